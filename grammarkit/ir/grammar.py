@@ -1,0 +1,65 @@
+"""The root of the IR: a grammar file as an ordered list of statements.
+
+Statements keep source order (so `grammarkit fmt` does not reshuffle a file); the
+properties below give typed views for the engines.
+"""
+from __future__ import annotations
+
+from typing import Annotated, Literal, Union
+
+from pydantic import Field
+
+from .base import Node
+from .split import Attr, Const, Default, Import, Rule, Snippet, Use, Variants
+from .tiling import ConstraintDef, DockDef, ExampleDef, NeighborRule, PartDef, SiteDef
+
+Statement = Annotated[
+    Union[
+        Attr, Const, Rule, Snippet, Use, Default, Variants, Import,
+        PartDef, SiteDef, DockDef, NeighborRule, ConstraintDef, ExampleDef,
+    ],
+    Field(discriminator="kind"),
+]
+
+SPLIT_KINDS = frozenset({"rule", "snippet", "use", "default", "variants"})
+TILING_KINDS = frozenset({"part", "site", "dock", "neighbors", "constraint", "example"})
+
+
+class Grammar(Node):
+    """`grammar NAME` followed by statements."""
+
+    name: str
+    statements: tuple[Statement, ...] = ()
+    comments: tuple[str, ...] = ()
+    # Path the grammar was read from (not part of equality; used to resolve relative files).
+    source_path: str | None = Field(default=None)
+
+    @property
+    def family(self) -> Literal["split", "tiling", "empty"]:
+        kinds = {s.kind for s in self.statements}
+        if kinds & TILING_KINDS:
+            return "tiling"
+        if kinds & SPLIT_KINDS:
+            return "split"
+        return "empty"
+
+    def _of(self, cls):  # noqa: ANN001 - small typed filter
+        return tuple(s for s in self.statements if isinstance(s, cls))
+
+    attrs = property(lambda self: self._of(Attr))
+    consts = property(lambda self: self._of(Const))
+    rules = property(lambda self: self._of(Rule))
+    snippets = property(lambda self: self._of(Snippet))
+    uses = property(lambda self: self._of(Use))
+    defaults = property(lambda self: self._of(Default))
+    variants = property(lambda self: self._of(Variants))
+    imports = property(lambda self: self._of(Import))
+    parts = property(lambda self: self._of(PartDef))
+    sites = property(lambda self: self._of(SiteDef))
+    docks = property(lambda self: self._of(DockDef))
+    neighbor_rules = property(lambda self: self._of(NeighborRule))
+    constraints = property(lambda self: self._of(ConstraintDef))
+    examples = property(lambda self: self._of(ExampleDef))
+
+
+Grammar._ignored_in_eq = Node._ignored_in_eq | {"source_path"}

@@ -1,0 +1,54 @@
+"""The built-in split operations, registered through the `grammarkit_operations` hook.
+
+Specs (names, parameters, block kinds) are the language contract that `grammarkit check`
+validates against. The split engine binds each spec's `apply`.
+"""
+from __future__ import annotations
+
+from typing import Iterable
+
+from ..hookspecs import hookimpl
+from ..registry import OperationSpec, Param
+
+AXES = ("x", "y", "z")
+FACE_SELECTORS = ("top", "bottom", "side", "front", "back", "left", "right", "all")
+
+SPECS: tuple[OperationSpec, ...] = (
+    OperationSpec("footprint", (Param("shape", "any", doc="rect(w, d), lshape(...), polygon(...)"),),
+                  doc="Replace the scope's geometry by a planar footprint polygon (xy plane)."),
+    OperationSpec("extrude", (Param("height"),), doc="Extrude a face along its normal into a volume."),
+    OperationSpec("taper", (Param("height"), Param("top_scale", required=False, default=0.0)),
+                  doc="Extrude a face, scaling the top about the centroid (0: to a point)."),
+    OperationSpec("comp", (Param("mode", "axis", choices=("f",)),), block="selectors",
+                  selectors=FACE_SELECTORS, doc="Decompose a volume into its faces."),
+    OperationSpec("split", (Param("axis", "axis", choices=AXES),), block="sizes",
+                  doc="Split the scope along an axis into absolute, relative and floating parts."),
+    OperationSpec("repeat", (Param("axis", "axis", choices=AXES), Param("size"),
+                             Param("separator", required=False, default=0.0)),
+                  doc="Repetition sugar: `repeat(x, 2) (A)*` or `repeat(x, 2, 0.3) (A B)* A`."),
+    OperationSpec("offset", (Param("distance"),), block="optional-selectors",
+                  selectors=("inside", "border"), doc="Inset (negative) a face; inside/border parts."),
+    OperationSpec("roofGable", (Param("angle"), Param("overhang", required=False, default=0.0),
+                                Param("ridge", "axis", required=False, default="x", choices=("x", "y"))),
+                  doc="Gable roof over a footprint face; ridge along the given scope axis."),
+    OperationSpec("roofHip", (Param("angle"), Param("overhang", required=False, default=0.0)),
+                  doc="Hip roof: every edge slopes at the angle."),
+    OperationSpec("roofPyramid", (Param("angle"), Param("overhang", required=False, default=0.0)),
+                  doc="Pyramid roof with its apex over the face centroid."),
+    OperationSpec("roofShed", (Param("angle"), Param("overhang", required=False, default=0.0),
+                               Param("ridge", "axis", required=False, default="x", choices=("x", "y"))),
+                  doc="Shed (mono-pitch) roof rising towards +ridge-normal."),
+    OperationSpec("t", (Param("x"), Param("y"), Param("z")), doc="Translate the scope (scope axes)."),
+    OperationSpec("r", (Param("x"), Param("y"), Param("z")), doc="Rotate the scope (degrees, XYZ)."),
+    OperationSpec("s", (Param("x"), Param("y"), Param("z")), doc="Set the scope size."),
+    OperationSpec("center", (Param("axes", "string", required=False, default="xyz"),),
+                  doc="Center the scope in its parent's scope along the given axes."),
+    OperationSpec("i", (Param("path", "string"),), doc="Insert a mesh file fitted to the scope."),
+    OperationSpec("color", (Param("value", "string"),), doc="Tag the shape with a colour (#rrggbb)."),
+    OperationSpec("material", (Param("name", "string"),), doc="Tag the shape with a material name."),
+)
+
+
+@hookimpl
+def grammarkit_operations() -> Iterable[OperationSpec]:
+    return SPECS
