@@ -91,8 +91,9 @@ class PluginManager:
                 return self._cache[kind]
             found: dict[str, Any] = {}
             hook = getattr(self._pm.hook, hook_name)
-            # pluggy calls implementations last-registered first; we want registration order.
-            for impl in reversed(hook.get_hookimpls()):
+            # get_hookimpls() is in registration order (pluggy *calls* them in reverse); the
+            # first registered provider of a name wins, so entry points load sorted by name.
+            for impl in hook.get_hookimpls():
                 plugin_name = impl.plugin_name
                 info = self._infos.setdefault(plugin_name, PluginInfo(name=plugin_name))
                 try:

@@ -1,0 +1,4 @@
+"""`python -m grammarkit` runs the `grammarkit` command."""
+from .cli import main
+
+main()

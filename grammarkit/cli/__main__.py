@@ -1,0 +1,4 @@
+"""`python -m grammarkit.cli` runs the `grammarkit` command."""
+from . import main
+
+main()
