@@ -20,6 +20,7 @@ BUILTIN_COMMANDS = [
     ("grammarkit.cli.derive", "derive"),
     ("grammarkit.cli.tiling", "learn"),
     ("grammarkit.cli.tiling", "validate"),
+    ("grammarkit.cli.render", "render"),
 ]
 
 

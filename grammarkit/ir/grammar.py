@@ -30,7 +30,9 @@ class Grammar(Node):
 
     name: str
     statements: tuple[Statement, ...] = ()
-    comments: tuple[str, ...] = ()
+    comments: tuple[str, ...] = ()  # full-line comments before the `grammar` header
+    # Comments after the last statement (kept by `grammarkit fmt`; not part of equality).
+    trailing_comments: tuple[str, ...] = ()
     # Path the grammar was read from (not part of equality; used to resolve relative files).
     source_path: str | None = Field(default=None)
 
@@ -62,4 +64,4 @@ class Grammar(Node):
     examples = property(lambda self: self._of(ExampleDef))
 
 
-Grammar._ignored_in_eq = Node._ignored_in_eq | {"source_path"}
+Grammar._ignored_in_eq = Node._ignored_in_eq | {"source_path", "trailing_comments"}

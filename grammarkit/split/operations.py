@@ -1,11 +1,16 @@
 """The built-in split operations, registered through the `grammarkit_operations` hook.
 
 Specs (names, parameters, block kinds) are the language contract that `grammarkit check`
-validates against. The split engine binds each spec's `apply`.
+validates against. Each spec's `apply` is bound to its implementation in
+`grammarkit.split.ops`, imported on first use so that `grammarkit check` stays light.
 """
 from __future__ import annotations
 
+from dataclasses import replace
 from typing import Iterable
+
+from importlib import import_module
+from typing import Any
 
 from ..hookspecs import hookimpl
 from ..registry import OperationSpec, Param
@@ -13,7 +18,28 @@ from ..registry import OperationSpec, Param
 AXES = ("x", "y", "z")
 FACE_SELECTORS = ("top", "bottom", "side", "front", "back", "left", "right", "all")
 
-SPECS: tuple[OperationSpec, ...] = (
+
+
+class LazyApply:
+    """`apply` of a built-in operation: imports grammarkit.split.ops when first called.
+
+    The split compiler unwraps it (`.target()`) so the hot loop calls the function directly.
+    """
+
+    def __init__(self, op: str):
+        self.op = op
+        self._fn = None
+
+    def target(self):  # noqa: ANN201
+        if self._fn is None:
+            self._fn = import_module("grammarkit.split.ops").BUILTIN_APPLY[self.op]
+        return self._fn
+
+    def __call__(self, ctx: Any, shape: Any, args: Any, block: Any) -> Any:
+        return self.target()(ctx, shape, args, block)
+
+
+_SPECS: tuple[OperationSpec, ...] = (
     OperationSpec("footprint", (Param("shape", "any", doc="rect(w, d), lshape(...), polygon(...)"),),
                   doc="Replace the scope's geometry by a planar footprint polygon (xy plane)."),
     OperationSpec("extrude", (Param("height"),), doc="Extrude a face along its normal into a volume."),
@@ -38,6 +64,13 @@ SPECS: tuple[OperationSpec, ...] = (
     OperationSpec("roofShed", (Param("angle"), Param("overhang", required=False, default=0.0),
                                Param("ridge", "axis", required=False, default="x", choices=("x", "y"))),
                   doc="Shed (mono-pitch) roof rising towards +ridge-normal."),
+    OperationSpec("roofMansard", (Param("angle"), Param("height"),
+                                  Param("top_angle", required=False, default=15.0),
+                                  Param("overhang", required=False, default=0.0)),
+                  doc="Mansard roof: steep hip sides up to `height`, then a shallow hip on top."),
+    OperationSpec("recess", (Param("depth"),),
+                  doc="Cut the face `depth` into the solid below it (windows, doors); the face "
+                      "moves to the bottom of the recess."),
     OperationSpec("t", (Param("x"), Param("y"), Param("z")), doc="Translate the scope (scope axes)."),
     OperationSpec("r", (Param("x"), Param("y"), Param("z")), doc="Rotate the scope (degrees, XYZ)."),
     OperationSpec("s", (Param("x"), Param("y"), Param("z")), doc="Set the scope size."),
@@ -47,6 +80,9 @@ SPECS: tuple[OperationSpec, ...] = (
     OperationSpec("color", (Param("value", "string"),), doc="Tag the shape with a colour (#rrggbb)."),
     OperationSpec("material", (Param("name", "string"),), doc="Tag the shape with a material name."),
 )
+
+
+SPECS: tuple[OperationSpec, ...] = tuple(replace(spec, apply=LazyApply(spec.name)) for spec in _SPECS)
 
 
 @hookimpl

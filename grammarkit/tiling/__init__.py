@@ -1,0 +1,35 @@
+"""Tiling grammars: segmented models, shape graphs, learned rules, validation and docking.
+
+Public API (signatures are stable; the graph sampler builds on them):
+
+    read_assembly(path, *, grammar=None, name=None) -> Assembly     # GLB/glTF/OBJ/folder
+    write_assembly(assembly, path) -> Path                          # atomic; reads back the same
+    load_examples(grammar) -> list[Assembly]                        # the grammar's `example`s
+    part_prototype(grammar, type_name) -> trimesh.Trimesh           # `part T = box(...)|mesh(...)`
+    shape_graph(assembly, tolerance=None) -> networkx.Graph          # nodes: part ids (type, centroid)
+    rules_from_grammar(grammar) -> Rules
+    validate(grammar_or_rules, assembly, *, tolerance=None, graph=None, docks=True) -> Report
+    learn(assemblies, name="learned", *, example_paths=None, bandwidth=0.1, docks=True) -> Grammar
+    dock(a_points, b_points) -> (4x4 rigid transform, rms residual)  # Kabsch, det +1
+    local_frame(part) -> 4x4                                        # Kalojanov's diagonal frame
+
+See docs/tiling.md.
+"""
+from __future__ import annotations
+
+from .assembly import Assembly, Part
+from .contacts import DEFAULT_RELATIVE_TOLERANCE, default_tolerance
+from .dock import dock
+from .frames import local_frame, relative_placement
+from .graph import shape_graph
+from .io import ShapeWarning, load_examples, part_prototype, read_assembly, type_from_name, write_assembly
+from .learn import learn
+from .rules import DockPlacement, Rules, rules_from_grammar
+from .validate import Report, Violation, validate
+
+__all__ = [
+    "DEFAULT_RELATIVE_TOLERANCE", "Assembly", "DockPlacement", "Part", "Report", "Rules", "ShapeWarning",
+    "Violation", "default_tolerance", "dock", "learn", "load_examples", "local_frame", "part_prototype",
+    "read_assembly", "relative_placement", "rules_from_grammar", "shape_graph", "type_from_name",
+    "validate", "write_assembly",
+]

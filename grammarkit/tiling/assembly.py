@@ -25,9 +25,15 @@ class Part:
 
     @property
     def centroid(self) -> np.ndarray:
-        """Centre of the part's vertices' bounding box (robust for open meshes)."""
-        lo, hi = self.mesh.bounds
-        return (lo + hi) / 2.0
+        """Area-weighted centroid of the part's surface (works for open meshes too).
+
+        Unlike the bounding-box centre it moves rigidly with the part, which docking by
+        centroid alignment (Kabsch) and centroid-distance matching rely on; it is the value
+        `shape_graph` stores as the node attribute `centroid`."""
+        from .frames import surface_centroid
+
+        return surface_centroid(np.asarray(self.mesh.vertices, dtype=np.float64),
+                                np.asarray(self.mesh.faces))
 
     def transformed(self, matrix: np.ndarray, new_id: str | None = None) -> "Part":
         mesh = self.mesh.copy()

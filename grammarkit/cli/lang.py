@@ -1,0 +1,170 @@
+"""`grammarkit check`, `grammarkit fmt` and `grammarkit plugins`: the language-facing commands."""
+from __future__ import annotations
+
+import json
+import os
+import sys
+import tempfile
+from pathlib import Path
+
+import click
+
+from ..errors import Diagnostic, GrammarError
+
+_MAX_SIZE_HELP = "refuse grammar files larger than this many bytes"
+
+
+def _counts(diags: list[Diagnostic]) -> tuple[int, int]:
+    errors = sum(1 for d in diags if d.severity == "error")
+    warnings = sum(1 for d in diags if d.severity == "warning")
+    return errors, warnings
+
+
+def _plural(n: int, word: str) -> str:
+    return f"{n} {word}{'' if n == 1 else 's'}"
+
+
+@click.command("check")
+@click.argument("files", nargs=-1, required=True, type=click.Path(dir_okay=False, path_type=Path))
+@click.option("--json", "as_json", is_flag=True, help="print the diagnostics as JSON")
+@click.option("--emit-ir", is_flag=True, help="print the IR of each file as JSON")
+@click.option("--max-size", type=click.IntRange(min=1), default=None, help=_MAX_SIZE_HELP)
+def check(files: tuple[Path, ...], as_json: bool, emit_ir: bool, max_size: int | None) -> None:
+    """Report every problem in the grammar FILES (exit status 1 if there are errors)."""
+    from ..dsl import DEFAULT_MAX_BYTES, check_text
+
+    results = []
+    total_errors = total_warnings = 0
+    for path in files:
+        grammar, diags = check_text(path, max_bytes=max_size or DEFAULT_MAX_BYTES)
+        e, w = _counts(diags)
+        total_errors += e
+        total_warnings += w
+        results.append((path, grammar, diags))
+
+    if as_json:
+        out = {
+            "files": [
+                {"file": str(path), "ok": not any(d.severity == "error" for d in diags),
+                 "diagnostics": [d.to_json() for d in diags],
+                 **({"ir": json.loads(g.model_dump_json()) if g is not None else None}
+                    if emit_ir else {})}
+                for path, g, diags in results
+            ],
+            "errors": total_errors,
+            "warnings": total_warnings,
+        }
+        click.echo(json.dumps(out, indent=2))
+    else:
+        # With --emit-ir the IR goes to stdout and the diagnostics to stderr (pipe-friendly).
+        diag_err = emit_ir
+        for path, g, diags in results:
+            for d in diags:
+                click.echo(d.format(), err=diag_err)
+            if emit_ir and g is not None:
+                click.echo(g.model_dump_json(indent=2))
+        summary = (f"{_plural(total_errors, 'error')}, {_plural(total_warnings, 'warning')} "
+                   f"in {_plural(len(files), 'file')}")
+        click.echo(summary, err=True)
+    if total_errors:
+        sys.exit(1)
+
+
+def write_atomically(path: Path, text: str) -> None:
+    """Write text to path via a temporary file in the same folder and a rename."""
+    path = Path(path)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent or ".")
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8", newline="\n") as fh:
+            fh.write(text)
+        try:
+            os.chmod(tmp, path.stat().st_mode & 0o7777)
+        except OSError:
+            pass
+        os.replace(tmp, path)
+    except BaseException:
+        try:
+            os.unlink(tmp)
+        except OSError:
+            pass
+        raise
+
+
+@click.command("fmt")
+@click.argument("files", nargs=-1, required=True, type=click.Path(dir_okay=False, path_type=Path))
+@click.option("--in-place", "-i", is_flag=True, help="rewrite the files (atomically)")
+@click.option("--check", "check_only", is_flag=True,
+              help="do not write; exit 1 if a file is not in canonical form")
+@click.option("--max-size", type=click.IntRange(min=1), default=None, help=_MAX_SIZE_HELP)
+def fmt(files: tuple[Path, ...], in_place: bool, check_only: bool, max_size: int | None) -> None:
+    """Print grammar FILES in canonical form (or rewrite them with --in-place)."""
+    from ..dsl import DEFAULT_MAX_BYTES
+    from ..dsl.parser import read_source
+    from ..printer import format_grammar
+
+    failed = False
+    changed = []
+    for path in files:
+        try:
+            original = read_source(path, max_bytes=max_size or DEFAULT_MAX_BYTES)
+            text = format_grammar(original, filename=str(path))
+        except GrammarError as exc:
+            click.echo(exc.format(), err=True)
+            failed = True
+            continue
+        if check_only:
+            if text != original:
+                changed.append(path)
+                click.echo(f"would reformat {path}", err=True)
+        elif in_place:
+            if text != original:
+                write_atomically(path, text)
+                click.echo(f"reformatted {path}", err=True)
+        else:
+            click.echo(text, nl=False)
+    if failed or (check_only and changed):
+        sys.exit(1)
+
+
+@click.command("plugins")
+@click.option("--json", "as_json", is_flag=True, help="print the plugin list as JSON")
+def plugins_command(as_json: bool) -> None:
+    """List every registered plugin: distribution, version, what it provides, and errors."""
+    from ..plugins import get_plugin_manager
+
+    infos = get_plugin_manager().plugins()
+    if as_json:
+        click.echo(json.dumps([
+            {"name": i.name, "distribution": i.distribution, "version": i.version,
+             "module": i.module, "provides": i.provides, "errors": i.errors, "ok": i.ok}
+            for i in infos], indent=2))
+        return
+    from rich.console import Console
+    from rich.table import Table
+
+    table = Table(title="grammarkit plugins", show_lines=False)
+    table.add_column("plugin", style="bold")
+    table.add_column("distribution")
+    table.add_column("version")
+    table.add_column("provides")
+    table.add_column("status")
+    for i in infos:
+        provides = "\n".join(f"{kind}: {', '.join(names)}" for kind, names in sorted(i.provides.items()))
+        status = "ok" if i.ok else "[red]" + "\n".join(_escape(e) for e in i.errors) + "[/red]"
+        table.add_row(i.name, i.distribution or "-", i.version or "-", provides or "-", status)
+    Console(width=max(100, _terminal_width())).print(table)
+    broken = [i.name for i in infos if not i.ok]
+    if broken:
+        click.echo(f"{_plural(len(broken), 'plugin')} with problems: {', '.join(broken)}", err=True)
+
+
+def _escape(text: str) -> str:
+    from rich.markup import escape
+    return escape(text)
+
+
+def _terminal_width() -> int:
+    try:
+        return os.get_terminal_size().columns
+    except OSError:
+        return 120

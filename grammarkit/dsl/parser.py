@@ -1,0 +1,393 @@
+"""Text -> Lark parse tree: the cached LALR parser, the newline postlexer, comments and limits.
+
+Everything that can go wrong with raw text (size, encoding, nesting, syntax) becomes a located
+`Diagnostic`; no Lark exception leaves this module.
+"""
+from __future__ import annotations
+
+import contextvars
+import functools
+import re
+from dataclasses import dataclass
+from importlib import resources
+from pathlib import Path
+from typing import Iterator
+
+from lark import Lark, Token, Tree
+from lark.exceptions import LarkError, UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken
+
+from ..errors import Diagnostic, GrammarError
+from ..ir.base import Span
+
+DEFAULT_MAX_BYTES = 5 * 1024 * 1024  # a grammar file larger than this is certainly a mistake
+MAX_NESTING = 48  # brackets; keeps every later recursive pass far from Python's recursion limit
+MAX_SYNTAX_ERRORS = 50
+
+# Keywords of the language. They are reserved everywhere (the transformer rejects them as names)
+# so that the printer never has to guess whether a name would read back as a keyword.
+KEYWORDS = frozenset({
+    "grammar", "import", "attr", "const", "snippet", "use", "as", "default", "for", "variants",
+    "case", "else", "NIL", "true", "false", "part", "site", "at", "facing", "mirror", "dock",
+    "rot", "neighbors", "in", "constraint", "example",
+})
+NAME_RE = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\Z")
+
+# Statement keywords whose `{ }` holds statements (newline separated) rather than an expression.
+_STATEMENT_BLOCK_HEADS = frozenset({"SNIPPET", "EXAMPLE"})
+_OPEN = {"(": ")", "[": "]", "{": "}"}
+_CLOSE = frozenset(_OPEN.values())
+
+
+@dataclass(frozen=True)
+class Comment:
+    line: int
+    column: int
+    text: str  # without the leading '#'
+
+
+class _NestingTooDeep(Exception):
+    def __init__(self, token: Token):
+        self.token = token
+
+
+# Comments found by the lexer during the current parse (the parser object is shared and cached).
+_comment_sink: contextvars.ContextVar[list | None] = contextvars.ContextVar("_comment_sink", default=None)
+
+
+def _collect_comment(token: Token) -> Token:
+    sink = _comment_sink.get()
+    if sink is not None:
+        sink.append(Comment(token.line, token.column, token.value[1:].rstrip()))
+    return token
+
+
+class StatementPostLexer:
+    """Makes newlines end statements, except inside open brackets of an expression.
+
+    Inside `snippet ... { }` and `example NAME { }` newlines (and ';') separate the inner
+    statements, as at top level. Also enforces the nesting limit, so that deeply nested input
+    gives a clear error instead of a recursion failure later on.
+    """
+
+    always_accept = ("_NL", "SEMICOLON", "RBRACE")
+
+    def __init__(self, max_nesting: int = MAX_NESTING):
+        self.max_nesting = max_nesting
+
+    def process(self, stream: Iterator[Token]) -> Iterator[Token]:
+        # Tokens are yielded at once: the contextual lexer lexes the next token in the parser
+        # state reached after the tokens yielded so far, so nothing may be held back.
+        stack: list[tuple[str, bool]] = []  # open brackets: (closing char, is_statement_block)
+        at_statement_start = True  # the next token starts a statement (at a statement level)
+        head: list[str | None] = [None]  # first token type of the current statement, per level
+        last: Token | None = None
+        for tok in stream:
+            in_statements = not stack or stack[-1][1]
+            if tok.type in ("_NL", "SEMICOLON"):
+                if in_statements:
+                    if not at_statement_start:
+                        at_statement_start = True
+                        yield Token.new_borrow_pos("_NL", "\n", tok)
+                    continue
+                if tok.type == "_NL":
+                    continue  # newline inside an expression bracket: not a separator
+                yield tok  # ';' inside an expression: a syntax error reported by the parser
+                continue
+            value = tok.value
+            is_punct = tok.type not in ("STRING", "NAME", "DOTTED_NAME", "TERMINAL_NAME")
+            if is_punct and value == "}" and stack and stack[-1][1]:
+                # closing a statement block: its last inner statement ends here
+                if not at_statement_start:
+                    yield Token.new_borrow_pos("_NL", "\n", tok)
+                stack.pop()
+                head.pop()
+                at_statement_start = False
+                last = tok
+                yield tok
+                continue
+            if at_statement_start:
+                head[-1] = tok.type
+                at_statement_start = False
+            if is_punct and value in _OPEN:
+                if len(stack) >= self.max_nesting:
+                    raise _NestingTooDeep(tok)
+                statement_block = (value == "{" and (not stack or stack[-1][1])
+                                   and head[-1] in _STATEMENT_BLOCK_HEADS)
+                stack.append((_OPEN[value], statement_block))
+                if statement_block:
+                    head.append(None)
+                    at_statement_start = True
+            elif is_punct and value in _CLOSE and stack:
+                stack.pop()
+            last = tok
+            yield tok
+        if last is not None and (not at_statement_start or stack):
+            yield Token("_NL", "", start_pos=last.end_pos, line=last.end_line,
+                        column=last.end_column, end_line=last.end_line,
+                        end_column=last.end_column, end_pos=last.end_pos)
+
+
+@functools.lru_cache(maxsize=None)
+def get_parser() -> Lark:
+    """The LALR parser, built once per process (building it costs ~100 ms)."""
+    text = resources.files("grammarkit.dsl").joinpath("grammar.lark").read_text(encoding="utf-8")
+    return Lark(
+        text,
+        parser="lalr",
+        lexer="contextual",
+        propagate_positions=True,
+        maybe_placeholders=False,
+        postlex=StatementPostLexer(),
+        lexer_callbacks={"COMMENT": _collect_comment},
+        cache=False,
+    )
+
+
+# -- reading files -------------------------------------------------------------------------
+
+def read_source(path: Path, *, max_bytes: int = DEFAULT_MAX_BYTES) -> str:
+    """Read a grammar file as text, with located errors for size and encoding problems."""
+    fname = str(path)
+    try:
+        size = path.stat().st_size
+    except OSError as exc:
+        raise GrammarError(f"cannot read {fname}: {exc.strerror or exc}", Span(file=fname),
+                           code="io-error") from None
+    if size > max_bytes:
+        raise GrammarError(
+            f"file is too large ({size:,} bytes; the limit is {max_bytes:,} bytes)",
+            Span(file=fname, line=1, column=1, end_line=1, end_column=1), code="too-large",
+            hint="split the grammar into several files joined with `import`, or raise the limit")
+    try:
+        data = path.read_bytes()
+    except OSError as exc:
+        raise GrammarError(f"cannot read {fname}: {exc.strerror or exc}", Span(file=fname),
+                           code="io-error") from None
+    return decode_source(data, fname)
+
+
+def decode_source(data: bytes, filename: str | None) -> str:
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        before = data[:exc.start]
+        line = before.count(b"\n") + 1
+        col = exc.start - (before.rfind(b"\n") + 1) + 1
+        raise GrammarError(
+            f"file is not valid UTF-8 text (byte 0x{data[exc.start]:02x} at offset {exc.start})",
+            Span(file=filename, line=line, column=col, end_line=line, end_column=col + 1),
+            code="encoding", hint="save the file as UTF-8") from None
+
+
+# -- parsing -------------------------------------------------------------------------------
+
+@dataclass
+class ParseResult:
+    tree: Tree | None
+    comments: list[Comment]
+    diagnostics: list[Diagnostic]
+    source: str
+
+
+def parse_tree(source: str, filename: str | None = None, *,
+               max_bytes: int = DEFAULT_MAX_BYTES) -> ParseResult:
+    """Parse text to a Lark tree. On syntax errors `tree` is None and every error is listed."""
+    if source.startswith("\ufeff"):
+        source = source[1:]
+    if len(source) > max_bytes:
+        d = Diagnostic("error", f"grammar text is too large ({len(source):,} characters; the limit "
+                       f"is {max_bytes:,})", Span(file=filename, line=1, column=1, end_line=1,
+                                                   end_column=1), code="too-large")
+        return ParseResult(None, [], [d], source)
+    comments: list[Comment] = []
+    token = _comment_sink.set(comments)
+    try:
+        try:
+            tree = get_parser().parse(source)
+            return ParseResult(tree, comments, [], source)
+        except (LarkError, _NestingTooDeep) as exc:
+            first = _diagnostic_for(exc, source, filename)
+    finally:
+        _comment_sink.reset(token)
+    # Find every other error: parse statement by statement (only on the error path).
+    diagnostics = _all_syntax_errors(source, filename, first)
+    return ParseResult(None, comments, diagnostics, source)
+
+
+def _all_syntax_errors(source: str, filename: str | None, first: Diagnostic) -> list[Diagnostic]:
+    found: dict[tuple[int, int], Diagnostic] = {}
+    token = _comment_sink.set(None)
+    try:
+        for start_line, chunk in split_statements(source):
+            if len(found) >= MAX_SYNTAX_ERRORS:
+                break
+            try:
+                # Pad with newlines so that Lark reports positions in the whole file.
+                padded = "\n" * (start_line - 1) + chunk
+                get_parser().parse(padded)
+            except (LarkError, _NestingTooDeep) as exc:
+                d = _diagnostic_for(exc, padded, filename)
+                if d.span is not None:
+                    found.setdefault((d.span.line, d.message), d)
+    finally:
+        _comment_sink.reset(token)
+    if first.span is not None:
+        found = {k: v for k, v in found.items() if k[0] != first.span.line}
+        found[(first.span.line, first.message)] = first
+    out = sorted(found.values(), key=lambda d: (d.span.line, d.span.column) if d.span else (0, 0))
+    if len(out) >= MAX_SYNTAX_ERRORS:
+        out.append(Diagnostic("note", f"stopped after {MAX_SYNTAX_ERRORS} syntax errors",
+                              Span(file=filename)))
+    return out
+
+
+def split_statements(source: str) -> Iterator[tuple[int, str]]:
+    """Cut text into top-level statements (newline at bracket depth 0), tracking strings/comments.
+
+    Only used to continue after a syntax error, so it may be approximate: each chunk is parsed
+    on its own and its errors reported.
+    """
+    depth = 0
+    start = 0
+    start_line = 1
+    line = 1
+    i = 0
+    n = len(source)
+    while i < n:
+        c = source[i]
+        if c == '"':
+            j = i + 1
+            while j < n and source[j] not in '"\n':
+                j += 2 if source[j] == "\\" else 1
+            i = j + 1 if j < n and source[j] == '"' else j
+            continue
+        if c == "#":
+            j = source.find("\n", i)
+            i = n if j < 0 else j
+            continue
+        if c in "([{":
+            depth += 1
+        elif c in ")]}":
+            depth = max(0, depth - 1)
+        elif c == "\n":
+            line += 1
+            if depth == 0:
+                if source[start:i].strip():
+                    yield start_line, source[start:i]
+                start = i + 1
+                start_line = line
+        i += 1
+    if source[start:].strip():
+        yield start_line, source[start:]
+
+
+# -- syntax errors in plain words ------------------------------------------------------------
+
+_WORDS = {
+    "NAME": "a name",
+    "DOTTED_NAME": "a dotted name (like scope.sx or Wall.end)",
+    "TERMINAL_NAME": "a terminal (like Wall.)",
+    "NUMBER": "a number",
+    "INT": "a whole number",
+    "PERCENT": "a percentage (like 30%)",
+    "STRING": 'a string (like "text")',
+    "FACING": "a direction (like +x)",
+    "_NL": "end of line",
+    "$END": "end of file",
+    "SEMICOLON": "';'",
+    "CALL_NAME": "a call (like extrude(3))",
+}
+
+
+def describe_terminal(name: str) -> str:
+    if name in _WORDS:
+        return _WORDS[name]
+    try:
+        term = get_parser().get_terminal(name)
+    except (KeyError, AttributeError):
+        return name.lower()
+    pattern = term.pattern
+    if getattr(pattern, "type", "") == "str":
+        return f"'{pattern.value}'"
+    return name.lower()
+
+
+def _expected_words(names) -> str:
+    words = sorted({describe_terminal(n) for n in names if n not in ("SEMICOLON",)},
+                   key=lambda w: (w.startswith("'"), w))
+    if not words:
+        return ""
+    if len(words) > 14:
+        words = words[:14] + ["..."]
+    return "expected one of: " + ", ".join(words)
+
+
+def _describe_token(tok: Token) -> str:
+    if tok.type == "$END":
+        return "end of file"
+    if tok.type == "_NL":
+        return "end of line"
+    text = tok.value if len(tok.value) <= 30 else tok.value[:27] + "..."
+    if tok.type in ("NAME", "DOTTED_NAME"):
+        return f"name '{text}'"
+    if tok.type in ("NUMBER", "INT"):
+        return f"number {text}"
+    if tok.type == "STRING":
+        return f"string {text}"
+    return f"'{text}'"
+
+
+def _line_end_col(source: str, line: int) -> int:
+    lines = source.split("\n")
+    if 1 <= line <= len(lines):
+        return len(lines[line - 1]) + 1
+    return 1
+
+
+def _diagnostic_for(exc: Exception, source: str, filename: str | None) -> Diagnostic:
+    if isinstance(exc, _NestingTooDeep):
+        t = exc.token
+        return Diagnostic("error", f"brackets nested too deeply (the limit is {MAX_NESTING} levels)",
+                          Span(file=filename, line=t.line, column=t.column, end_line=t.line,
+                               end_column=t.column + 1), code="too-deep",
+                          hint="flatten the expression or split it into consts")
+    if isinstance(exc, UnexpectedToken):
+        tok = exc.token
+        if tok.type == "_NL" or tok.type == "$END":
+            line = tok.line if tok.line is not None and tok.line > 0 else source.count("\n") + 1
+            col = tok.column if tok.column and tok.type != "$END" else _line_end_col(source, line)
+            what = ("unexpected end of line" if tok.type == "_NL" and tok.value
+                    else "unexpected end of file")
+        else:
+            line, col = tok.line, tok.column
+            what = f"unexpected {_describe_token(tok)}"
+        width = max(1, len(tok.value)) if tok.type not in ("_NL", "$END") else 1
+        return Diagnostic("error", f"syntax error: {what}",
+                          Span(file=filename, line=line, column=col, end_line=line,
+                               end_column=col + width),
+                          hint=_expected_words(exc.expected) or None, code="syntax")
+    if isinstance(exc, UnexpectedCharacters):
+        ch = source[exc.pos_in_stream] if 0 <= exc.pos_in_stream < len(source) else "?"
+        if ch == '"':
+            what = "unterminated string (strings end on the same line)"
+        elif ch == "\t" or ch.isspace():
+            what = f"unexpected whitespace character {ch!r}"
+        else:
+            what = f"unexpected character {ch!r}"
+        allowed = getattr(exc, "allowed", None) or ()
+        return Diagnostic("error", f"syntax error: {what}",
+                          Span(file=filename, line=exc.line, column=exc.column, end_line=exc.line,
+                               end_column=exc.column + 1),
+                          hint=_expected_words(allowed) or None, code="syntax")
+    if isinstance(exc, UnexpectedEOF):
+        line = source.count("\n") + 1
+        return Diagnostic("error", "syntax error: unexpected end of file",
+                          Span(file=filename, line=line, column=_line_end_col(source, line)),
+                          hint=_expected_words(exc.expected) or None, code="syntax")
+    if isinstance(exc, UnexpectedInput):
+        line = getattr(exc, "line", 1) or 1
+        col = getattr(exc, "column", 1) or 1
+        return Diagnostic("error", "syntax error", Span(file=filename, line=line, column=col),
+                          code="syntax")
+    return Diagnostic("error", f"syntax error: {exc}", Span(file=filename, line=1, column=1),
+                      code="syntax")

@@ -1,0 +1,524 @@
+"""Lark parse tree -> IR: one transformer method per tree shape, every node with its Span.
+
+Problems the grammar cannot express (a reserved word used as a name, a bad string escape, a
+pattern that lists something other than rule names, ...) are collected as diagnostics; the
+transformer always finishes so that every problem in a file is reported at once.
+"""
+from __future__ import annotations
+
+import math
+import re
+from typing import Any, Iterable
+
+from lark import Token, Transformer, Tree, v_args
+
+from ..errors import DiagnosticBag
+from ..ir import (
+    Arg, Attr, Binary, Const, Bool, Branch, Call, Case, CaseArm, Choice, ChoiceArm, ConstraintDef, CountRange,
+    Default, DockDef, ExampleDef, Import, InlinePart, NeighborRule, Nil, Num, OpCall, PartDef, Pattern,
+    Placement, Push, Ref, Repeat, Rule, Seq, SiteDef, Snippet, Str, Successor, Terminal, Unary, Use,
+    Variants, VariantOption, Vector,
+)
+from ..ir.base import Span
+from .parser import KEYWORDS
+
+MAX_EXPR_DEPTH = 64  # operator chains deeper than this are refused (printer/checker recurse)
+
+_ESCAPES = {"n": "\n", "t": "\t", "r": "\r", '"': '"', "\\": "\\", "0": "\0"}
+_ESCAPE_RE = re.compile(r"\\(u\{[0-9a-fA-F]{1,6}\}|.)")
+
+
+class Header:
+    """`grammar NAME` (not an IR statement: it sets Grammar.name)."""
+
+    def __init__(self, name: str, span: Span):
+        self.name = name
+        self.span = span
+
+
+class _Group:
+    """A parenthesised body inside a sequence (flattened or kept as a Case/Choice item)."""
+
+    def __init__(self, body: Any, span: Span):
+        self.body = body
+        self.span = span
+
+
+def call_names(tree: Tree) -> set[str]:
+    """Names of all rules defined in a parse tree (to tell successor calls from operations)."""
+    names = set()
+    for t in tree.find_data("rule"):
+        if t.children and isinstance(t.children[0], Token):
+            names.add(str(t.children[0]))
+    return names
+
+
+@v_args(meta=True)
+class ToIR(Transformer):
+    """Builds IR nodes bottom-up. `rule_names` decides whether `Name(args)` is a successor."""
+
+    def __init__(self, filename: str | None, bag: DiagnosticBag, rule_names: Iterable[str] = ()):
+        super().__init__(visit_tokens=False)
+        self.filename = filename
+        self.bag = bag
+        self.rule_names = set(rule_names)
+        self._depth: dict[int, int] = {}
+        self._literal_nums: set[int] = set()  # ids of Num built straight from a NUMBER token
+
+    # -- helpers ---------------------------------------------------------------------------
+    def span(self, meta) -> Span:
+        if getattr(meta, "empty", True):
+            return Span(file=self.filename)
+        return Span(file=self.filename, line=meta.line, column=meta.column,
+                    end_line=meta.end_line, end_column=meta.end_column)
+
+    def tspan(self, tok: Token) -> Span:
+        return Span(file=self.filename, line=tok.line or 0, column=tok.column or 0,
+                    end_line=tok.end_line or tok.line or 0,
+                    end_column=tok.end_column or tok.column or 0)
+
+    def name(self, tok: Token) -> str:
+        value = str(tok)
+        if value in KEYWORDS:
+            self.bag.error(f"'{value}' is a reserved word and cannot be used as a name",
+                           self.tspan(tok), code="reserved-word")
+        return value
+
+    def depth(self, node: Any) -> int:
+        return self._depth.get(id(node), 1)
+
+    def _deep(self, node: Any, children: Iterable[Any], span: Span) -> Any:
+        d = 1 + max((self.depth(c) for c in children), default=0)
+        if d > MAX_EXPR_DEPTH:
+            if not getattr(self, "_reported_deep", False):
+                self.bag.error(f"expression nested too deeply (the limit is {MAX_EXPR_DEPTH} levels)",
+                               span, code="too-deep", hint="split it into several consts")
+                self._reported_deep = True
+            return Num(value=0, span=span)
+        self._depth[id(node)] = d
+        return node
+
+    # -- statements ------------------------------------------------------------------------
+    def start(self, meta, children):
+        return children
+
+    def header(self, meta, c):
+        return Header(self.name(c[0]), self.span(meta))
+
+    def import_(self, meta, c):
+        return Import(path=self.string_value(c[0]), span=self.span(meta))
+
+    def attr(self, meta, c):
+        name = self.name(c[0])
+        value = c[1]
+        rng = enum = None
+        for ann_kind, ann_value, ann_span in c[2:]:
+            if ann_kind == "range":
+                if rng is not None:
+                    self.bag.error("@range given twice", ann_span, code="duplicate-annotation")
+                rng = ann_value
+            else:
+                if enum is not None:
+                    self.bag.error("@enum given twice", ann_span, code="duplicate-annotation")
+                enum = ann_value
+        return Attr(name=name, value=value, range=rng, enum=enum, span=self.span(meta))
+
+    def range_ann(self, meta, c):
+        return ("range", (c[0], c[1]), self.span(meta))
+
+    def enum_ann(self, meta, c):
+        return ("enum", tuple(c), self.span(meta))
+
+    def const(self, meta, c):
+        return Const(name=self.name(c[0]), value=c[1], span=self.span(meta))
+
+    def rule(self, meta, c):
+        name = self.name(c[0])
+        params: tuple[str, ...] = c[1] if len(c) == 3 else ()
+        body = self.as_seq(c[-1], self.span(meta))
+        return Rule(name=name, params=params, body=body, span=self.span(meta))
+
+    def params(self, meta, c):
+        return tuple(self.name(t) for t in c)
+
+    # -- rule bodies -----------------------------------------------------------------------
+    def as_seq(self, body: Any, span: Span) -> Seq:
+        if isinstance(body, Seq):
+            return body
+        return Seq(items=(body,), span=getattr(body, "span", span))
+
+    def seq(self, meta, c):
+        items: list[Any] = []
+        for item in c:
+            if isinstance(item, _Group):
+                body = item.body
+                if isinstance(body, Seq):
+                    items.extend(body.items)  # `(A B)` is just A B
+                else:
+                    items.append(body)
+            else:
+                items.append(item)
+        return Seq(items=tuple(items), span=self.span(meta))
+
+    def call(self, meta, c):
+        tok = c[0]
+        name = self.name(tok)
+        args: tuple[Arg, ...] = ()
+        block = None
+        for part in c[1:]:
+            if isinstance(part, list):
+                args = tuple(part)
+            elif isinstance(part, tuple):
+                block = part
+        span = self.span(meta)
+        if name in self.rule_names and block is None and all(a.name is None for a in args):
+            return Successor(name=name, args=tuple(a.value for a in args), span=span)
+        return OpCall(name=name, args=args, block=block, span=span)
+
+    def successor(self, meta, c):
+        return Successor(name=self.name(c[0]), span=self.span(meta))
+
+    def terminal(self, meta, c):
+        value = str(c[0])[:-1]
+        if value in KEYWORDS:
+            self.bag.error(f"'{value}' is a reserved word and cannot be used as a name",
+                           self.tspan(c[0]), code="reserved-word")
+        return Terminal(name=value, span=self.span(meta))
+
+    def nil(self, meta, c):
+        return Nil(span=self.span(meta))
+
+    def push(self, meta, c):
+        return Push(body=self.as_seq(c[0], self.span(meta)), span=self.span(meta))
+
+    def group(self, meta, c):
+        return _Group(c[0], self.span(meta))
+
+    def pattern(self, meta, c):
+        span = self.span(meta)
+        body = c[0]
+        names: list[str] = []
+        if isinstance(body, Seq) and body.items and all(
+                isinstance(i, Successor) and not i.args for i in body.items):
+            names = [i.name for i in body.items]
+        else:
+            self.bag.error("a repeat pattern `( ... )*` may only list rule names, like (A B)*",
+                           span, code="bad-pattern")
+        tail = self.name(c[1]) if len(c) > 1 else None
+        return Pattern(group=tuple(names), tail=tail, span=span)
+
+    def case(self, meta, c):
+        arms = tuple(x for x in c if isinstance(x, CaseArm))
+        otherwise = next((x for x in c if isinstance(x, Seq)), None)
+        return Case(arms=arms, otherwise=otherwise, span=self.span(meta))
+
+    def case_arm(self, meta, c):
+        return CaseArm(cond=c[0], body=c[1], span=self.span(meta))
+
+    def else_arm(self, meta, c):
+        return c[0]
+
+    def choice(self, meta, c):
+        arms = tuple(x for x in c if isinstance(x, ChoiceArm))
+        otherwise = next((x for x in c if isinstance(x, Seq)), None)
+        return Choice(arms=arms, otherwise=otherwise, span=self.span(meta))
+
+    def choice_arm(self, meta, c):
+        return ChoiceArm(percent=c[0], body=c[1], span=self.span(meta))
+
+    def percent(self, meta, c):
+        tok = c[0]
+        if tok.type == "PERCENT":
+            return self.number_value(tok, str(tok)[:-1])
+        return Ref(name=self.name(tok), span=self.tspan(tok))
+
+    def args(self, meta, c):
+        return list(c)
+
+    def pos_arg(self, meta, c):
+        return Arg(value=c[0], span=self.span(meta))
+
+    def named_arg(self, meta, c):
+        return Arg(name=self.name(c[0]), value=c[1], span=self.span(meta))
+
+    def block(self, meta, c):
+        return tuple(c)
+
+    def _branch(self, meta, c, mode):
+        return Branch(mode=mode, key=c[0], body=c[1], span=self.span(meta))
+
+    def abs_branch(self, meta, c):
+        return self._branch(meta, c, "abs")
+
+    def rel_branch(self, meta, c):
+        return self._branch(meta, c, "rel")
+
+    def float_branch(self, meta, c):
+        return self._branch(meta, c, "float")
+
+    def repeat(self, meta, c):
+        return Repeat(items=tuple(c), span=self.span(meta))
+
+    # -- snippets --------------------------------------------------------------------------
+    def snippet(self, meta, c):
+        attrs = tuple(x for x in c[2:] if isinstance(x, Attr))
+        rules = tuple(x for x in c[2:] if isinstance(x, Rule))
+        return Snippet(name=self.name(c[0]), object_type=self.name(c[1]), attrs=attrs, rules=rules,
+                       span=self.span(meta))
+
+    def use(self, meta, c):
+        return Use(snippet=self.name(c[0]), anchor=self.name(c[1]), span=self.span(meta))
+
+    def default(self, meta, c):
+        return Default(snippet=self.name(c[0]), object_type=self.name(c[1]), span=self.span(meta))
+
+    def variants(self, meta, c):
+        return Variants(object_type=self.name(c[0]), options=tuple(c[1:]), span=self.span(meta))
+
+    def variant(self, meta, c):
+        return VariantOption(snippet=self.name(c[0]), weight=c[1], span=self.span(meta))
+
+    # -- tiling ----------------------------------------------------------------------------
+    def part(self, meta, c):
+        span = self.span(meta)
+        geometry = c[1]
+        if not isinstance(geometry, Call):
+            self.bag.error("a part's geometry must be a call such as mesh(\"file.glb\") or box(w, d, h)",
+                           getattr(geometry, "span", None) or span, code="bad-part")
+            geometry = Call(func="box", args=(), span=span)
+        return PartDef(name=self.name(c[0]), geometry=geometry, span=span)
+
+    def vec3(self, meta, c):
+        return tuple(c)
+
+    def facing(self, meta, c):
+        return ("facing", str(c[0]))
+
+    def mirror(self, meta, c):
+        axis = str(c[0])
+        if axis not in ("x", "y", "z"):
+            self.bag.error(f"mirror axis must be x, y or z, not '{axis}'", self.tspan(c[0]),
+                           code="bad-axis")
+            axis = "x"
+        return ("mirror", axis)
+
+    def rot(self, meta, c):
+        return ("rot", c[0])
+
+    def site(self, meta, c):
+        span = self.span(meta)
+        dotted = str(c[0]).split(".")
+        if len(dotted) != 2:
+            self.bag.error("a site is named Part.site (exactly one dot)", self.tspan(c[0]),
+                           code="bad-site")
+            dotted = [dotted[0], dotted[-1]]
+        for piece in dotted:
+            if piece in KEYWORDS:
+                self.bag.error(f"'{piece}' is a reserved word and cannot be used as a name",
+                               self.tspan(c[0]), code="reserved-word")
+        opts = dict(x for x in c[2:])
+        return SiteDef(part=dotted[0], name=dotted[1], position=c[1],
+                       facing=opts.get("facing", "+x"), mirror=opts.get("mirror"), span=span)
+
+    def endpoint(self, meta, c):
+        pieces = str(c[0]).split(".")
+        if len(pieces) > 2:
+            self.bag.error("a dock end is Part or Part.site", self.tspan(c[0]), code="bad-dock")
+        for piece in pieces:
+            if piece in KEYWORDS:
+                self.bag.error(f"'{piece}' is a reserved word and cannot be used as a name",
+                               self.tspan(c[0]), code="reserved-word")
+        return (pieces[0], pieces[1] if len(pieces) > 1 else None)
+
+    def dock(self, meta, c):
+        (a, a_site), (b, b_site) = c[0], c[1]
+        placements = c[2] if len(c) > 2 else ()
+        return DockDef(a=a, a_site=a_site, b=b, b_site=b_site, placements=placements,
+                       span=self.span(meta))
+
+    def placements(self, meta, c):
+        return tuple(c)
+
+    def placement(self, meta, c):
+        rot = c[1][1] if len(c) > 1 else None
+        return Placement(at=c[0], rot=rot, span=self.span(meta))
+
+    def neighbors(self, meta, c):
+        multisets: tuple = ()
+        counts = []
+        for x in c[1:]:
+            if isinstance(x, CountRange):
+                counts.append(x)
+            else:
+                multisets = x
+        return NeighborRule(part=self.name(c[0]), multisets=multisets, counts=tuple(counts),
+                            span=self.span(meta))
+
+    def multisets(self, meta, c):
+        return tuple(c)
+
+    def multiset(self, meta, c):
+        return tuple(self.name(t) for t in c)
+
+    def _int(self, tok: Token) -> int:
+        value = int(str(tok))
+        if value > 10**9:
+            self.bag.error("count is too large", self.tspan(tok), code="bad-number")
+            return 10**9
+        return value
+
+    def count_between(self, meta, c):
+        lo = self._int(c[1])
+        hi = self._int(c[2]) if len(c) > 2 else None
+        return CountRange(type=self.name(c[0]), lo=lo, hi=hi, span=self.span(meta))
+
+    def count_exact(self, meta, c):
+        n = self._int(c[1])
+        return CountRange(type=self.name(c[0]), lo=n, hi=n, span=self.span(meta))
+
+    def constraint(self, meta, c):
+        args = tuple(c[1]) if len(c) > 1 else ()
+        return ConstraintDef(name=self.name(c[0]), args=args, span=self.span(meta))
+
+    def example_file(self, meta, c):
+        span = self.span(meta)
+        if str(c[1]) != "assembly":
+            self.bag.error(f"an example file is given as assembly(\"file\"), not {c[1]}(...)",
+                           self.tspan(c[1]), code="bad-example")
+        return ExampleDef(name=self.name(c[0]), source=self.string_value(c[2]), span=span)
+
+    def example_inline(self, meta, c):
+        return ExampleDef(name=self.name(c[0]), parts=tuple(c[1:]), span=self.span(meta))
+
+    def inline_part(self, meta, c):
+        span = self.span(meta)
+        rot = c[2][1] if len(c) > 2 else None
+        return InlinePart(type=self.name(c[0]), placement=Placement(at=c[1], rot=rot, span=span),
+                          span=span)
+
+    # -- expressions -----------------------------------------------------------------------
+    def number_value(self, tok: Token, text: str) -> Num:
+        value = float(text)
+        if not math.isfinite(value):
+            self.bag.error(f"number {text} is too large", self.tspan(tok), code="bad-number")
+            value = 0.0
+        num = Num(value=value, span=self.tspan(tok))
+        self._literal_nums.add(id(num))
+        return num
+
+    def number(self, meta, c):
+        return self.number_value(c[0], str(c[0]))
+
+    def string_value(self, tok: Token) -> str:
+        raw = str(tok)[1:-1]
+        if "\\" not in raw:
+            return raw
+
+        def unescape(m: re.Match) -> str:
+            esc = m.group(1)
+            if esc.startswith("u{"):
+                code = int(esc[2:-1], 16)
+                if code > 0x10FFFF or 0xD800 <= code <= 0xDFFF:
+                    self.bag.error(f"\\{esc} is not a valid character", self.tspan(tok),
+                                   code="bad-escape")
+                    return "?"
+                return chr(code)
+            if esc in _ESCAPES:
+                return _ESCAPES[esc]
+            self.bag.error(f"unknown escape \\{esc} in string (use \\\\ for a backslash)",
+                           self.tspan(tok), code="bad-escape")
+            return esc
+
+        return _ESCAPE_RE.sub(unescape, raw)
+
+    def string(self, meta, c):
+        return Str(value=self.string_value(c[0]), span=self.span(meta))
+
+    def true(self, meta, c):
+        return Bool(value=True, span=self.span(meta))
+
+    def false(self, meta, c):
+        return Bool(value=False, span=self.span(meta))
+
+    def ref(self, meta, c):
+        tok = c[0]
+        if tok.type == "DOTTED_NAME":
+            for piece in str(tok).split("."):
+                if piece in KEYWORDS:
+                    self.bag.error(f"'{piece}' is a reserved word and cannot be used as a name",
+                                   self.tspan(tok), code="reserved-word")
+            return Ref(name=str(tok), span=self.span(meta))
+        return Ref(name=self.name(tok), span=self.span(meta))
+
+    def call_expr(self, meta, c):
+        span = self.span(meta)
+        node = Call(func=self.name(c[0]), args=tuple(c[1:]), span=span)
+        return self._deep(node, c[1:], span)
+
+    def paren(self, meta, c):
+        self._literal_nums.discard(id(c[0]))
+        return c[0]
+
+    def vector(self, meta, c):
+        span = self.span(meta)
+        return self._deep(Vector(items=tuple(c), span=span), c, span)
+
+    def _span_of(self, a: Any, b: Any) -> Span:
+        sa, sb = getattr(a, "span", None), getattr(b, "span", None)
+        if sa is None or sb is None:
+            return sa or sb or Span(file=self.filename)
+        return Span(file=self.filename, line=sa.line, column=sa.column, end_line=sb.end_line,
+                    end_column=sb.end_column)
+
+    def _left_chain(self, meta, c):
+        left = c[0]
+        for i in range(1, len(c), 2):
+            right = c[i + 1]
+            span = self._span_of(left, right)
+            left = self._deep(Binary(op=str(c[i]), left=left, right=right, span=span),
+                              (left, right), span)
+        return left
+
+    or_expr = and_expr = eq_expr = rel_expr = sum = product = _left_chain
+
+    def _apply_unary(self, ops: list[Token], operand: Any) -> Any:
+        for tok in reversed(ops):
+            op = str(tok)
+            span = self._span_of(_TokSpan(self.tspan(tok)), operand)
+            if op == "-" and isinstance(operand, Num) and id(operand) in self._literal_nums:
+                # `-3` is the number -3 (so `offset(-0.1)` carries a plain negative number)
+                operand = Num(value=-operand.value, span=span)
+                continue
+            operand = self._deep(Unary(op=op, operand=operand, span=span), (operand,), span)
+        return operand
+
+    def unary(self, meta, c):
+        return self._apply_unary(list(c[:-1]), c[-1])
+
+    def power(self, meta, c):
+        # atom ("^" uops* atom)*: right-associative, unary ops bind looser than ^ on their right.
+        groups: list[tuple[list[Token], Any]] = []
+        i = 1
+        while i < len(c):
+            assert str(c[i]) == "^"
+            i += 1
+            ops = []
+            while isinstance(c[i], Token) and str(c[i]) in ("-", "+", "!"):
+                ops.append(c[i])
+                i += 1
+            groups.append((ops, c[i]))
+            i += 1
+        result = groups[-1][1]
+        for k in range(len(groups) - 1, -1, -1):
+            ops, _ = groups[k]
+            result = self._apply_unary(ops, result)
+            base = c[0] if k == 0 else groups[k - 1][1]
+            span = self._span_of(base, result)
+            result = self._deep(Binary(op="^", left=base, right=result, span=span), (base, result),
+                                span)
+        return result
+
+
+class _TokSpan:
+    def __init__(self, span: Span):
+        self.span = span

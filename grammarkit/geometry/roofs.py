@@ -1,0 +1,150 @@
+"""Roofs over planar footprints, as manifold3d solids in the footprint's local frame (z up).
+
+Method (chosen for robustness over elegance): every roof is the footprint prism cut by
+half-spaces, one inclined plane per roof face, with `Manifold.trim_by_plane`.
+
+- Hip roof of a convex polygon: the prism intersected with, for every edge, the half-space
+  below the plane rising from that edge at the roof angle. This is exactly the straight
+  skeleton roof of a convex polygon.
+- Hip roof of a non-convex polygon (L, U, T footprints): the polygon is covered by maximal
+  convex pieces (`footprints.convex_cover`: cut along the edges at each reflex vertex, keep the
+  pieces not contained in others; an L gives its two full-length wings) and the hip roofs of
+  the pieces are united. For rectilinear footprints whose wings have equal depth this is the
+  straight-skeleton roof; otherwise it is a plausible cross-hipped roof with valleys, always a
+  closed manifold, never self-intersecting.
+- Gable and shed roofs: the prism under two (one) inclined planes whose ridge runs along the
+  requested local axis (`ridge="x"` or `"y"`), not along whatever edge happens to come first.
+- Pyramid: the convex hull of the base and an apex over the bounding-box centre, clipped by the
+  footprint prism (so a non-convex footprint gets a pyramid that does not overhang its notch).
+- Mansard: a steep hip roof cut at a break height, topped by a shallow hip roof over the
+  footprint inset by the steep part's run.
+
+`overhang` offsets the footprint outwards (mitred corners) before building the roof; the eaves
+are then a thin wedge starting at z = 0.
+"""
+from __future__ import annotations
+
+import math
+
+import manifold3d
+
+from .footprints import Polygon, bbox, convex_cover, cross_section, is_convex, polygons_of
+
+Manifold = manifold3d.Manifold
+
+__all__ = ["gable", "hip", "mansard", "pyramid", "shed", "overhung"]
+
+
+def _check_angle(angle: float, lo: float = 0.0, hi: float = 89.0) -> float:
+    if not (lo < angle <= hi):
+        raise ValueError(f"roof angle must be in ({lo:g}, {hi:g}] degrees, got {angle:g}")
+    return math.tan(math.radians(angle))
+
+
+def overhung(poly: Polygon, overhang: float) -> list[Polygon]:
+    """The footprint grown by `overhang` (mitred corners); several pieces only if it was odd."""
+    if overhang < 0:
+        raise ValueError(f"overhang must be >= 0, got {overhang:g}")
+    if overhang == 0:
+        return [poly]
+    cs = cross_section(poly).offset(overhang, manifold3d.JoinType.Miter, 2.0)
+    return polygons_of(cs)
+
+
+def _keep_below(solid: Manifold, nx: float, ny: float, c: float, t: float) -> Manifold:
+    """Keep z <= t * (n . p - c) (the side under a plane rising at slope t away from a line)."""
+    # condition: t*nx*x + t*ny*y - z >= t*c
+    vx, vy, vz = t * nx, t * ny, -1.0
+    ln = math.sqrt(vx * vx + vy * vy + vz * vz)
+    return solid.trim_by_plane((vx / ln, vy / ln, vz / ln), t * c / ln)
+
+
+def _hip_convex(poly: Polygon, t: float) -> Manifold:
+    x0, y0, x1, y1 = bbox(poly)
+    top = t * max(x1 - x0, y1 - y0) + 1.0
+    solid = Manifold.extrude(cross_section(poly), top)
+    n = len(poly)
+    for i in range(n):
+        (ax, ay), (bx, by) = poly[i], poly[(i + 1) % n]
+        dx, dy = bx - ax, by - ay
+        ln = math.hypot(dx, dy)
+        if ln < 1e-12:
+            continue
+        nx, ny = -dy / ln, dx / ln  # inward normal of a counter-clockwise polygon
+        solid = _keep_below(solid, nx, ny, nx * ax + ny * ay, t)
+    return solid
+
+
+def hip(poly: Polygon, angle: float, overhang: float = 0.0) -> Manifold:
+    t = _check_angle(angle)
+    pieces = []
+    for p in overhung(poly, overhang):
+        if is_convex(p):
+            pieces.append(_hip_convex(p, t))
+        else:
+            pieces.extend(_hip_convex(c, t) for c in convex_cover(p))
+    if len(pieces) == 1:
+        return pieces[0]
+    return Manifold.batch_boolean(pieces, manifold3d.OpType.Add)
+
+
+def gable(poly: Polygon, angle: float, overhang: float = 0.0, ridge: str = "x") -> Manifold:
+    """Two planes meeting in a ridge parallel to local `ridge` over the bounding-box middle."""
+    t = _check_angle(angle)
+    parts = []
+    for p in overhung(poly, overhang):
+        x0, y0, x1, y1 = bbox(p)
+        span = (y1 - y0) if ridge == "x" else (x1 - x0)
+        solid = Manifold.extrude(cross_section(p), t * span / 2 + 1.0)
+        if ridge == "x":
+            solid = _keep_below(solid, 0.0, 1.0, y0, t)
+            solid = _keep_below(solid, 0.0, -1.0, -y1, t)
+        else:
+            solid = _keep_below(solid, 1.0, 0.0, x0, t)
+            solid = _keep_below(solid, -1.0, 0.0, -x1, t)
+        parts.append(solid)
+    return parts[0] if len(parts) == 1 else Manifold.batch_boolean(parts, manifold3d.OpType.Add)
+
+
+def shed(poly: Polygon, angle: float, overhang: float = 0.0, ridge: str = "x") -> Manifold:
+    """One plane rising from the low side (min y for ridge x, min x for ridge y)."""
+    t = _check_angle(angle)
+    parts = []
+    for p in overhung(poly, overhang):
+        x0, y0, x1, y1 = bbox(p)
+        span = (y1 - y0) if ridge == "x" else (x1 - x0)
+        solid = Manifold.extrude(cross_section(p), t * span + 1.0)
+        solid = _keep_below(solid, 0.0, 1.0, y0, t) if ridge == "x" else _keep_below(solid, 1.0, 0.0, x0, t)
+        parts.append(solid)
+    return parts[0] if len(parts) == 1 else Manifold.batch_boolean(parts, manifold3d.OpType.Add)
+
+
+def pyramid(poly: Polygon, angle: float, overhang: float = 0.0) -> Manifold:
+    t = _check_angle(angle)
+    parts = []
+    for p in overhung(poly, overhang):
+        x0, y0, x1, y1 = bbox(p)
+        h = t * min(x1 - x0, y1 - y0) / 2
+        pts = [(x, y, 0.0) for x, y in p] + [((x0 + x1) / 2, (y0 + y1) / 2, h)]
+        solid = Manifold.hull_points(pts)
+        if not is_convex(p):
+            solid = solid ^ Manifold.extrude(cross_section(p), h + 1.0)
+        parts.append(solid)
+    return parts[0] if len(parts) == 1 else Manifold.batch_boolean(parts, manifold3d.OpType.Add)
+
+
+def mansard(poly: Polygon, angle: float, height: float, top_angle: float = 15.0,
+            overhang: float = 0.0) -> Manifold:
+    """A steep lower roof up to `height`, then a shallow hip over what is left on top."""
+    t = _check_angle(angle)
+    if height <= 0:
+        raise ValueError(f"mansard break height must be > 0, got {height:g}")
+    lower = hip(poly, angle, overhang).trim_by_plane((0.0, 0.0, -1.0), -height)
+    if top_angle <= 0:
+        return lower
+    run = height / t
+    parts = [lower]
+    for p in overhung(poly, overhang):
+        for q in polygons_of(cross_section(p).offset(-run, manifold3d.JoinType.Miter, 2.0), 1e-6):
+            parts.append(hip(q, top_angle).translate((0.0, 0.0, height)))
+    return parts[0] if len(parts) == 1 else Manifold.batch_boolean(parts, manifold3d.OpType.Add)

@@ -1,0 +1,619 @@
+"""From IR to runnable rules: snippet binding, name resolution, closures for every step.
+
+Compilation happens once per grammar (and per snippet binding, for variations); deriving a
+building then runs plain Python closures with no pydantic access in the hot loop.
+
+Snippet combination (Nishida 2016):
+- `use S as A`: a copy of snippet S whose `Start` is renamed `A`. The copy's other rules are
+  private to it (internally `A::Rule`, shown as `Rule`), its attrs become `A.attr`.
+- `default S for T`: a successor `T` that no rule or `use` defines is bound to a copy of S.
+- Inside a copy, names resolve to the copy's own rules first, then to the grammar's rules and
+  anchors. A name that resolves to nothing becomes a leaf (with a warning), as in CGA.
+- `variants T { ... }` tables are used by `variations()` to swap the snippet bound to anchors
+  of object type T; `choices={anchor: snippet}` passed here overrides the bindings.
+"""
+from __future__ import annotations
+
+import math
+import random
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Callable, Mapping
+
+from ..errors import DerivationError, GrammarError, GrammarkitError
+from ..expr_eval import compile_expr, is_constant
+from ..ir import expr as E
+from ..ir import split as S
+from ..ir.base import Span
+from ..ir.grammar import Grammar
+from .engine import fail, label_of
+
+BUILTIN_NAMES = {
+    "scope.sx": 0, "scope.sy": 1, "scope.sz": 2,
+}
+
+
+class CRule:
+    """A compiled rule: display name, object type, parameters and steps."""
+
+    __slots__ = ("name", "key", "otype", "params", "steps", "span", "label", "snippet")
+
+    def __init__(self, name: str, key: str, otype: str | None, params: tuple[str, ...],
+                 span: Span | None, snippet: str | None = None):
+        self.name, self.key, self.otype, self.params = name, key, otype, params
+        self.span, self.snippet = span, snippet
+        self.steps: tuple = ()
+        self.label = label_of("rule", key)
+
+    def __repr__(self) -> str:
+        return f"CRule({self.key})"
+
+
+class Slot:
+    """One entry of an operation block (a split part, a selector branch, or a repeat group)."""
+
+    __slots__ = ("mode", "size", "sel", "body", "items", "label", "span")
+
+    def __init__(self, mode: str, size: Callable | None = None, sel: str | None = None,
+                 body: tuple = (), items: tuple = (), label: int = 0, span: Span | None = None):
+        self.mode, self.size, self.sel, self.body, self.items = mode, size, sel, body, items
+        self.label, self.span = label, span
+
+
+@dataclass
+class AttrInfo:
+    """A user-settable parameter: a grammar attr or an attr of a bound snippet copy."""
+
+    key: str  # "height" or "Roof.roof_deg"
+    name: str
+    attr: S.Attr
+    scope: str | None  # anchor of the snippet copy, None for the grammar's own attrs
+    snippet: str | None
+    default: Callable = field(repr=False, default=None)  # type: ignore[assignment]
+    lo: Callable | None = field(repr=False, default=None)
+    hi: Callable | None = field(repr=False, default=None)
+    choices: tuple[Callable, ...] | None = field(repr=False, default=None)
+
+
+class _ValueEnv:
+    """Environment for attr/const values: no scope, a generator seeded by the run seed."""
+
+    sz = (0.0, 0.0, 0.0)
+    params: tuple = ()
+    si, st = 0, 1
+
+    def __init__(self, seed: int):
+        self._rng = random.Random(seed ^ 0x5EED)
+
+    def rng(self) -> random.Random:
+        return self._rng
+
+
+class CompiledGrammar:
+    """The runnable form of a split grammar (one snippet binding)."""
+
+    def __init__(self, grammar: Grammar):
+        self.grammar = grammar
+        self.name = grammar.name
+        self.rules: dict[str, CRule] = {}
+        self.axiom: CRule | None = None
+        self.attrs: dict[str, AttrInfo] = {}
+        self.consts: dict[str, Callable] = {}
+        self.values: dict[str, Any] = {}  # filled per derivation by set_values()
+        self.warnings: list[tuple[str, Span | None]] = []
+        self.bindings: dict[str, str] = {}  # anchor -> snippet name
+        self.base_dir = str(Path(grammar.source_path).parent) if grammar.source_path else None
+
+    # -- values ----------------------------------------------------------------------------
+    def resolve_attr_keys(self, name: str) -> list[str]:
+        """Keys an `--set name=...` refers to: an exact key, else every attr with that name."""
+        if name in self.attrs:
+            return [name]
+        return [k for k, a in self.attrs.items() if a.name == name]
+
+    def set_values(self, overrides: Mapping[str, Any] | None, seed: int) -> dict[str, Any]:
+        """Evaluate attrs (with overrides) and consts into `self.values`; returns attr values."""
+        env = _ValueEnv(seed)
+        V = self.values
+        V.clear()
+        pending: dict[str, Callable] = {}
+        for key, info in self.attrs.items():
+            pending[key] = info.default
+        for name, f in self.consts.items():
+            pending[name] = f
+        for name, value in (overrides or {}).items():
+            keys = self.resolve_attr_keys(name)
+            if not keys:
+                known = ", ".join(sorted(self.attrs)) or "none"
+                raise GrammarError(f"unknown attr {name!r} (known attrs: {known})", None,
+                                   code="unknown-attr")
+            for key in keys:
+                V[key] = check_attr_value(self.attrs[key], value, env)
+                pending.pop(key, None)
+        # evaluate in dependency order: retry what needed a value not computed yet
+        while pending:
+            progress = False
+            for key in list(pending):
+                try:
+                    V[key] = pending[key](env)
+                except KeyError:
+                    continue
+                del pending[key]
+                progress = True
+            if not progress:
+                key = next(iter(pending))
+                info = self.attrs.get(key)
+                span = info.attr.span if info else None
+                raise GrammarError(f"cannot evaluate {key!r}: its value depends on itself "
+                                   f"(a cycle among {', '.join(sorted(pending))})", span, code="cycle")
+        return {k: V[k] for k in self.attrs}
+
+
+def check_attr_value(info: AttrInfo, value: Any, env: Any = None) -> Any:
+    """Convert and check a user value against the attr's type, range or enum."""
+    env = env or _ValueEnv(0)
+    default = info.default(env)
+    if isinstance(value, str) and not isinstance(default, str):
+        text = value.strip()
+        if isinstance(default, bool):
+            if text.lower() not in ("true", "false"):
+                raise GrammarError(f"attr {info.key!r} is a boolean; got {value!r}", info.attr.span)
+            value = text.lower() == "true"
+        else:
+            try:
+                value = float(text)
+            except ValueError:
+                raise GrammarError(f"attr {info.key!r} is a number; got {value!r}", info.attr.span,
+                                   code="bad-attr-value") from None
+            if value.is_integer() and isinstance(default, int):
+                value = int(value)
+    if info.lo is not None:
+        lo, hi = info.lo(env), info.hi(env)  # type: ignore[misc]
+        if not isinstance(value, (int, float)) or isinstance(value, bool) or not (lo <= value <= hi):
+            raise GrammarError(f"attr {info.key!r} = {value!r} is outside its range [{lo:g}, {hi:g}]",
+                               info.attr.span, code="attr-out-of-range")
+    if info.choices is not None:
+        options = [c(env) for c in info.choices]
+        if value not in options:
+            raise GrammarError(f"attr {info.key!r} = {value!r} is not one of {options}",
+                               info.attr.span, code="attr-not-in-enum")
+    return value
+
+
+# ---------------------------------------------------------------------------------------------
+def compile_grammar(grammar: Grammar, choices: Mapping[str, str] | None = None,
+                    start: str | None = None) -> CompiledGrammar:
+    from ..plugins import get_plugin_manager
+
+    pm = get_plugin_manager()
+    return _Compiler(grammar, pm.operations(), pm.functions(), choices or {}).run(start)
+
+
+class _Scope:
+    """Where a rule body lives: the grammar itself or a bound snippet copy."""
+
+    def __init__(self, anchor: str | None = None, snippet: S.Snippet | None = None):
+        self.anchor = anchor
+        self.snippet = snippet
+        self.local_rules = {r.name for r in snippet.rules} if snippet else set()
+        self.local_attrs = {a.name for a in snippet.attrs} if snippet else set()
+
+    def rule_key(self, name: str) -> str | None:
+        if self.snippet is None:
+            return None
+        if name == "Start":
+            return self.anchor
+        if name in self.local_rules:
+            return f"{self.anchor}::{name}"
+        return None
+
+
+class _Compiler:
+    def __init__(self, grammar: Grammar, ops: Mapping[str, Any], functions: Mapping[str, Any],
+                 choices: Mapping[str, str]):
+        self.g = grammar
+        self.ops = ops
+        self.functions = functions
+        self.out = CompiledGrammar(grammar)
+        self.top = {}
+        for r in grammar.rules:
+            if r.name in self.top:
+                raise GrammarError(f"rule {r.name!r} is defined twice", r.span, code="duplicate-rule")
+            self.top[r.name] = r
+        self.snippets = {s.name: s for s in grammar.snippets}
+        self.uses: dict[str, str] = {}
+        self.use_spans: dict[str, Span | None] = {}
+        for u in grammar.uses:
+            self._check_snippet(u.snippet, u.span)
+            self.uses[u.anchor] = u.snippet
+            self.use_spans[u.anchor] = u.span
+        for anchor, snip in choices.items():
+            self._check_snippet(snip, None)
+            self.uses[anchor] = snip
+        self.defaults: dict[str, str] = {}
+        for d in grammar.defaults:
+            self._check_snippet(d.snippet, d.span)
+            self.defaults[d.object_type] = d.snippet
+        self.global_names = {a.name for a in grammar.attrs} | {c.name for c in grammar.consts}
+        self.pending: list[tuple[CRule, S.Rule, _Scope]] = []
+
+    def _check_snippet(self, name: str, span: Span | None) -> None:
+        if name not in self.snippets:
+            known = ", ".join(sorted(self.snippets)) or "none"
+            raise GrammarError(f"unknown snippet {name!r} (known: {known})", span, code="unknown-snippet")
+
+    # -- entry -------------------------------------------------------------------------------
+    def run(self, start: str | None) -> CompiledGrammar:
+        out = self.out
+        value_scope = _Scope()
+        for a in self.g.attrs:
+            out.attrs[a.name] = self._attr_info(a.name, a, None, None, value_scope)
+        for c in self.g.consts:
+            out.consts[c.name] = self._expr(c.value, value_scope, ())
+        if start is None:
+            if not self.top:
+                raise GrammarError("the grammar has no rules to start from", None, code="no-axiom")
+            start = next(iter(self.top))
+        axiom = self._lookup(start, _Scope(), None)
+        if axiom is None:
+            raise GrammarError(f"start rule {start!r} is not defined", None, code="no-axiom")
+        out.axiom = axiom
+        while self.pending:
+            crule, rule, scope = self.pending.pop()
+            crule.steps = self._seq(rule.body, scope, rule.params, crule)
+        return out
+
+    def _attr_info(self, key: str, a: S.Attr, anchor: str | None, snippet: str | None,
+                   scope: _Scope) -> AttrInfo:
+        info = AttrInfo(key, a.name, a, anchor, snippet, self._expr(a.value, scope, ()))
+        if a.range is not None:
+            info.lo = self._expr(a.range[0], scope, ())
+            info.hi = self._expr(a.range[1], scope, ())
+        if a.enum is not None:
+            info.choices = tuple(self._expr(x, scope, ()) for x in a.enum)
+        return info
+
+    # -- rules and names -----------------------------------------------------------------------
+    def _lookup(self, name: str, scope: _Scope, span: Span | None) -> CRule | None:
+        """The compiled rule a successor `name` refers to from `scope` (None: undefined)."""
+        rules = self.out.rules
+        key = scope.rule_key(name)
+        if key is not None:
+            if key not in rules:
+                if name == "Start":
+                    return self._bind(scope.anchor, scope.snippet.name, span)  # type: ignore[arg-type]
+                rule = next(r for r in scope.snippet.rules if r.name == name)  # type: ignore[union-attr]
+                cr = CRule(name, key, scope.snippet.object_type, rule.params, rule.span, scope.snippet.name)
+                rules[key] = cr
+                self.pending.append((cr, rule, scope))
+            return rules[key]
+        if name in rules:
+            return rules[name]
+        if name in self.uses:
+            if name in self.top:
+                self.out.warnings.append((f"rule {name!r} is also bound by `use {self.uses[name]} as "
+                                          f"{name}`; the snippet wins", self.top[name].span))
+            return self._bind(name, self.uses[name], span)
+        if name in self.top:
+            rule = self.top[name]
+            cr = CRule(name, name, None, rule.params, rule.span)
+            rules[name] = cr
+            self.pending.append((cr, rule, _Scope()))
+            return cr
+        if name in self.defaults:
+            return self._bind(name, self.defaults[name], span)
+        return None
+
+    def _bind(self, anchor: str, snippet_name: str, span: Span | None) -> CRule:
+        snip = self.snippets[snippet_name]
+        start = next((r for r in snip.rules if r.name == "Start"), None)
+        if start is None:
+            raise GrammarError(f"snippet {snippet_name!r} has no Start rule", snip.span, code="no-start")
+        scope = _Scope(anchor, snip)
+        self.out.bindings[anchor] = snippet_name
+        for a in snip.attrs:
+            key = f"{anchor}.{a.name}"
+            self.out.attrs[key] = self._attr_info(key, a, anchor, snippet_name, _Scope(anchor, snip))
+        cr = CRule(anchor, anchor, snip.object_type, start.params, start.span, snippet_name)
+        self.out.rules[anchor] = cr
+        self.pending.append((cr, start, scope))
+        return cr
+
+    # -- expressions ---------------------------------------------------------------------------
+    def _expr(self, e: Any, scope: _Scope, params: tuple[str, ...]) -> Callable:
+        V = self.out.values
+        glob = self.global_names
+
+        def resolve(name: str, span: Span | None) -> Callable | None:
+            if name in params:
+                i = params.index(name)
+                return lambda s, _i=i: s.params[_i]
+            if name in BUILTIN_NAMES:
+                i = BUILTIN_NAMES[name]
+                return lambda s, _i=i: s.sz[_i]
+            if name in ("split.index", "comp.index"):
+                return lambda s: s.si
+            if name in ("split.total", "comp.total"):
+                return lambda s: s.st
+            if name in scope.local_attrs:
+                key = f"{scope.anchor}.{name}"
+                return lambda s, _k=key: V[_k]
+            if name in glob:
+                return lambda s, _k=name: V[_k]
+            return None
+        return compile_expr(e, resolve, self.functions)
+
+    # -- sequences -----------------------------------------------------------------------------
+    def _seq(self, seq: S.Seq, scope: _Scope, params: tuple[str, ...], rule: CRule) -> tuple:
+        items = list(seq.items)
+        steps: list[Callable] = []
+        i = 0
+        n = len(items)
+        while i < n:
+            item = items[i]
+            last = i == n - 1
+            if isinstance(item, S.OpCall) and item.name == "repeat":
+                nxt = items[i + 1] if i + 1 < n else None
+                if not isinstance(nxt, S.Pattern):
+                    raise GrammarError("repeat(...) must be followed by a pattern such as (A)* or (A B)* A",
+                                       item.span, code="repeat-without-pattern")
+                steps.append(self._repeat(item, nxt, scope, params, rule, len(steps)))
+                i += 2
+                if i < n:
+                    raise GrammarError("nothing may follow a repeat pattern", items[i].span)
+                continue
+            if isinstance(item, S.Pattern):
+                raise GrammarError("a pattern (A)* needs a repeat(axis, size) before it", item.span,
+                                   code="pattern-without-repeat")
+            steps.append(self._item(item, scope, params, rule, last, len(steps)))
+            if isinstance(item, S.OpCall) and item.block is not None and not last:
+                raise GrammarError(f"nothing may follow {item.name}(...) {{ ... }}: its block consumes "
+                                   "the shape", items[i + 1].span, code="item-after-block")
+            i += 1
+        return tuple(steps)
+
+    def _item(self, item: Any, scope: _Scope, params: tuple[str, ...], rule: CRule, last: bool,
+              index: int) -> Callable:
+        if isinstance(item, S.OpCall):
+            return self._op(item, scope, params, rule, index)
+        if isinstance(item, S.Successor):
+            return self._successor(item.name, item.args, item.span, scope, params, last)
+        if isinstance(item, S.Terminal):
+            return _terminal_step(item.name, last)
+        if isinstance(item, S.Nil):
+            return _nil_step
+        if isinstance(item, S.Push):
+            body = self._seq(item.body, scope, params, rule)
+
+            def push(ctx: Any, s: Any, _body=body) -> Any:
+                ctx.push(s.copy(), _body)
+                return s
+            return push
+        if isinstance(item, S.Case):
+            arms = tuple((self._expr(a.cond, scope, params), self._seq(a.body, scope, params, rule))
+                         for a in item.arms)
+            other = self._seq(item.otherwise, scope, params, rule) if item.otherwise is not None else None
+            return _case_step(arms, other)
+        if isinstance(item, S.Choice):
+            arms = tuple((self._expr(a.percent, scope, params), self._seq(a.body, scope, params, rule),
+                          a.span) for a in item.arms)
+            other = self._seq(item.otherwise, scope, params, rule) if item.otherwise is not None else None
+            return _choice_step(arms, other, item.span)
+        raise GrammarError(f"unexpected item {type(item).__name__}", getattr(item, "span", None))
+
+    def _successor(self, name: str, args: tuple, span: Span | None, scope: _Scope,
+                   params: tuple[str, ...], last: bool) -> Callable:
+        target = self._lookup(name, scope, span)
+        if target is None:
+            self.out.warnings.append((f"no rule for {name!r}: it becomes a leaf", span))
+            return _terminal_step(name, last)
+        if len(args) != len(target.params):
+            raise GrammarError(f"rule {name!r} takes {len(target.params)} argument(s), got {len(args)}",
+                               span, code="bad-arity")
+        fns = tuple(self._expr(a, scope, params) for a in args)
+        if last:
+            def succ_last(ctx: Any, s: Any) -> None:
+                ctx.enter(s, target, tuple(f(s) for f in fns) if fns else ())
+                return None
+            return succ_last
+
+        def succ(ctx: Any, s: Any) -> Any:
+            ctx.enter(s.copy(), target, tuple(f(s) for f in fns) if fns else ())
+            return s
+        return succ
+
+    def _args(self, call: S.OpCall, spec: Any, scope: _Scope, params: tuple[str, ...]) -> list:
+        ps = spec.params
+        positional = [a for a in call.args if a.name is None]
+        named = {a.name: a for a in call.args if a.name is not None}
+        if len(positional) > len(ps) and not spec.variadic:
+            raise GrammarError(f"{call.name}() takes at most {len(ps)} argument(s), got {len(positional)}",
+                               call.span, code="bad-arity")
+        fns: list[Callable] = []
+        for i, p in enumerate(ps):
+            arg = positional[i] if i < len(positional) else named.pop(p.name, None)
+            if arg is None:
+                if p.required:
+                    raise GrammarError(f"{call.name}() is missing argument {p.name!r}", call.span,
+                                       code="missing-argument")
+                fns.append(_const_fn(p.default))
+                continue
+            fns.append(self._arg(arg.value, p, call, scope, params))
+        if named:
+            bad = next(iter(named.values()))
+            raise GrammarError(f"{call.name}() has no parameter {bad.name!r}; parameters: "
+                               f"{', '.join(p.name for p in ps)}", bad.span, code="unknown-parameter")
+        for arg in positional[len(ps):]:
+            fns.append(self._expr(arg.value, scope, params))
+        return fns
+
+    def _arg(self, value: Any, p: Any, call: S.OpCall, scope: _Scope, params: tuple[str, ...]) -> Callable:
+        if p.type in ("axis", "selector") and isinstance(value, E.Ref) and (
+                not p.choices or value.name in p.choices):
+            return _const_fn(value.name)
+        if p.type in ("axis", "selector") and isinstance(value, E.Ref):
+            raise GrammarError(f"{call.name}(): {p.name} must be one of {', '.join(p.choices)}, "
+                               f"got {value.name!r}", value.span, code="bad-argument")
+        return self._expr(value, scope, params)
+
+    def _op(self, call: S.OpCall, scope: _Scope, params: tuple[str, ...], rule: CRule, index: int) -> Callable:
+        spec = self.ops.get(call.name)
+        if spec is None:
+            known = ", ".join(sorted(self.ops))
+            raise GrammarError(f"unknown operation {call.name!r}", call.span, hint=f"known operations: {known}",
+                               code="unknown-operation")
+        apply = spec.apply
+        if apply is None:
+            raise GrammarError(f"operation {call.name!r} (plugin {spec.plugin!r}) has no implementation",
+                               call.span, code="operation-without-apply")
+        apply = apply.target() if hasattr(apply, "target") else apply
+        fns = self._args(call, spec, scope, params)
+        if call.name == "i" and fns and is_constant(fns[0]):
+            base = Path(call.span.file).parent if call.span and call.span.file else (
+                Path(self.out.base_dir) if self.out.base_dir else Path("."))
+            fns[0] = _const_fn(str(base / fns[0](None)))
+        block = None
+        if call.block is not None:
+            if spec.block == "none":
+                raise GrammarError(f"{call.name}() takes no {{ }} block", call.span, code="unexpected-block")
+            block = self._block(call, spec, scope, params, rule, index)
+        elif spec.block in ("sizes", "selectors"):
+            raise GrammarError(f"{call.name}() needs a {{ ... }} block", call.span, code="missing-block")
+        return _op_step(apply, tuple(fns), block, call.span, call.name)
+
+    def _block(self, call: S.OpCall, spec: Any, scope: _Scope, params: tuple[str, ...], rule: CRule,
+               index: int) -> tuple:
+        sizes = spec.block in ("sizes", "optional-sizes")
+
+        def build(items: tuple, path: str) -> tuple:
+            out = []
+            for j, it in enumerate(items):
+                lab = label_of(rule.key, index, path, j) << 12
+                if isinstance(it, S.Repeat):
+                    if not sizes:
+                        raise GrammarError("repeat groups {...}* are only allowed in split blocks", it.span)
+                    out.append(Slot("repeat", items=build(it.items, f"{path}.{j}"), label=lab, span=it.span))
+                    continue
+                body = self._seq(it.body, scope, params, rule)
+                if sizes:
+                    out.append(Slot(it.mode, size=self._expr(it.key, scope, params), body=body,
+                                    label=lab, span=it.span))
+                else:
+                    if not isinstance(it.key, E.Ref) or it.mode != "abs":
+                        raise GrammarError(f"{call.name}() block entries must be selectors "
+                                           f"({', '.join(spec.selectors)})", it.span, code="bad-selector")
+                    if spec.selectors and it.key.name not in spec.selectors:
+                        raise GrammarError(f"{call.name}(): unknown selector {it.key.name!r}; expected one of "
+                                           f"{', '.join(spec.selectors)}", it.key.span or it.span,
+                                           code="bad-selector")
+                    out.append(Slot("sel", sel=it.key.name, body=body, label=lab, span=it.span))
+            return tuple(out)
+        return build(call.block or (), "")
+
+    def _repeat(self, call: S.OpCall, pat: S.Pattern, scope: _Scope, params: tuple[str, ...],
+                rule: CRule, index: int) -> Callable:
+        spec = self.ops.get("repeat")
+        if spec is None or spec.apply is None:
+            raise GrammarError("operation 'repeat' is not available", call.span)
+        fns = self._args(call, spec, scope, params)
+        axis_fn, size_fn, sep_fn = fns[0], fns[1], fns[2]
+        span = pat.span
+
+        def succ_body(name: str) -> tuple:
+            return (self._successor(name, (), span, scope, params, True),)
+        group = []
+        for j, name in enumerate(pat.group):
+            lab = label_of(rule.key, index, "pattern", j) << 12
+            if j == 0:
+                group.append(Slot("float", size=size_fn, body=succ_body(name), label=lab, span=span))
+            else:
+                group.append(Slot("abs", size=sep_fn, body=succ_body(name), label=lab, span=span))
+        slots = [Slot("repeat", items=tuple(group), label=label_of(rule.key, index, "pattern-group") << 12,
+                      span=span)]
+        if pat.tail is not None:
+            slots.append(Slot("float", size=size_fn, body=succ_body(pat.tail),
+                              label=label_of(rule.key, index, "pattern-tail") << 12, span=span))
+        apply = spec.apply.target() if hasattr(spec.apply, "target") else spec.apply
+        return _op_step(apply, (axis_fn, size_fn, sep_fn), tuple(slots), call.span, "repeat")
+
+
+# -- step factories -------------------------------------------------------------------------------
+def _const_fn(value: Any) -> Callable:
+    def f(env: Any, _v=value) -> Any:
+        return _v
+    f._const = True  # type: ignore[attr-defined]
+    f._value = value  # type: ignore[attr-defined]
+    return f
+
+
+def _nil_step(ctx: Any, s: Any) -> None:
+    return None
+
+
+def _terminal_step(name: str, last: bool) -> Callable:
+    if last:
+        def term_last(ctx: Any, s: Any) -> None:
+            ctx.leaf(s, name)
+            return None
+        return term_last
+
+    def term(ctx: Any, s: Any) -> Any:
+        ctx.leaf(s.copy(), name)
+        return s
+    return term
+
+
+def _op_step(apply: Callable, fns: tuple, block: tuple | None, span: Span | None, name: str) -> Callable:
+    const = [f(None) for f in fns] if all(is_constant(f) for f in fns) else None
+
+    def step(ctx: Any, s: Any) -> Any:
+        try:
+            r = apply(ctx, s, const if const is not None else [f(s) for f in fns], block)
+        except GrammarkitError:
+            raise
+        except (ValueError, TypeError, ArithmeticError, IndexError) as exc:
+            raise fail(s, f"{name}(): {exc}", span) from None
+        except Exception as exc:  # noqa: BLE001 - a plugin's operation crashed: report, no traceback
+            raise fail(s, f"{name}() failed: {type(exc).__name__}: {exc}", span) from None
+        if type(r) is list:
+            ctx.spawn(s, r, name)
+            return None
+        return r
+    return step
+
+
+def _case_step(arms: tuple, other: tuple | None) -> Callable:
+    def case(ctx: Any, s: Any) -> Any:
+        for cond, body in arms:
+            if cond(s):
+                return ctx.run_inline(s, body)
+        if other is not None:
+            return ctx.run_inline(s, other)
+        return s
+    return case
+
+
+def _choice_step(arms: tuple, other: tuple | None, span: Span | None) -> Callable:
+    def choice(ctx: Any, s: Any) -> Any:
+        u = s.rng().random() * 100.0
+        acc = 0.0
+        chosen = None
+        for pct, body, aspan in arms:
+            p = pct(s)
+            if isinstance(p, bool) or not isinstance(p, (int, float)) or p < 0 or not math.isfinite(p):
+                raise fail(s, f"a choice percentage must be a number >= 0, got {p!r}", aspan or span)
+            acc += p
+            if chosen is None and u < acc:
+                chosen = body
+        if acc > 100.0 + 1e-9:
+            raise fail(s, f"choice percentages add up to {acc:g} > 100", span)
+        if chosen is None:
+            chosen = other
+        if chosen is None:
+            return s  # the remaining probability: no arm applies, the shape goes on unchanged
+        return ctx.run_inline(s, chosen)
+    return choice
+
+
+__all__ = ["AttrInfo", "CRule", "CompiledGrammar", "Slot", "check_attr_value", "compile_grammar"]
+_ = DerivationError

@@ -1,0 +1,269 @@
+"""The derivation engine: runs compiled rules on shapes and collects the building's solids.
+
+One `Derivation` per model. Shapes wait on an explicit stack (no recursion limit for deep
+grammars); each compiled step transforms the current shape or hands it on. What becomes
+geometry (decided here, documented in docs/operations.md "Watertight output"):
+
+- volumes that end as leaves, volumes decomposed by `comp(f)` (the *body*), roofs, extruded
+  faces and inserted meshes are *added*;
+- faces that went through `recess(d)` are *cut* out of the union (one batched subtraction);
+- other faces have no volume: they tag (colour/material) the body surface they lie on.
+
+Every solid gets a manifold3d original ID mapped to its semantic tags, so the triangles of the
+final union can be traced back to the terminal (or body) they came from.
+"""
+from __future__ import annotations
+
+import math
+import zlib
+from dataclasses import dataclass
+from typing import Any
+
+import manifold3d
+
+from ..errors import DerivationError, LimitError
+from ..geometry.footprints import cross_section
+from .shape import FACE, Shape
+
+Manifold = manifold3d.Manifold
+M64 = (1 << 64) - 1
+
+# How far a recess cut reaches out of its face, so that the cut's opening never lies exactly
+# in the facade plane (coplanar faces would make the boolean's result depend on round-off).
+CUT_OUTSET = 0.25
+
+
+@dataclass(frozen=True)
+class Limits:
+    """Resource guards; exceeding one ends the derivation with a LimitError naming the rule."""
+
+    max_depth: int = 64  # rule applications along one derivation path
+    max_shapes: int = 100_000  # shapes created in one derivation
+    max_repeat: int = 2_000  # repetitions of one repeat group / pattern
+    max_triangles: int = 2_000_000  # triangles of the final mesh
+
+
+def mix(a: int, b: int) -> int:
+    """splitmix64 of two integers: per-shape seeds from the parent's seed and a path label."""
+    x = (a * 0x9E3779B97F4A7C15 + b + 0x632BE59BD9B4E019) & M64
+    x = ((x ^ (x >> 30)) * 0xBF58476D1CE4E5B9) & M64
+    x = ((x ^ (x >> 27)) * 0x94D049BB133111EB) & M64
+    return x ^ (x >> 31)
+
+
+def label_of(*parts: Any) -> int:
+    """A stable (process-independent) 32-bit label for a derivation path step."""
+    return zlib.crc32("\x1f".join(map(str, parts)).encode())
+
+
+class Tag:
+    """Semantic tags of one solid or face terminal."""
+
+    __slots__ = ("name", "rule", "object_type", "color", "material", "node", "role")
+
+    def __init__(self, name: str, rule: str, object_type: str | None, color: str | None,
+                 material: str | None, node: int, role: str):
+        self.name, self.rule, self.object_type = name, rule, object_type
+        self.color, self.material, self.node, self.role = color, material, node, role
+
+    def to_dict(self) -> dict:
+        return {"name": self.name, "rule": self.rule, "object_type": self.object_type,
+                "color": self.color, "material": self.material, "node": self.node, "role": self.role}
+
+
+class Derivation:
+    """Mutable state of one derivation. Operations may call the public methods."""
+
+    def __init__(self, compiled: Any, seed: int, limits: Limits, base_dir: str | None):
+        self.compiled = compiled
+        self.seed = int(seed) & M64
+        self.limits = limits
+        self.base_dir = base_dir
+        self.stack: list[tuple[Shape, tuple]] = []
+        # tree: (parent, rule name, kind, origin, axes, size, seed, span, via)
+        self.nodes: list[tuple] = []
+        self.tags: list[Tag] = []
+        self.adds: list[Any] = []  # world-space solids to unite
+        self.cuts: list[Any] = []  # world-space solids to subtract
+        self.id_tag: dict[int, int] = {}  # manifold original ID -> tag index
+        self.faces: list[tuple] = []  # face terminals: (tag, origin, axes, size, poly)
+        self.leaves: list[int] = []  # tag index of each terminal, in derivation order
+        self.warnings: list[str] = []
+        self.est_tris = 0
+
+    # -- bookkeeping --------------------------------------------------------------------
+    def _node(self, s: Shape, parent: int, via: str) -> None:
+        nodes = self.nodes
+        s.node = len(nodes)
+        if s.node >= self.limits.max_shapes:
+            raise LimitError(
+                f"shape limit exceeded: more than {self.limits.max_shapes} shapes "
+                f"(while applying rule {s.rule.name!r})", s.rule.span, code="limit-shapes",
+                hint="a rule probably recurses without end, or a split makes far too many parts")
+        nodes.append((parent, s.rule.name, s.kind, s.o, s.ax, s.sz, s.seed, s.rule.span, via))
+
+    def start(self, rule: Any, shape: Shape) -> None:
+        shape.rule = rule
+        shape.seed = mix(self.seed, rule.label)
+        shape.entry = (shape.o, shape.ax, shape.sz)
+        self._node(shape, -1, "axiom")
+        self.stack.append((shape, rule.steps))
+
+    def enter(self, s: Shape, rule: Any, params: tuple) -> None:
+        """Hand shape `s` (already a copy if needed) to `rule`: a new node of the tree."""
+        parent = s.node
+        depth = s.depth + 1
+        if depth > self.limits.max_depth:
+            raise LimitError(
+                f"depth limit exceeded: more than {self.limits.max_depth} nested rule applications "
+                f"(rule {rule.name!r} applied from {s.rule.name!r})", s.rule.span, code="limit-depth",
+                hint="a rule probably calls itself without a terminating case")
+        s.depth = depth
+        s.seed = mix(s.seed, rule.label)
+        s.rule = rule
+        s.params = params
+        s.entry = (s.o, s.ax, s.sz)
+        s._rng = None
+        self._node(s, parent, "rule")
+        self.stack.append((s, rule.steps))
+
+    def spawn(self, s: Shape, children: list, via: str) -> None:
+        """Children of a block operation: each runs its slot's body on its own shape."""
+        depth = s.depth + 1
+        if depth > self.limits.max_depth:
+            raise LimitError(f"depth limit exceeded in rule {s.rule.name!r}", s.rule.span,
+                             code="limit-depth")
+        parent = s.node
+        seed = s.seed
+        pending = []
+        for i, (c, slot) in enumerate(children):
+            c.depth = depth
+            c.seed = mix(seed, slot.label + i)
+            c._rng = None
+            self._node(c, parent, via)
+            pending.append((c, slot.body))
+        pending.reverse()  # the stack pops the first child first
+        self.stack.extend(pending)
+
+    def push(self, s: Shape, steps: tuple) -> None:
+        self.stack.append((s, steps))
+
+    def run(self) -> None:
+        stack = self.stack
+        while stack:
+            s, steps = stack.pop()
+            for step in steps:
+                s = step(self, s)
+                if s is None:
+                    break
+            else:
+                self.leaf(s, s.rule.name)
+
+    def run_inline(self, s: Shape, steps: tuple) -> Shape | None:
+        """Run a nested sequence (a case arm, a choice) on `s`; returns what is left of it."""
+        for step in steps:
+            s = step(self, s)
+            if s is None:
+                return None
+        return s
+
+    # -- geometry collection ------------------------------------------------------------
+    def _tag(self, s: Shape, name: str, role: str) -> int:
+        rule = s.rule
+        self.tags.append(Tag(name, rule.name, rule.otype, s.color, s.material, s.node, role))
+        return len(self.tags) - 1
+
+    def _add(self, s: Shape, tag: int) -> None:
+        solid, oid, tris = local_solid(s)
+        if solid is None:
+            self.warnings.append(f"rule {s.rule.name!r}: a volume of size {tuple(round(v, 4) for v in s.sz)} "
+                                 "has no thickness and was left out of the mesh")
+            return
+        self.id_tag[oid] = tag
+        self.adds.append(solid.transform(frame(s.o, s.ax)))
+        self.est_tris += tris
+
+    def leaf(self, s: Shape, name: str) -> None:
+        """`s` becomes a terminal named `name`."""
+        if s.kind == FACE:
+            tag = self._tag(s, name, "face")
+            self.faces.append((tag, s.o, s.ax, s.sz, s.poly))
+            if s.cut >= 0:  # the recess this face came from takes the terminal's tags
+                t = self.tags[s.cut]
+                if t.role == "cut-pending":
+                    t.name, t.rule, t.object_type, t.role = name, s.rule.name, s.rule.otype, "cut"
+                    t.color, t.material, t.node = s.color, s.material, s.node
+        else:
+            tag = self._tag(s, name, "volume")
+            self._add(s, tag)
+        self.leaves.append(tag)
+
+    def add_body(self, s: Shape) -> None:
+        """A volume decomposed by comp(f) stays as the solid body its faces decorate."""
+        self._add(s, self._tag(s, s.rule.name, "body"))
+
+    def add_solid(self, s: Shape, name: str | None = None) -> None:
+        """Add a volume shape's solid without ending the shape (plugins may use this)."""
+        self._add(s, self._tag(s, name or s.rule.name, "volume"))
+
+    def add_cut(self, s: Shape, depth: float) -> int:
+        """Subtract the prism of face `s` from z = -depth to just above its plane."""
+        tag = self._tag(s, s.rule.name, "cut-pending")
+        h = depth + CUT_OUTSET
+        if s.poly is None:
+            solid = Manifold.cube((s.sz[0], s.sz[1], h))
+        else:
+            solid = Manifold.extrude(cross_section(s.poly), h)
+        self.id_tag[solid.original_id()] = tag
+        z = s.ax[2]
+        o = (s.o[0] - z[0] * depth, s.o[1] - z[1] * depth, s.o[2] - z[2] * depth)
+        self.cuts.append(solid.transform(frame(o, s.ax)))
+        self.est_tris += 12
+        return tag
+
+    def check_triangles(self, n: int, where: Any) -> None:
+        if n > self.limits.max_triangles:
+            raise LimitError(f"triangle limit exceeded: {n} > {self.limits.max_triangles}", where,
+                             code="limit-triangles")
+
+
+def frame(o: tuple, ax: tuple) -> list[list[float]]:
+    (a0, a1, a2), (b0, b1, b2), (c0, c1, c2) = ax
+    return [[a0, b0, c0, o[0]], [a1, b1, c1, o[1]], [a2, b2, c2, o[2]]]
+
+
+def local_solid(s: Shape) -> tuple[Any, int, int]:
+    """The solid of a volume shape in scope coordinates, its original ID and a triangle estimate."""
+    sx, sy, sz = s.sz
+    if s.solid is not None:
+        solid = s.solid
+        oid = solid.original_id()
+        if oid < 0:
+            solid = solid.as_original()
+            oid = solid.original_id()
+        return solid, oid, 0
+    if sz <= 1e-9 or sx <= 1e-9 or sy <= 1e-9:
+        return None, -1, 0
+    if s.poly is None:
+        solid = Manifold.cube((sx, sy, sz))
+        return solid, solid.original_id(), 12
+    solid = Manifold.extrude(cross_section(s.poly), sz)
+    return solid, solid.original_id(), 4 * sum(len(c) for c in s.poly)
+
+
+def rotation(rx: float, ry: float, rz: float) -> tuple:
+    """Rotation matrix (rows) for XYZ Euler angles in degrees, applied x first."""
+    cx, sx_ = math.cos(math.radians(rx)), math.sin(math.radians(rx))
+    cy, sy_ = math.cos(math.radians(ry)), math.sin(math.radians(ry))
+    cz, sz_ = math.cos(math.radians(rz)), math.sin(math.radians(rz))
+    # R = Rz * Ry * Rx
+    return (
+        (cz * cy, cz * sy_ * sx_ - sz_ * cx, cz * sy_ * cx + sz_ * sx_),
+        (sz_ * cy, sz_ * sy_ * sx_ + cz * cx, sz_ * sy_ * cx - cz * sx_),
+        (-sy_, cy * sx_, cy * cx),
+    )
+
+
+def fail(s: Shape, message: str, span: Any = None, **kw: Any) -> DerivationError:
+    rule = getattr(s.rule, "name", "?")
+    return DerivationError(f"in rule {rule!r} (shape #{s.node}): {message}", span or getattr(s.rule, "span", None), **kw)

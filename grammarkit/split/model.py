@@ -1,0 +1,295 @@
+"""The result of a derivation: one watertight mesh, the tagged terminals, and the derivation tree."""
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+from functools import cached_property
+from typing import Any
+
+import manifold3d
+import numpy as np
+
+from ..errors import DerivationError, LimitError
+from .engine import Derivation, Tag
+
+Manifold = manifold3d.Manifold
+
+DEFAULT_COLOR = "#b8b4ac"
+CUT_COLOR = "#3a4450"
+
+__all__ = ["Model", "Part", "TreeNode", "compose"]
+
+
+@dataclass(frozen=True)
+class Part:
+    """A terminal shape with its semantic tags and scope (world coordinates)."""
+
+    id: int
+    name: str  # terminal name (`Glass.`) or the rule it ended in
+    rule: str
+    object_type: str | None
+    color: str | None
+    material: str | None
+    kind: str  # "face" or "volume"
+    node: int  # index in the derivation tree
+    origin: tuple[float, float, float]
+    axes: tuple[tuple[float, float, float], ...]
+    size: tuple[float, float, float]
+
+    def to_dict(self) -> dict:
+        return {"id": self.id, "name": self.name, "rule": self.rule, "object_type": self.object_type,
+                "color": self.color, "material": self.material, "kind": self.kind, "node": self.node,
+                "origin": list(self.origin), "axes": [list(a) for a in self.axes], "size": list(self.size)}
+
+
+@dataclass
+class TreeNode:
+    """A shape of the derivation: the rule applied to it, its scope, seed and source line."""
+
+    id: int
+    parent: int
+    rule: str
+    kind: str  # "face" or "volume"
+    via: str  # how it was made: "axiom", "rule" (a successor) or the block operation's name
+    origin: tuple[float, float, float]
+    axes: tuple[tuple[float, float, float], ...]
+    size: tuple[float, float, float]
+    seed: int
+    file: str | None
+    line: int | None
+    terminal: str | None = None
+    children: list["TreeNode"] = field(default_factory=list)
+
+    def to_dict(self, nested: bool = False) -> dict:
+        d = {"id": self.id, "parent": self.parent, "rule": self.rule, "kind": self.kind, "via": self.via,
+             "origin": [round(v, 6) for v in self.origin], "axes": [[round(v, 6) for v in a] for a in self.axes],
+             "size": [round(v, 6) for v in self.size], "seed": self.seed, "file": self.file,
+             "line": self.line, "terminal": self.terminal}
+        if nested:
+            d["children"] = [c.to_dict(True) for c in self.children]
+        return d
+
+
+def compose(ctx: Derivation, where: Any) -> tuple[Any, Any]:
+    """Unite the added solids, subtract the cuts (one batched boolean each); check the result."""
+    adds = ctx.adds
+    if not adds:
+        raise DerivationError("the derivation produced no volume: extrude a footprint (or end in a "
+                              "volume) somewhere, faces alone have no thickness", where, code="empty-model")
+    ctx.check_triangles(ctx.est_tris, where)
+    body = adds[0] if len(adds) == 1 else Manifold.batch_boolean(adds, manifold3d.OpType.Add)
+    if ctx.cuts:
+        body = Manifold.batch_boolean([body, *ctx.cuts], manifold3d.OpType.Subtract)
+    mesh = body.to_mesh()
+    status = body.status()
+    if status != manifold3d.Error.NoError:
+        raise DerivationError(f"the mesh boolean failed ({status.name})", where, code="boolean-failed")
+    n = len(mesh.tri_verts)
+    if n == 0:
+        raise DerivationError("the resulting mesh is empty (everything was cut away?)", where,
+                              code="empty-model")
+    ctx.check_triangles(n, where)
+    return body, mesh
+
+
+def _rgba(hex_color: str | None, default: str) -> tuple[int, int, int, int]:
+    h = (hex_color or default).lstrip("#")
+    return (int(h[0:2], 16), int(h[2:4], 16), int(h[4:6], 16), 255)
+
+
+class Model:
+    """One derived building.
+
+    - `mesh`: a trimesh with per-face colours (one watertight manifold; `process=False`)
+    - `manifold`: the manifold3d solid
+    - `parts`: the terminals with their tags (rule, object type, colour, material) and scopes
+    - `tree` / `tree_dict()`: the derivation tree
+    - `triangle_tags`: for every triangle, the index into `tags` of what it came from
+    - `to_scene()`: a trimesh.Scene for the exporters
+    """
+
+    def __init__(self, name: str, seed: int, attrs: dict[str, Any], ctx: Derivation, manifold: Any,
+                 mesh: Any, warnings: list[str], bindings: dict[str, str]):
+        self.name = name
+        self.seed = seed
+        self.attrs = attrs
+        self.manifold = manifold
+        self._mesh = mesh
+        self._ctx = ctx
+        self.tags: list[Tag] = ctx.tags
+        self.warnings = warnings
+        self.bindings = bindings
+
+    # -- mesh ----------------------------------------------------------------------------------
+    @property
+    def vertices(self) -> np.ndarray:
+        return np.asarray(self._mesh.vert_properties, dtype=np.float64)[:, :3]
+
+    @property
+    def faces(self) -> np.ndarray:
+        return np.asarray(self._mesh.tri_verts, dtype=np.int64).reshape(-1, 3)
+
+    @property
+    def triangle_count(self) -> int:
+        return len(self._mesh.tri_verts)
+
+    @cached_property
+    def triangle_tags(self) -> np.ndarray:
+        """Tag index per triangle: the solid it came from, then face terminals painted on top."""
+        mesh = self._mesh
+        ntri = len(mesh.tri_verts)
+        out = np.full(ntri, -1, dtype=np.int64)
+        run_ids = np.asarray(mesh.run_original_id)
+        run_index = np.asarray(mesh.run_index, dtype=np.int64) // 3
+        id_tag = self._ctx.id_tag
+        for k, oid in enumerate(run_ids):
+            out[run_index[k]:run_index[k + 1]] = id_tag.get(int(oid), -1)
+        self._paint_faces(out)
+        return out
+
+    def _paint_faces(self, out: np.ndarray) -> None:
+        """Face terminals have no volume: they colour the body triangles lying in their region."""
+        faces = [f for f in self._ctx.faces if self.tags[f[0]].color or self.tags[f[0]].material]
+        if not faces:
+            return
+        is_body = np.array([t.role == "body" for t in self.tags] + [False], dtype=bool)
+        idx = np.nonzero(is_body[out])[0]
+        if len(idx) == 0:
+            return
+        V = self.vertices
+        T = self.faces[idx]
+        a, b, c = V[T[:, 0]], V[T[:, 1]], V[T[:, 2]]
+        cen = (a + b + c) / 3.0
+        nrm = np.cross(b - a, c - a)
+        ln = np.linalg.norm(nrm, axis=1)
+        ok = ln > 1e-12
+        nrm[ok] /= ln[ok, None]
+        tol = 1e-4
+        # Group faces by plane and in-plane axes: one triangle selection per facade plane, then a
+        # (faces x triangles) rectangle test with numpy broadcasting.
+        groups: dict[tuple, list] = {}
+        for f in faces:
+            _, o, ax, _, _ = f
+            ez = ax[2]
+            key = (tuple(round(v, 6) for v in ax[0]), tuple(round(v, 6) for v in ez),
+                   round(o[0] * ez[0] + o[1] * ez[1] + o[2] * ez[2], 5))
+            groups.setdefault(key, []).append(f)
+        for members in groups.values():
+            _, o, ax, _, _ = members[0]
+            ex, ey, ez = (np.asarray(v) for v in ax)
+            d = cen - np.asarray(o)
+            m = (np.abs(d @ ez) < 1e-3) & (nrm @ ez > 0.99)
+            if not m.any():
+                continue
+            rows = np.nonzero(m)[0]
+            U, W = d[rows] @ ex, d[rows] @ ey
+            o0 = np.asarray(o)
+            starts = np.array([[(np.asarray(f[1]) - o0) @ ex, (np.asarray(f[1]) - o0) @ ey] for f in members])
+            sizes = np.array([[f[3][0], f[3][1]] for f in members])
+            inside = ((U[None, :] > starts[:, :1] - tol) & (U[None, :] < starts[:, :1] + sizes[:, :1] + tol)
+                      & (W[None, :] > starts[:, 1:] - tol) & (W[None, :] < starts[:, 1:] + sizes[:, 1:] + tol))
+            for k, f in enumerate(members):
+                if f[4] is not None and inside[k].any():
+                    cols = np.nonzero(inside[k])[0]
+                    inside[k, cols] = _in_contours(U[cols] - starts[k, 0], W[cols] - starts[k, 1], f[4])
+            hit = inside.any(axis=0)
+            if not hit.any():
+                continue
+            last = len(members) - 1 - np.argmax(inside[::-1], axis=0)  # the latest face wins
+            tags = np.array([f[0] for f in members])
+            out[idx[rows[hit]]] = tags[last[hit]]
+
+    @cached_property
+    def mesh(self) -> Any:
+        import trimesh
+
+        tags = self.triangle_tags
+        palette = np.array([_rgba(t.color, CUT_COLOR if t.role == "cut" else DEFAULT_COLOR) for t in self.tags]
+                           + [_rgba(None, DEFAULT_COLOR)], dtype=np.uint8)
+        colors = palette[tags]  # -1 picks the default colour appended last
+        return trimesh.Trimesh(vertices=self.vertices, faces=self.faces, face_colors=colors, process=False,
+                               metadata={"name": self.name, "seed": self.seed})
+
+    @property
+    def triangle_materials(self) -> list[str | None]:
+        return [self.tags[t].material if t >= 0 else None for t in self.triangle_tags]
+
+    # -- parts and tree ------------------------------------------------------------------------
+    @cached_property
+    def parts(self) -> list[Part]:
+        ctx = self._ctx
+        nodes = ctx.nodes
+        out = []
+        for i, t in enumerate(ctx.leaves):
+            tag = self.tags[t]
+            n = nodes[tag.node]
+            out.append(Part(i, tag.name, tag.rule, tag.object_type, tag.color, tag.material,
+                            "face" if tag.role == "face" else "volume", tag.node, n[3], n[4], n[5]))
+        return out
+
+    @cached_property
+    def _tree_nodes(self) -> list[TreeNode]:
+        terminal = {self.tags[t].node: self.tags[t].name for t in self._ctx.leaves}
+        nodes = []
+        for i, (parent, rule, kind, o, ax, sz, seed, span, via) in enumerate(self._ctx.nodes):
+            nodes.append(TreeNode(i, parent, rule, "face" if kind == "F" else "volume", via, o, ax, sz, seed,
+                                  span.file if span else None, span.line if span else None, terminal.get(i)))
+        for n in nodes:
+            if n.parent >= 0:
+                nodes[n.parent].children.append(n)
+        return nodes
+
+    @property
+    def tree(self) -> TreeNode:
+        return self._tree_nodes[0]
+
+    @property
+    def shape_count(self) -> int:
+        return len(self._ctx.nodes)
+
+    def tree_dict(self) -> dict:
+        """JSON-able derivation tree: a flat node list (parents by id) plus model facts."""
+        return {
+            "grammar": self.name, "seed": self.seed, "attrs": self.attrs, "bindings": self.bindings,
+            "shape_count": self.shape_count, "terminal_count": len(self._ctx.leaves),
+            "triangles": self.triangle_count, "warnings": self.warnings,
+            "nodes": [n.to_dict() for n in self._tree_nodes],
+        }
+
+    def tree_json(self, indent: int | None = None) -> str:
+        return json.dumps(self.tree_dict(), indent=indent)
+
+    def to_scene(self) -> Any:
+        """A trimesh.Scene with the building as one node whose extras carry the model facts."""
+        import trimesh
+
+        scene = trimesh.Scene()
+        extras = {"grammar": self.name, "seed": self.seed,
+                  "attrs": {k: v for k, v in self.attrs.items() if isinstance(v, (int, float, str, bool))},
+                  "materials": sorted({t.material for t in self.tags if t.material})}
+        scene.add_geometry(self.mesh, node_name=self.name or "building", geom_name=self.name or "building",
+                           metadata=extras)
+        scene.metadata.update(extras)
+        return scene
+
+    def __repr__(self) -> str:
+        return (f"Model({self.name!r}, seed={self.seed}, shapes={self.shape_count}, "
+                f"terminals={len(self._ctx.leaves)}, triangles={self.triangle_count})")
+
+
+def _in_contours(u: np.ndarray, v: np.ndarray, contours: Any) -> np.ndarray:
+    """Even-odd point-in-polygon test for points (u, v) against several contours."""
+    inside = np.zeros(len(u), dtype=bool)
+    for c in contours:
+        pts = np.asarray(c, dtype=float)
+        x0, y0 = pts[:, 0], pts[:, 1]
+        x1, y1 = np.roll(x0, -1), np.roll(y0, -1)
+        for k in range(len(pts)):
+            cond = (y0[k] > v) != (y1[k] > v)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                xc = x0[k] + (v - y0[k]) * (x1[k] - x0[k]) / (y1[k] - y0[k])
+            inside ^= cond & (u < xc)
+    return inside
+
+
+_ = LimitError

@@ -1,0 +1,541 @@
+"""Implementations of the built-in split operations (bound to the specs in operations.py).
+
+Contract shared with plugins: `apply(ctx, shape, args, block)` where `ctx` is the
+`Derivation`, `args` the evaluated arguments in the spec's parameter order (defaults filled
+in; variadic extras appended), and `block` the compiled block slots or None. A non-block
+operation returns the (new or modified) shape to continue with, or None to delete it. A
+block operation returns a list of `(child_shape, slot)`; each child then runs its slot's body.
+Raise ValueError for bad arguments: the engine turns it into a DerivationError naming the
+rule and the call's source position.
+"""
+from __future__ import annotations
+
+import math
+from functools import lru_cache
+from pathlib import Path
+from typing import Any
+
+import manifold3d
+
+from ..geometry import footprints as fp
+from ..geometry import roofs
+from ..geometry.solids import insert_fitted, taper as taper_solid
+from .engine import rotation
+from .shape import FACE, VOLUME, Shape
+
+Manifold = manifold3d.Manifold
+AXIS = {"x": 0, "y": 1, "z": 2}
+EPS = 1e-9
+
+
+def _axis(value: Any) -> int:
+    try:
+        return AXIS[str(value)]
+    except KeyError:
+        raise ValueError(f"axis must be x, y or z, got {value!r}") from None
+
+
+def _num(value: Any, what: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise ValueError(f"{what} must be a number, got {value!r}")
+    v = float(value)
+    if not math.isfinite(v):
+        raise ValueError(f"{what} must be finite, got {v}")
+    return v
+
+
+def _face_only(s: Shape, op: str) -> None:
+    if s.kind != FACE:
+        raise ValueError(f"{op}() needs a face (e.g. from footprint() or comp(f)), got a volume")
+
+
+def _rect_or_poly(poly: Any, sx: float, sy: float) -> Any:
+    """Keep `poly` only when it is not just the scope rectangle (the fast path)."""
+    if poly is None:
+        return None
+    if len(poly) == 1 and fp.is_rectangle(poly[0], sx, sy, 1e-7):
+        return None
+    return poly
+
+
+def _piece(s: Shape, cs: manifold3d.CrossSection, kind: str, extra_o: tuple[float, float] = (0.0, 0.0)):
+    """A child shape from a CrossSection given in `s`'s scope coordinates (normalized bbox)."""
+    contours = []
+    for c in cs.to_polygons():
+        poly = tuple((float(x), float(y)) for x, y in c)
+        if abs(fp.area(poly)) > 1e-9:
+            contours.append(poly)
+    if not contours:
+        return None
+    pts = [p for c in contours for p in c]
+    x0 = min(p[0] for p in pts)
+    y0 = min(p[1] for p in pts)
+    x1 = max(p[0] for p in pts)
+    y1 = max(p[1] for p in pts)
+    shifted = tuple(tuple((x - x0, y - y0) for x, y in c) for c in contours)
+    sx, sy = x1 - x0, y1 - y0
+    o = s.world(x0 + extra_o[0], y0 + extra_o[1], 0.0)
+    return s.derived(o, (sx, sy, s.sz[2] if kind == VOLUME else 0.0), _rect_or_poly(shifted, sx, sy), kind)
+
+
+# -- geometry creation -------------------------------------------------------------------------
+def op_footprint(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
+    shape = args[0]
+    if not isinstance(shape, (tuple, list)) or not shape:
+        raise ValueError("footprint() needs a polygon such as rect(20, 12) or polygon(0, 0, 8, 0, 8, 6)")
+    poly = fp.validate_polygon(shape)
+    norm, (x0, y0, x1, y1) = fp.normalize(poly)
+    sx, sy = x1 - x0, y1 - y0
+    o = s.world(x0, y0, 0.0)
+    return s.derived(o, (sx, sy, 0.0), _rect_or_poly((norm,), sx, sy), FACE)
+
+
+def op_extrude(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
+    h = _num(args[0], "extrude height")
+    _face_only(s, "extrude")
+    if h <= 0:
+        raise ValueError(f"extrude height must be > 0, got {h:g} (use recess(d) to cut into a face)")
+    return s.derived(s.o, (s.sz[0], s.sz[1], h), s.poly, VOLUME)
+
+
+def op_taper(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
+    h = _num(args[0], "taper height")
+    k = _num(args[1], "taper top_scale")
+    _face_only(s, "taper")
+    if h <= 0 or k < 0:
+        raise ValueError(f"taper needs height > 0 and top_scale >= 0, got {h:g}, {k:g}")
+    polys = s.contours()
+    solids = [taper_solid(p, h, k) for p in polys if fp.area(p) > 0]
+    solid = solids[0] if len(solids) == 1 else Manifold.batch_boolean(solids, manifold3d.OpType.Add)
+    return s.derived(s.o, (s.sz[0], s.sz[1], h), None, VOLUME, solid=solid)
+
+
+def op_recess(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
+    d = _num(args[0], "recess depth")
+    _face_only(s, "recess")
+    if d <= 0:
+        raise ValueError(f"recess depth must be > 0, got {d:g}")
+    c = s.copy()
+    c.cut = ctx.add_cut(s, d)
+    z = s.ax[2]
+    c.o = (s.o[0] - z[0] * d, s.o[1] - z[1] * d, s.o[2] - z[2] * d)
+    return c
+
+
+# -- comp ------------------------------------------------------------------------------------
+def _classify(nx: float, ny: float) -> str:
+    if abs(ny) >= abs(nx):
+        return "front" if ny < 0 else "back"
+    return "right" if nx > 0 else "left"
+
+
+def op_comp(ctx: Any, s: Shape, args: Any, block: Any) -> list:
+    if s.kind != VOLUME:
+        raise ValueError("comp(f) needs a volume (e.g. after extrude), got a face")
+    if s.solid is not None:
+        raise ValueError("comp(f) works on boxes and extruded footprints, not on roofs, tapers "
+                         "or inserted meshes")
+    sx, sy, h = s.sz
+    (ax, ay, az) = s.ax
+    ctx.add_body(s)
+    faces: list[tuple[frozenset, Shape]] = []
+    contours = s.contours()
+    # side faces: one per contour edge, x along the edge, y up, z outwards
+    for contour in contours:
+        n = len(contour)
+        hole = fp.area(contour) < 0
+        for i in range(n):
+            (x0, y0), (x1, y1) = contour[i], contour[(i + 1) % n]
+            dx, dy = x1 - x0, y1 - y0
+            ln = math.hypot(dx, dy)
+            if ln < 1e-9:
+                continue
+            ux, uy = dx / ln, dy / ln
+            ex = (ax[0] * ux + ay[0] * uy, ax[1] * ux + ay[1] * uy, ax[2] * ux + ay[2] * uy)
+            ez = (ex[1] * az[2] - ex[2] * az[1], ex[2] * az[0] - ex[0] * az[2], ex[0] * az[1] - ex[1] * az[0])
+            side = _classify(uy, -ux)  # outward normal of a CCW contour edge is (dy, -dx)
+            sel = frozenset(("side", "all", side, "hole") if hole else ("side", "all", side))
+            faces.append((sel, s.derived(s.world(x0, y0, 0.0), (ln, h, 0.0), None, FACE, ax=(ex, az, ez))))
+    top = s.derived(s.world(0.0, 0.0, h), (sx, sy, 0.0), s.poly, FACE)
+    faces.append((frozenset(("top", "all")), top))
+    if s.poly is None:
+        bpoly = None
+    else:
+        bpoly = tuple(tuple(reversed([(x, sy - y) for x, y in c])) for c in s.poly)
+    neg_y = (-ay[0], -ay[1], -ay[2])
+    neg_z = (-az[0], -az[1], -az[2])
+    bottom = s.derived(s.world(0.0, sy, 0.0), (sx, sy, 0.0), bpoly, FACE, ax=(ax, neg_y, neg_z))
+    faces.append((frozenset(("bottom", "all")), bottom))
+    out = []
+    for sel, face in faces:
+        for slot in block:
+            if slot.sel in sel:
+                out.append((face, slot))
+                break
+    total = len(out)
+    for i, (face, _) in enumerate(out):
+        face.si, face.st = i, total
+    return out
+
+
+# -- split -----------------------------------------------------------------------------------
+def layout(ctx: Any, s: Shape, items: tuple, length: float) -> list[tuple[Any, float, float]]:
+    """Positions of split parts along an axis of `length`: a list of (slot, start, size).
+
+    Absolute sizes are fixed, relative ones are fractions of the whole length, floating ones
+    share what is left in proportion to their nominal sizes. Each repeat group takes the
+    repetition count that best fits (rounding when the group can stretch, as many as fit when
+    it cannot). When fixed parts do not fit, the part crossing the end is clipped and later
+    parts are dropped; parts of size <= 0 are skipped.
+    """
+    flat: list[tuple[Any, bool, float]] = []
+    _expand(ctx, s, items, length, length, flat)
+    fixed = 0.0
+    weight = 0.0
+    for _, floating, v in flat:
+        if floating:
+            weight += v
+        else:
+            fixed += v
+    rest = length - fixed
+    k = rest / weight if (weight > 0 and rest > 0) else 0.0
+    out = []
+    pos = 0.0
+    end = length + 1e-9
+    for slot, floating, v in flat:
+        size = v * k if floating else v
+        if size <= EPS:
+            continue
+        if pos + size > end:
+            size = length - pos
+            if size > EPS:
+                out.append((slot, pos, size))
+            break
+        out.append((slot, pos, size))
+        pos += size
+    return out
+
+
+def _sizes(s: Shape, items: tuple, total: float) -> list[tuple[Any, str, float]]:
+    out = []
+    for it in items:
+        if it.mode == "repeat":
+            out.append((it, "repeat", 0.0))
+            continue
+        v = it.size(s)
+        if isinstance(v, bool) or not isinstance(v, (int, float)):
+            raise ValueError(f"split size must be a number, got {v!r}")
+        if it.mode == "rel":
+            v *= total
+        out.append((it, it.mode, float(v)))
+    return out
+
+
+def _nominal(s: Shape, items: tuple, total: float) -> tuple[float, bool]:
+    """Length of one instance of a repeat group at nominal sizes, and whether it can stretch."""
+    n = 0.0
+    stretch = False
+    for it, mode, v in _sizes(s, items, total):
+        if mode == "repeat":
+            m, st = _nominal(s, it.items, total)
+            n += m
+            stretch = stretch or st
+        else:
+            n += v
+            stretch = stretch or mode == "float"
+    return n, stretch
+
+
+def _expand(ctx: Any, s: Shape, items: tuple, avail: float, total: float, flat: list) -> None:
+    sized = _sizes(s, items, total)
+    fixed = sum(v for _, mode, v in sized if mode in ("abs", "rel"))
+    floating = sum(v for _, mode, v in sized if mode == "float")
+    reps = [(it, *_nominal(s, it.items, total)) for it, mode, _ in sized if mode == "repeat"]
+    counts: dict[int, int] = {}
+    if reps:
+        room = avail - fixed - floating
+        nominal = sum(n for _, n, _ in reps)
+        stretch = any(st for _, _, st in reps)
+        if nominal <= EPS:
+            raise ValueError("a repeat group needs a positive total size")
+        ratio = room / nominal
+        n = max(1, int(math.floor(ratio + 0.5)) if stretch else int(math.floor(ratio + 1e-9)))
+        if n > ctx.limits.max_repeat:
+            from ..errors import LimitError
+            raise LimitError(
+                f"repeat limit exceeded: {n} repetitions > {ctx.limits.max_repeat} "
+                f"(in rule {s.rule.name!r}, length {avail:g} / group size {nominal:g})",
+                reps[0][0].span or s.rule.span, code="limit-repeat")
+        for it, nom, _ in reps:
+            counts[id(it)] = n
+        share = {id(it): (room * nom / nominal / n if n else 0.0) for it, nom, _ in reps}
+    for it, mode, v in sized:
+        if mode == "repeat":
+            for _ in range(counts[id(it)]):
+                _expand(ctx, s, it.items, share[id(it)], total, flat)
+        else:
+            flat.append((it, mode == "float", v))
+
+
+def _split_geometry(s: Shape, a: int, start: float, size: float) -> Shape | None:
+    ax = s.ax[a]
+    o = (s.o[0] + ax[0] * start, s.o[1] + ax[1] * start, s.o[2] + ax[2] * start)
+    sz = list(s.sz)
+    sz[a] = size
+    if s.solid is not None:
+        normal = [0.0, 0.0, 0.0]
+        normal[a] = 1.0
+        piece = s.solid.trim_by_plane(tuple(normal), start)
+        normal[a] = -1.0
+        piece = piece.trim_by_plane(tuple(normal), -(start + size))
+        shift = [0.0, 0.0, 0.0]
+        shift[a] = -start
+        piece = piece.translate(tuple(shift))
+        if piece.is_empty():
+            return None
+        return s.derived(o, tuple(sz), None, s.kind, solid=piece)
+    if s.poly is None or a == 2:
+        return s.derived(o, tuple(sz), s.poly)
+    x0, y0, x1, y1 = (start, 0.0, start + size, s.sz[1]) if a == 0 else (0.0, start, s.sz[0], start + size)
+    cs = fp.cross_section(s.poly) ^ Manifold_rect(x0, y0, x1, y1)
+    if cs.is_empty():
+        return None
+    return _piece(s, cs, s.kind)
+
+
+def Manifold_rect(x0: float, y0: float, x1: float, y1: float) -> manifold3d.CrossSection:
+    return manifold3d.CrossSection.square((x1 - x0, y1 - y0)).translate((x0, y0))
+
+
+def op_split(ctx: Any, s: Shape, args: Any, block: Any) -> list:
+    a = _axis(args[0])
+    length = s.sz[a]
+    if length <= EPS:
+        raise ValueError(f"split({args[0]}) on a shape of size 0 along {args[0]}"
+                         + (" (faces are flat: split them along x or y)" if a == 2 and s.kind == FACE else ""))
+    parts = layout(ctx, s, block, length)
+    out = []
+    for slot, start, size in parts:
+        c = _split_geometry(s, a, start, size)
+        if c is not None:
+            out.append((c, slot))
+    total = len(out)
+    for i, (c, _) in enumerate(out):
+        c.si, c.st = i, total
+    return out
+
+
+# -- offset ----------------------------------------------------------------------------------
+def op_offset(ctx: Any, s: Shape, args: Any, block: Any) -> Any:
+    d = _num(args[0], "offset distance")
+    _face_only(s, "offset")
+    sx, sy = s.sz[0], s.sz[1]
+    inside: Shape | None
+    border: list[Shape] = []
+    if s.poly is None and d <= 0:
+        e = -d
+        w, h = sx - 2 * e, sy - 2 * e
+        inside = s.derived(s.world(e, e, 0.0), (w, h, 0.0), None) if w > EPS and h > EPS else None
+        if block is not None and e > EPS:
+            if inside is None:
+                border = [s.copy()]
+            else:
+                # one ring face (outer contour + clockwise hole): extruding it makes one solid
+                ring = (((0.0, 0.0), (sx, 0.0), (sx, sy), (0.0, sy)),
+                        ((e, e), (e, sy - e), (sx - e, sy - e), (sx - e, e)))
+                border = [s.derived(s.o, (sx, sy, 0.0), ring)]
+    else:
+        whole = fp.cross_section(s.contours())
+        grown = whole.offset(d, manifold3d.JoinType.Miter, 2.0)
+        inside = None if grown.is_empty() else _piece(s, grown, FACE)
+        if block is not None and abs(d) > EPS:
+            ring = (whole - grown) if d < 0 else (grown - whole)
+            piece = None if ring.is_empty() else _piece(s, ring, FACE)
+            if piece is not None:
+                border = [piece]
+    if block is None:
+        return inside
+    out = []
+    for slot in block:
+        if slot.sel == "inside" and inside is not None:
+            out.append((inside, slot))
+        elif slot.sel == "border":
+            out.extend((b.copy() if i else b, slot) for i, b in enumerate(border))
+    total = len(out)
+    for i, (c, _) in enumerate(out):
+        c.si, c.st = i, total
+    return out
+
+
+# -- roofs -----------------------------------------------------------------------------------
+def _roof(s: Shape, build: Any, name: str) -> Shape:
+    _face_only(s, name)
+    if s.sz[0] <= EPS or s.sz[1] <= EPS:
+        raise ValueError(f"{name}() on an empty face")
+    polys = [p for p in s.contours() if fp.area(p) > 0]
+    solids = [build(p) for p in polys]
+    solid = solids[0] if len(solids) == 1 else Manifold.batch_boolean(solids, manifold3d.OpType.Add)
+    x0, y0, z0, x1, y1, z1 = solid.bounding_box()
+    if not all(math.isfinite(v) for v in (x0, y0, z0, x1, y1, z1)) or z1 - z0 <= EPS:
+        raise ValueError(f"{name}() produced an empty roof")
+    solid = solid.translate((-x0, -y0, -z0))
+    return s.derived(s.world(x0, y0, z0), (x1 - x0, y1 - y0, z1 - z0), None, VOLUME, solid=solid)
+
+
+def _ridge(v: Any) -> str:
+    v = str(v)
+    if v not in ("x", "y"):
+        raise ValueError(f"ridge must be x or y, got {v!r}")
+    return v
+
+
+def op_roof_gable(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
+    angle, over, ridge = _num(args[0], "angle"), _num(args[1], "overhang"), _ridge(args[2])
+    return _roof(s, lambda p: roofs.gable(p, angle, over, ridge), "roofGable")
+
+
+def op_roof_hip(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
+    angle, over = _num(args[0], "angle"), _num(args[1], "overhang")
+    return _roof(s, lambda p: roofs.hip(p, angle, over), "roofHip")
+
+
+def op_roof_pyramid(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
+    angle, over = _num(args[0], "angle"), _num(args[1], "overhang")
+    return _roof(s, lambda p: roofs.pyramid(p, angle, over), "roofPyramid")
+
+
+def op_roof_shed(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
+    angle, over, ridge = _num(args[0], "angle"), _num(args[1], "overhang"), _ridge(args[2])
+    return _roof(s, lambda p: roofs.shed(p, angle, over, ridge), "roofShed")
+
+
+def op_roof_mansard(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
+    angle, height = _num(args[0], "angle"), _num(args[1], "height")
+    top, over = _num(args[2], "top_angle"), _num(args[3], "overhang")
+    return _roof(s, lambda p: roofs.mansard(p, angle, height, top, over), "roofMansard")
+
+
+# -- transformations -------------------------------------------------------------------------
+def op_t(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
+    x, y, z = (_num(v, "t()") for v in args[:3])
+    (a0, a1, a2), (b0, b1, b2), (c0, c1, c2) = s.ax
+    c = s
+    c.o = (s.o[0] + a0 * x + b0 * y + c0 * z, s.o[1] + a1 * x + b1 * y + c1 * z,
+           s.o[2] + a2 * x + b2 * y + c2 * z)
+    return c
+
+
+def op_r(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
+    rx, ry, rz = (_num(v, "r()") for v in args[:3])
+    R = rotation(rx, ry, rz)
+    ax = s.ax
+    # new axis j = sum_i R[i][j] * old axis i  (the rotation is expressed in scope coordinates)
+    new = tuple(tuple(sum(R[i][j] * ax[i][k] for i in range(3)) for k in range(3)) for j in range(3))
+    c = s
+    c.ax = new  # type: ignore[assignment]
+    return c
+
+
+def op_s(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
+    new = tuple(_num(v, "s()") for v in args[:3])
+    if any(v < 0 for v in new):
+        raise ValueError(f"s() sizes must be >= 0, got {new}")
+    old = s.sz
+    f = tuple((n / o) if o > EPS else 1.0 for n, o in zip(new, old))
+    c = s.copy()
+    c.sz = new  # type: ignore[assignment]
+    if s.poly is not None:
+        c.poly = tuple(tuple((x * f[0], y * f[1]) for x, y in p) for p in s.poly)
+    if s.solid is not None:
+        c.solid = s.solid.scale(f)
+    if s.kind == FACE and new[2] > EPS and s.poly is None:
+        c.kind = VOLUME  # a face given a depth becomes a box (e.g. to insert a mesh in it)
+    return c
+
+
+def op_center(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
+    axes = str(args[0])
+    if not axes or any(ch not in "xyz" for ch in axes):
+        raise ValueError(f"center() takes a combination of x, y, z, got {axes!r}")
+    eo, eax, esz = s.entry or (s.o, s.ax, s.sz)
+    pc = [eo[k] + sum(eax[i][k] * esz[i] / 2 for i in range(3)) for k in range(3)]
+    cc = [s.o[k] + sum(s.ax[i][k] * s.sz[i] / 2 for i in range(3)) for k in range(3)]
+    d = [pc[k] - cc[k] for k in range(3)]
+    o = list(s.o)
+    for ch in axes:
+        a = s.ax[AXIS[ch]]
+        t = d[0] * a[0] + d[1] * a[1] + d[2] * a[2]
+        for k in range(3):
+            o[k] += a[k] * t
+    c = s
+    c.o = tuple(o)  # type: ignore[assignment]
+    return c
+
+
+@lru_cache(maxsize=64)
+def _load_part(path: str) -> manifold3d.Manifold:
+    from ..geometry.convert import to_manifold
+    try:
+        from ..geometry.meshio import load_mesh
+    except ImportError:  # pragma: no cover - the geometry helper's loader is the normal path
+        import trimesh
+
+        def load_mesh(p: str):  # type: ignore[no-redef]
+            return trimesh.load(p, force="mesh", process=False)
+    mesh = load_mesh(path)
+    return to_manifold(mesh, what=path)
+
+
+def op_insert(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
+    rel = str(args[0])
+    base = Path(ctx.base_dir_for(s)) if hasattr(ctx, "base_dir_for") else Path(ctx.base_dir or ".")
+    path = (base / rel).resolve() if not Path(rel).is_absolute() else Path(rel)
+    if not path.is_file():
+        raise ValueError(f"i(): mesh file not found: {path}")
+    solid, size = insert_fitted(_load_part(str(path)), s.sz)
+    return s.derived(s.o, size, None, VOLUME, solid=solid)
+
+
+# -- tags ------------------------------------------------------------------------------------
+def _hex_color(v: Any) -> str:
+    text = str(v).strip()
+    h = text[1:] if text.startswith("#") else ""
+    if len(h) == 3:
+        h = "".join(ch * 2 for ch in h)
+    if len(h) != 6 or any(ch not in "0123456789abcdefABCDEF" for ch in h):
+        raise ValueError(f"color must be '#rrggbb' or '#rgb', got {text!r}")
+    return "#" + h.lower()
+
+
+def op_color(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
+    c = s
+    c.color = _hex_color(args[0])
+    return c
+
+
+def op_material(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
+    c = s
+    c.material = str(args[0])
+    return c
+
+
+BUILTIN_APPLY = {
+    "footprint": op_footprint, "extrude": op_extrude, "taper": op_taper, "recess": op_recess,
+    "comp": op_comp, "split": op_split, "offset": op_offset,
+    "roofGable": op_roof_gable, "roofHip": op_roof_hip, "roofPyramid": op_roof_pyramid,
+    "roofShed": op_roof_shed, "roofMansard": op_roof_mansard,
+    "t": op_t, "r": op_r, "s": op_s, "center": op_center, "i": op_insert,
+    "color": op_color, "material": op_material,
+}
+
+
+def op_repeat(ctx: Any, s: Shape, args: Any, block: Any) -> list:
+    """`repeat(axis, size, separator) (A B)* C`: the compiler turns the pattern into split slots."""
+    if _num(args[1], "repeat size") <= 0:
+        raise ValueError(f"repeat size must be > 0, got {args[1]!r}")
+    if _num(args[2], "repeat separator") < 0:
+        raise ValueError(f"repeat separator must be >= 0, got {args[2]!r}")
+    return op_split(ctx, s, (args[0],), block)
+
+
+BUILTIN_APPLY["repeat"] = op_repeat

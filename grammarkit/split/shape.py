@@ -1,0 +1,104 @@
+"""A shape of the split engine: a scope (oriented box) carrying a geometry.
+
+The scope is an origin `o`, three orthonormal axes `ax` (world directions of the scope's
+x, y, z) and a size `sz`, all plain tuples: shapes are created by the thousand per building
+and pure-Python tuples are much cheaper than numpy for 3-vectors. The geometry is one of
+
+- a face (`kind == "F"`): a planar region in the scope's xy plane; `poly is None` means the
+  full rectangle [0,sx] x [0,sy], else `poly` is a tuple of contours in scope coordinates
+  (counter-clockwise outer contours, clockwise holes);
+- a volume (`kind == "V"`): `solid is None` and `poly is None` is the scope box, `poly` set is
+  that footprint extruded over [0, sz], and `solid` set is a general manifold3d solid in scope
+  coordinates (roofs, tapers, inserted meshes).
+
+Plugins' operations receive and return Shapes (see `grammarkit.split.engine`).
+"""
+from __future__ import annotations
+
+import random
+from typing import Any
+
+Vec = tuple[float, float, float]
+
+FACE = "F"
+VOLUME = "V"
+
+
+class Shape:
+    __slots__ = (
+        "o", "ax", "sz", "kind", "poly", "solid", "color", "material", "rule", "params",
+        "seed", "node", "depth", "si", "st", "entry", "cut", "_rng",
+    )
+
+    def __init__(self, o: Vec, ax: tuple[Vec, Vec, Vec], sz: Vec, kind: str = FACE,
+                 poly: Any = None, solid: Any = None):
+        self.o = o
+        self.ax = ax
+        self.sz = sz
+        self.kind = kind
+        self.poly = poly
+        self.solid = solid
+        self.color: str | None = None
+        self.material: str | None = None
+        self.rule: Any = None  # the compiled rule being applied (name, object type, span)
+        self.params: tuple = ()
+        self.seed = 0
+        self.node = -1  # index in the derivation tree
+        self.depth = 0
+        self.si = 0  # split.index / comp index given by the parent's block operation
+        self.st = 1  # split.total
+        self.entry: tuple | None = None  # scope when the current rule was entered (for center)
+        self.cut = -1  # tag id of a recess cut made from this face, coloured by its terminal
+        self._rng: random.Random | None = None
+
+    def copy(self) -> "Shape":
+        c = Shape.__new__(Shape)
+        c.o, c.ax, c.sz, c.kind, c.poly, c.solid = self.o, self.ax, self.sz, self.kind, self.poly, self.solid
+        c.color, c.material, c.rule, c.params = self.color, self.material, self.rule, self.params
+        c.seed, c.node, c.depth, c.si, c.st = self.seed, self.node, self.depth, self.si, self.st
+        c.entry, c.cut, c._rng = self.entry, self.cut, None
+        return c
+
+    def derived(self, o: Vec, sz: Vec, poly: Any = None, kind: str | None = None,
+                ax: tuple[Vec, Vec, Vec] | None = None, solid: Any = None) -> "Shape":
+        """A new shape with a new scope/geometry that inherits the tags of this one."""
+        c = Shape.__new__(Shape)
+        c.o, c.ax, c.sz = o, (ax if ax is not None else self.ax), sz
+        c.kind = kind if kind is not None else self.kind
+        c.poly, c.solid = poly, solid
+        c.color, c.material, c.rule, c.params = self.color, self.material, self.rule, self.params
+        c.seed, c.node, c.depth, c.si, c.st = self.seed, self.node, self.depth, self.si, self.st
+        c.entry, c.cut, c._rng = self.entry, self.cut, None
+        return c
+
+    def rng(self) -> random.Random:
+        """The shape's own generator, seeded from the run seed and its derivation path."""
+        if self._rng is None:
+            self._rng = random.Random(self.seed)
+        return self._rng
+
+    # Convenience for plugins and debugging; the engine reads the tuples directly.
+    @property
+    def size(self) -> Vec:
+        return self.sz
+
+    @property
+    def is_face(self) -> bool:
+        return self.kind == FACE
+
+    def contours(self) -> tuple:
+        """The face/footprint contours in scope coordinates (the rectangle if `poly` is None)."""
+        if self.poly is not None:
+            return self.poly
+        sx, sy = self.sz[0], self.sz[1]
+        return (((0.0, 0.0), (sx, 0.0), (sx, sy), (0.0, sy)),)
+
+    def world(self, x: float, y: float, z: float) -> Vec:
+        """A point given in scope coordinates, in world coordinates."""
+        (ax, ay, az), (bx, by, bz), (cx, cy, cz) = self.ax
+        ox, oy, oz = self.o
+        return (ox + ax * x + bx * y + cx * z, oy + ay * x + by * y + cy * z, oz + az * x + bz * y + cz * z)
+
+    def __repr__(self) -> str:
+        name = getattr(self.rule, "name", "?")
+        return f"Shape({name}, kind={self.kind}, o={self.o}, size={self.sz})"

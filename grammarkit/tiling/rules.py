@@ -1,0 +1,317 @@
+"""The checkable content of a tiling grammar: `Rules`, compiled from the grammar's statements.
+
+What each statement means for validation (see docs/tiling.md):
+- `neighbors T: {A, A, B} | {A}`: the multiset of neighbour types of every T part must be one
+  of the listed ones exactly (Kalojanov's "exact neighbour-type count vectors").
+- `neighbors T: A in 1..2, B in 0..1`: per-type count ranges; types not listed may not be
+  neighbours of T (closed world). Several `neighbors T` statements: multisets are pooled,
+  count ranges must all hold.
+- `dock A -- B` (with or without sites): A and B may touch. As soon as a grammar has any dock
+  statement, a contact between two types with no dock is a violation ("allowed type pairs").
+- `dock A -- B { at (x, y, z) rot (rx, ry, rz) | ... }`: the allowed relative placements of a B
+  part in an A part's local frame (frames.py: Kalojanov's diagonal frame; degrees, extrinsic
+  XYZ). A touching A-B pair must match one within `position_tolerance` (times the larger
+  part's diagonal) and `angle_tolerance` degrees, modulo the parts' own symmetries.
+- `constraint NAME(args)`: a global constraint from the plugin registry (`connected`,
+  `grounded`, `path(from=A, to=B)`, `count(T, lo, hi)`, or a plugin's).
+
+`Rules` is a plain picklable dataclass, so worker processes (the graph sampler) can share it.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from ..errors import GrammarError
+
+if TYPE_CHECKING:  # pragma: no cover
+    from ..ir import Grammar
+    from ..ir.tiling import Placement
+
+__all__ = [
+    "DockPlacement", "Rules", "eval_number", "eval_value", "known_types", "placement_matrix",
+    "rotation_matrix", "rules_from_grammar",
+]
+
+
+@dataclass(frozen=True)
+class DockPlacement:
+    """B's frame in A's frame: translation (x, y, z) and rotation (degrees, extrinsic XYZ)."""
+
+    at: tuple[float, float, float]
+    rot: tuple[float, float, float] = (0.0, 0.0, 0.0)
+
+    def matrix(self) -> np.ndarray:
+        T = np.eye(4)
+        T[:3, :3] = rotation_matrix(self.rot)
+        T[:3, 3] = self.at
+        return T
+
+
+@dataclass
+class Rules:
+    name: str = ""
+    # every type the grammar mentions (parts, rules, docks, constraint arguments)
+    types: frozenset[str] = frozenset()
+    # type -> allowed neighbour-type multisets (sorted tuples)
+    neighbor_multisets: dict[str, frozenset[tuple[str, ...]]] = field(default_factory=dict)
+    # type -> list of {neighbour type: (lo, hi or None)}; each dict must hold (closed world)
+    neighbor_counts: dict[str, list[dict[str, tuple[int, int | None]]]] = field(default_factory=dict)
+    # allowed unordered type pairs (sorted); None: no dock statements, any pair may touch
+    pairs: frozenset[tuple[str, str]] | None = None
+    # (A, B) -> placements of B in A's frame (both orders are stored, the reverse one inverted)
+    docks: dict[tuple[str, str], tuple[DockPlacement, ...]] = field(default_factory=dict)
+    # (constraint name, evaluated arguments by parameter name, source span text)
+    constraints: tuple[tuple[str, dict[str, Any], str], ...] = ()
+    position_tolerance: float = 0.1  # fraction of the larger part's bounding-box diagonal
+    angle_tolerance: float = 20.0  # degrees
+
+    def allows_pair(self, a: str, b: str) -> bool:
+        return self.pairs is None or tuple(sorted((a, b))) in self.pairs
+
+    def check_neighbors(self, ptype: str, neighbor_types: list[str]) -> list[tuple[str, str]]:
+        """[(rule, allowed-description)] for every neighbour rule the observed list breaks."""
+        out = []
+        observed = tuple(sorted(neighbor_types))
+        multisets = self.neighbor_multisets.get(ptype)
+        if multisets is not None and observed not in multisets:
+            out.append(("neighbors", " | ".join(format_multiset(m) for m in sorted(multisets))))
+        for ranges in self.neighbor_counts.get(ptype, ()):
+            counts: dict[str, int] = {}
+            for t in observed:
+                counts[t] = counts.get(t, 0) + 1
+            bad = [t for t in counts if t not in ranges]
+            bad += [t for t, (lo, hi) in ranges.items()
+                    if counts.get(t, 0) < lo or (hi is not None and counts.get(t, 0) > hi)]
+            if bad:
+                out.append(("neighbor-count", format_ranges(ranges)))
+        return out
+
+    def to_json(self) -> dict:
+        return {
+            "name": self.name,
+            "types": sorted(self.types),
+            "neighbor_multisets": {t: [list(m) for m in sorted(ms)]
+                                   for t, ms in sorted(self.neighbor_multisets.items())},
+            "neighbor_counts": {t: [{k: [lo, hi] for k, (lo, hi) in r.items()} for r in rs]
+                                for t, rs in sorted(self.neighbor_counts.items())},
+            "pairs": None if self.pairs is None else [list(p) for p in sorted(self.pairs)],
+            "docks": {f"{a}--{b}": [{"at": list(p.at), "rot": list(p.rot)} for p in ps]
+                      for (a, b), ps in sorted(self.docks.items())},
+            "constraints": [{"name": n, "args": a} for n, a, _ in self.constraints],
+        }
+
+
+def format_multiset(m: tuple[str, ...]) -> str:
+    return "{" + ", ".join(m) + "}"
+
+
+def format_ranges(ranges: dict[str, tuple[int, int | None]]) -> str:
+    return ", ".join(f"{t} in {lo}..{'' if hi is None else hi}" for t, (lo, hi) in sorted(ranges.items()))
+
+
+# --------------------------------------------------------------------------------------------
+# small evaluators (tiling statements only need numbers, names and vectors)
+# --------------------------------------------------------------------------------------------
+def _env(grammar: "Grammar | None") -> dict[str, Any]:
+    env: dict[str, Any] = {}
+    if grammar is None:
+        return env
+    for st in (*grammar.attrs, *grammar.consts):
+        try:
+            env[st.name] = eval_value(st.value, env)
+        except GrammarError:
+            pass
+    return env
+
+
+def eval_value(expr, env: dict[str, Any] | None = None) -> Any:  # noqa: ANN001, C901
+    """Value of a constant expression; a bare name not in `env` is a type name (a str)."""
+    from ..ir import expr as E
+
+    env = env or {}
+    if isinstance(expr, E.Num):
+        v = expr.value
+        return int(v) if float(v).is_integer() else v
+    if isinstance(expr, (E.Str, E.Bool)):
+        return expr.value
+    if isinstance(expr, E.Ref):
+        return env.get(expr.name, expr.name)
+    if isinstance(expr, E.Vector):
+        return tuple(eval_value(i, env) for i in expr.items)
+    if isinstance(expr, E.Unary):
+        v = eval_value(expr.operand, env)
+        if expr.op == "!":
+            return not v
+        _need_number(v, expr)
+        return -v if expr.op == "-" else v
+    if isinstance(expr, E.Binary):
+        a, b = eval_value(expr.left, env), eval_value(expr.right, env)
+        op = expr.op
+        if op in ("&&", "||"):
+            return (a and b) if op == "&&" else (a or b)
+        if op in ("==", "!="):
+            return (a == b) if op == "==" else (a != b)
+        _need_number(a, expr)
+        _need_number(b, expr)
+        try:
+            return {"+": lambda: a + b, "-": lambda: a - b, "*": lambda: a * b, "/": lambda: a / b,
+                    "%": lambda: a % b, "^": lambda: a ** b, "<": lambda: a < b, "<=": lambda: a <= b,
+                    ">": lambda: a > b, ">=": lambda: a >= b}[op]()
+        except ZeroDivisionError:
+            raise GrammarError("division by zero", expr.span) from None
+    if isinstance(expr, E.Call):
+        import math as m
+
+        fns = {"sqrt": m.sqrt, "sin": lambda d: m.sin(m.radians(d)), "cos": lambda d: m.cos(m.radians(d)),
+               "min": min, "max": max, "abs": abs}
+        if expr.func in fns:
+            return fns[expr.func](*[eval_value(a, env) for a in expr.args])
+    raise GrammarError(f"cannot evaluate this expression here ({type(expr).__name__})",
+                       getattr(expr, "span", None))
+
+
+def _need_number(v: Any, expr) -> None:  # noqa: ANN001
+    if isinstance(v, bool) or not isinstance(v, (int, float)):
+        raise GrammarError(f"expected a number, got {v!r}", getattr(expr, "span", None))
+
+
+def eval_number(expr, grammar: "Grammar | None" = None) -> float:  # noqa: ANN001
+    v = eval_value(expr, _env(grammar))
+    _need_number(v, expr)
+    return float(v)
+
+
+def rotation_matrix(rot_deg) -> np.ndarray:  # noqa: ANN001
+    """Extrinsic XYZ Euler angles in degrees: R = Rz @ Ry @ Rx."""
+    rx, ry, rz = (math.radians(float(a)) for a in rot_deg)
+    cx, sx, cy, sy, cz, sz = math.cos(rx), math.sin(rx), math.cos(ry), math.sin(ry), math.cos(rz), math.sin(rz)
+    Rx = np.array([[1, 0, 0], [0, cx, -sx], [0, sx, cx]])
+    Ry = np.array([[cy, 0, sy], [0, 1, 0], [-sy, 0, cy]])
+    Rz = np.array([[cz, -sz, 0], [sz, cz, 0], [0, 0, 1]])
+    return Rz @ Ry @ Rx
+
+
+def euler_degrees(R: np.ndarray) -> tuple[float, float, float]:
+    """Inverse of `rotation_matrix` (extrinsic XYZ, degrees)."""
+    sy = -R[2, 0]
+    sy = max(-1.0, min(1.0, sy))
+    ry = math.asin(sy)
+    if abs(sy) < 1 - 1e-9:
+        rx = math.atan2(R[2, 1], R[2, 2])
+        rz = math.atan2(R[1, 0], R[0, 0])
+    else:  # gimbal lock: put everything in rz
+        rx = 0.0
+        rz = math.atan2(-R[0, 1], R[1, 1])
+    return tuple(math.degrees(a) for a in (rx, ry, rz))  # type: ignore[return-value]
+
+
+def placement_matrix(placement: "Placement", grammar: "Grammar | None" = None) -> np.ndarray:
+    env = _env(grammar)
+    at = [float(eval_value(e, env)) for e in placement.at]
+    rot = [float(eval_value(e, env)) for e in placement.rot] if placement.rot else [0.0, 0.0, 0.0]
+    T = np.eye(4)
+    T[:3, :3] = rotation_matrix(rot)
+    T[:3, 3] = at
+    return T
+
+
+# --------------------------------------------------------------------------------------------
+# grammar -> rules
+# --------------------------------------------------------------------------------------------
+def known_types(grammar: "Grammar") -> frozenset[str]:
+    return rules_from_grammar(grammar, resolve_constraints=False).types
+
+
+def rules_from_grammar(grammar: "Grammar", *, resolve_constraints: bool = True) -> Rules:
+    """Compile a tiling grammar's statements into `Rules` (raises GrammarError with spans)."""
+    env = _env(grammar)
+    rules = Rules(name=grammar.name)
+    types: set[str] = {p.name for p in grammar.parts}
+    for nr in grammar.neighbor_rules:
+        types.add(nr.part)
+        if nr.multisets:
+            prev = rules.neighbor_multisets.get(nr.part, frozenset())
+            rules.neighbor_multisets[nr.part] = prev | {tuple(sorted(m)) for m in nr.multisets}
+            for m in nr.multisets:
+                types.update(m)
+        if nr.counts:
+            ranges = {}
+            for c in nr.counts:
+                if c.hi is not None and c.hi < c.lo:
+                    raise GrammarError(f"neighbors {nr.part}: empty range {c.type} in {c.lo}..{c.hi}", c.span or nr.span)
+                ranges[c.type] = (c.lo, c.hi)
+                types.add(c.type)
+            rules.neighbor_counts.setdefault(nr.part, []).append(ranges)
+    pairs: set[tuple[str, str]] = set()
+    docks: dict[tuple[str, str], list[DockPlacement]] = {}
+    for d in grammar.docks:
+        types.update((d.a, d.b))
+        pairs.add(tuple(sorted((d.a, d.b))))  # type: ignore[arg-type]
+        for pl in d.placements:
+            at = tuple(float(_num(e, env)) for e in pl.at)
+            rot = tuple(float(_num(e, env)) for e in pl.rot) if pl.rot else (0.0, 0.0, 0.0)
+            fwd = DockPlacement(at, rot)  # type: ignore[arg-type]
+            docks.setdefault((d.a, d.b), []).append(fwd)
+            # the same docking seen from B (for A == B both directions are allowed placements)
+            inv = np.linalg.inv(fwd.matrix())
+            back = DockPlacement(tuple(float(x) for x in inv[:3, 3]), euler_degrees(inv[:3, :3]))  # type: ignore[arg-type]
+            docks.setdefault((d.b, d.a), []).append(back)
+    for s in grammar.sites:
+        types.add(s.part)
+    rules.pairs = frozenset(pairs) if grammar.docks else None
+    rules.docks = {k: tuple(v) for k, v in docks.items()}
+    compiled = []
+    for c in grammar.constraints:
+        args = _constraint_args(c, env, resolve_constraints)
+        for v in args.values():
+            if isinstance(v, str) and c.name in ("path", "count"):
+                types.add(v)
+        compiled.append((c.name, args, str(c.span) if c.span else f"constraint {c.name}"))
+    rules.constraints = tuple(compiled)
+    for ex in grammar.examples:
+        types.update(ip.type for ip in ex.parts)
+    rules.types = frozenset(types)
+    return rules
+
+
+def _num(expr, env) -> float:  # noqa: ANN001
+    v = eval_value(expr, env)
+    _need_number(v, expr)
+    return float(v)
+
+
+def _constraint_args(c, env: dict[str, Any], resolve: bool) -> dict[str, Any]:  # noqa: ANN001
+    """Bind positional and named arguments to the constraint's declared parameters."""
+    raw = [(a.name, eval_value(a.value, env)) for a in c.args]
+    if not resolve:
+        return {(n if n else str(i)): v for i, (n, v) in enumerate(raw)}
+    from ..plugins import get_plugin_manager
+
+    specs = get_plugin_manager().constraints()
+    spec = specs.get(c.name)
+    if spec is None:
+        raise GrammarError(f"unknown constraint {c.name!r}", c.span,
+                           hint=f"known constraints: {', '.join(sorted(specs)) or 'none'}")
+    params = [p.name for p in spec.params]
+    out: dict[str, Any] = {}
+    for i, (name, value) in enumerate(raw):
+        if name is None:
+            if i >= len(params):
+                raise GrammarError(f"constraint {c.name} takes at most {len(params)} argument(s)", c.span)
+            name = params[i]
+        elif name not in params:
+            raise GrammarError(f"constraint {c.name} has no parameter {name!r} "
+                               f"(parameters: {', '.join(params) or 'none'})", c.span)
+        if name in out:
+            raise GrammarError(f"constraint {c.name}: argument {name!r} given twice", c.span)
+        out[name] = value
+    for p in spec.params:
+        if p.name not in out:
+            if p.required:
+                raise GrammarError(f"constraint {c.name} needs argument {p.name!r}", c.span)
+            out[p.name] = p.default
+    return out

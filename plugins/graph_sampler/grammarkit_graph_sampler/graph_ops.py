@@ -1,0 +1,182 @@
+"""Graph-only steps of Kalojanov et al. 2019, section 4 (no geometry here).
+
+- `random_connected_subgraph`: randomised breadth-first growth from a random seed node.
+- `cut_layers`: split a sampled node set into the layer that stays with the *other* shape
+  (`outer`: nodes with a neighbour outside the sample), the layer that carries the cut edges
+  on the inserted side (`inner`), and the interior. The boundary edges of the inserted piece
+  `inner + interior` all run from `inner` to `outer`, so `inner + outer` are the "boundary
+  nodes" the paper matches.
+- `match_boundary`: a randomised backtracking search (with forward checking) for nodes of the recipient shape with
+  the same types and all pairwise centroid distances equal within a tolerance (the necessary
+  condition for a rigid docking); it stops at the first match.
+- `kept_region`: the recipient's nodes reachable from the matched outer layer without
+  crossing the matched inner layer (the part of the recipient that survives).
+
+Graphs are adjacency lists over node indices 0..n-1: the hot loop of the sampler runs here,
+and plain lists are several times faster than networkx views.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Sequence
+
+import numpy as np
+
+Adjacency = Sequence[Sequence[int]]
+
+
+def adjacency_from_edges(n: int, edges) -> list[list[int]]:
+    adj: list[list[int]] = [[] for _ in range(n)]
+    for a, b in edges:
+        adj[a].append(b)
+        adj[b].append(a)
+    for row in adj:
+        row.sort()
+    return adj
+
+
+def random_connected_subgraph(adj: Adjacency, size: int, rng: np.random.Generator, *,
+                              start: int | None = None, keep_prob: float = 0.5) -> list[int]:
+    """A connected node set of at most `size` nodes, grown breadth-first from `start`.
+
+    Each newly seen neighbour joins with probability `keep_prob`; a neighbour skipped in one
+    round is offered again in the next, so the growth reaches `size` unless the component is
+    smaller (at most `size` rounds). Nodes are returned in the order they joined (BFS order).
+    """
+    n = len(adj)
+    if n == 0 or size <= 0:
+        return []
+    first = int(rng.integers(n)) if start is None else int(start)
+    chosen = [first]
+    inside = {first}
+    for _ in range(size):
+        if len(chosen) >= size:
+            break
+        before = len(chosen)
+        for node in chosen[:before]:
+            for nb in adj[node]:
+                if nb in inside or len(chosen) >= size:
+                    continue
+                if rng.random() < keep_prob:
+                    chosen.append(nb)
+                    inside.add(nb)
+        if len(chosen) == before and all(nb in inside for node in chosen for nb in adj[node]):
+            break  # the whole component is in
+    return chosen
+
+
+@dataclass(frozen=True)
+class Cut:
+    """A sampled node set split into layers (all tuples keep the sampling order)."""
+
+    nodes: tuple[int, ...]
+    outer: tuple[int, ...]  # have a neighbour outside `nodes`: replaced by the recipient's
+    inner: tuple[int, ...]  # not outer, adjacent to outer: inserted, carry the cut edges
+    interior: tuple[int, ...]  # the rest: inserted
+
+    @property
+    def inserted(self) -> tuple[int, ...]:
+        return self.inner + self.interior
+
+    @property
+    def boundary(self) -> tuple[int, ...]:
+        """Endpoints of the boundary edges: matched against the recipient."""
+        return self.inner + self.outer
+
+
+def cut_layers(adj: Adjacency, nodes: Sequence[int]) -> Cut:
+    inside = set(nodes)
+    outer = [v for v in nodes if any(nb not in inside for nb in adj[v])]
+    outer_set = set(outer)
+    inner = [v for v in nodes if v not in outer_set and any(nb in outer_set for nb in adj[v])]
+    inner_set = set(inner)
+    interior = [v for v in nodes if v not in outer_set and v not in inner_set]
+    return Cut(tuple(nodes), tuple(outer), tuple(inner), tuple(interior))
+
+
+def distance_matrix(points: np.ndarray) -> np.ndarray:
+    pts = np.asarray(points, dtype=float)
+    diff = pts[:, None, :] - pts[None, :, :]
+    return np.sqrt((diff * diff).sum(axis=-1))
+
+
+def match_boundary(src_types: Sequence[str], src_dist: np.ndarray, boundary: Sequence[int],
+                   dst_by_type: dict[str, np.ndarray], dst_dist: np.ndarray, dst_sizes: np.ndarray,
+                   tolerance: float, rng: np.random.Generator, *, max_steps: int = 2000,
+                   ) -> list[int] | None:
+    """Nodes of the recipient matching `boundary` by type and all pairwise distances, or None.
+
+    The pair (a, b) of boundary nodes matches (a', b') when
+    |d(a, b) - d(a', b')| <= tolerance * max(size(a'), size(b')) (sizes of the recipient's
+    parts). Depth-first search over the boundary nodes in order; candidates of each type are
+    tried in a cyclic order from a random offset (the randomisation), and every assignment
+    filters the candidates of all later nodes at once (forward checking), so a dead end is
+    seen as soon as some later node has no candidate left. Returns the first complete,
+    injective assignment, or None when there is none or after `max_steps` assignments.
+    """
+    m = len(boundary)
+    if m == 0:
+        return None
+    doms: list[np.ndarray] = []
+    for v in boundary:
+        cands = dst_by_type.get(src_types[v])
+        if cands is None or len(cands) == 0:
+            return None
+        off = int(rng.integers(len(cands)))
+        doms.append(np.concatenate([cands[off:], cands[:off]]))
+    target = src_dist[np.ix_(boundary, boundary)]
+    steps = 0
+
+    def search(level: int, domains: list[np.ndarray]) -> list[int] | None:
+        nonlocal steps
+        rest = domains[1:]
+        if rest:
+            lens = np.array([len(d) for d in rest])
+            cat = np.concatenate(rest)
+            lab = np.repeat(np.arange(len(rest)), lens)
+            want = target[level + 1 + lab, level]
+            size_cat = dst_sizes[cat]
+        for x in domains[0]:
+            x = int(x)
+            steps += 1
+            if steps > max_steps:
+                return None
+            if not rest:
+                return [x]
+            ok = np.abs(dst_dist[cat, x] - want) <= tolerance * np.maximum(size_cat, dst_sizes[x])
+            ok &= cat != x
+            counts = np.bincount(lab[ok], minlength=len(rest))
+            if not counts.all():
+                continue  # some later boundary node would have no candidate
+            kept = cat[ok]
+            ends = np.cumsum(counts).tolist()
+            found = search(level + 1, [kept[a:b] for a, b in zip([0] + ends[:-1], ends)])
+            if found is not None:
+                return [x] + found
+            if steps > max_steps:
+                return None
+        return None
+
+    return search(0, doms)
+
+
+def kept_region(adj: Adjacency, outer: Sequence[int], inner: Sequence[int]) -> list[int]:
+    """Nodes reachable from `outer` without entering `inner` (sorted)."""
+    blocked = set(inner)
+    seen = set(outer)
+    stack = list(outer)
+    while stack:
+        v = stack.pop()
+        for nb in adj[v]:
+            if nb in seen or nb in blocked:
+                continue
+            seen.add(nb)
+            stack.append(nb)
+    return sorted(seen)
+
+
+def histogram_key(types: Sequence[str]) -> tuple[tuple[str, int], ...]:
+    counts: dict[str, int] = {}
+    for t in types:
+        counts[t] = counts.get(t, 0) + 1
+    return tuple(sorted(counts.items()))

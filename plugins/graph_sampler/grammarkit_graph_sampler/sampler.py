@@ -1,0 +1,528 @@
+"""Graph-based shape sampling (Kalojanov et al. 2019, section 4) over tiling-grammar examples.
+
+One *attempt* (a pure function of the pool of shapes and its own seed):
+  1. pick a donor and a recipient shape (one of them new in the previous iteration; they may
+     be the same shape);
+  2. sample a random connected subgraph of the donor by randomised BFS (size drawn from
+     [min_subgraph, 3/4 of the donor's parts], as the authors' code sweeps);
+  3. split it into layers (`graph_ops.cut_layers`): the inserted piece and the boundary nodes;
+  4. find nodes of the recipient matching the boundary nodes by type and by all pairwise
+     centroid distances within `tolerance` x part size; first match wins;
+  5. docking transform: least-squares rigid alignment (Kabsch) of the donor's boundary
+     centroids onto the matched ones; reject if any boundary centroid stays further than
+     `dock_tolerance` x the boundary's bounding-box diagonal;
+  6. replace: keep the recipient's parts reachable from the matched outer layer without
+     crossing the matched inner layer, add the donor's piece moved by the docking transform;
+  7. recompute the shape graph from the geometry (incrementally: only pairs involving the
+     inserted parts; the kept parts have not moved) and check the grammar's rules.
+Valid variants whose node-type histogram (or, optionally, typed graph up to isomorphism) is
+new are kept, in attempt order, and become the new shapes of the next iteration.
+
+Determinism: attempt `i` of iteration `k` draws from SeedSequence([seed, k, i]); attempts run
+in fixed-size batches against the state at the start of the batch and are merged in attempt
+order, so the output does not depend on the number of worker processes.
+"""
+from __future__ import annotations
+
+import multiprocessing as mp
+import os
+import time
+from dataclasses import dataclass, field
+from typing import Any, Callable, Iterator, Sequence
+
+import numpy as np
+
+from . import geometry
+from .dedupe import MODES, Deduper
+from .graph_ops import (
+    adjacency_from_edges, cut_layers, distance_matrix, histogram_key, kept_region, match_boundary,
+    random_connected_subgraph,
+)
+
+OUTCOMES = ("no-cut", "no-match", "too-large", "known", "docking", "invalid", "valid")
+
+
+@dataclass(frozen=True)
+class SamplerOptions:
+    """Parameters of the method (defaults follow the paper and the authors' code)."""
+
+    tolerance: float = 0.1  # pairwise centroid distances: |d1 - d2| <= tolerance * part size
+    dock_tolerance: float = 0.01  # boundary misalignment after Kabsch / boundary bbox diagonal
+    min_subgraph: int = 4  # sampled subgraph sizes: min_subgraph .. 3/4 of the donor's parts
+    max_subgraph_fraction: float = 0.75
+    keep_prob: float = 0.5  # randomised BFS: chance a seen neighbour joins in a round
+    attempts_per_shape: int = 512  # attempts per iteration = this x new shapes of last iteration
+    min_attempts: int = 1024
+    max_attempts: int = 100000  # per iteration (resource guard)
+    batch_size: int = 32  # attempts evaluated against the same state (fixed: determinism)
+    dedupe: str = "histogram"  # or "isomorphism"
+    max_parts: int | None = None  # default: 4 x the largest example
+    max_match_steps: int = 2000  # assignments tried per boundary search
+    contact_tolerance: float | None = None  # absolute; default from the examples' scale
+    incremental: bool = True  # False: recompute the whole shape graph (benchmark baseline)
+
+    @classmethod
+    def from_strings(cls, options: dict[str, str]) -> "SamplerOptions":
+        """Build from CLI `-O key=value` strings; unknown keys and bad values are errors."""
+        kwargs: dict[str, Any] = {}
+        fields_ = cls.__dataclass_fields__
+        for key, raw in options.items():
+            name = key.replace("-", "_")
+            if name not in fields_:
+                known = ", ".join(sorted(k.replace("_", "-") for k in fields_))
+                raise ValueError(f"unknown graph-sampler option {key!r}; known options: {known}")
+            ftype = str(fields_[name].type)
+            value: Any = raw
+            try:
+                if isinstance(raw, str):
+                    if "bool" in ftype:
+                        if raw.lower() not in ("1", "0", "true", "false", "yes", "no"):
+                            raise ValueError(raw)
+                        value = raw.lower() in ("1", "true", "yes")
+                    elif "float" in ftype:
+                        value = None if raw.lower() == "none" else float(raw)
+                    elif "int" in ftype:
+                        value = None if raw.lower() == "none" else int(raw)
+            except ValueError:
+                raise ValueError(f"graph-sampler option {key}={raw!r}: expected {ftype}") from None
+            kwargs[name] = value
+        return cls(**kwargs).checked()
+
+    def checked(self) -> "SamplerOptions":
+        if self.dedupe not in MODES:
+            raise ValueError(f"graph-sampler option dedupe={self.dedupe!r}: use one of {', '.join(MODES)}")
+        for name in ("tolerance", "dock_tolerance"):
+            if not getattr(self, name) > 0:
+                raise ValueError(f"graph-sampler option {name} must be > 0")
+        if not 0 < self.keep_prob <= 1:
+            raise ValueError("graph-sampler option keep_prob must be in (0, 1]")
+        if self.batch_size < 1 or self.min_subgraph < 3 or self.max_attempts < 1:
+            raise ValueError("graph-sampler options batch_size >= 1, min_subgraph >= 3, max_attempts >= 1")
+        return self
+
+
+@dataclass
+class Proto:
+    """A source part of an example; every part of every shape is a proto moved rigidly."""
+
+    type: str
+    mesh: Any  # trimesh.Trimesh in its example's world frame
+    transform: np.ndarray  # the source Part.transform (provenance)
+    source: str  # "example/part-id"
+    center: np.ndarray  # area-weighted surface centroid of `mesh` (moves rigidly; as shape_graph)
+    size: float  # a third of the bounding-box diagonal (the authors' part size)
+
+
+@dataclass
+class Shape:
+    """A member of the pool: an example or a kept variant (parts as proto + rigid transform)."""
+
+    key: str
+    protos: tuple[int, ...]
+    transforms: np.ndarray  # (n, 4, 4): applied to the proto's mesh
+    edges: tuple[tuple[int, int], ...]  # i < j, sorted
+    iteration: int = 0
+    parents: tuple[str, ...] = ()
+    operation: dict = field(default_factory=dict)
+    ids: tuple[str, ...] = ()  # part ids (examples: as read; variants: `Type.k` in node order)
+    # derived (filled by `prepare`)
+    types: tuple[str, ...] = ()
+    centroids: np.ndarray | None = None
+    sizes: np.ndarray | None = None
+    adj: list | None = None
+    dist: np.ndarray | None = None
+    by_type: dict | None = None
+
+    def __len__(self) -> int:
+        return len(self.protos)
+
+    def prepare(self, protos: Sequence[Proto]) -> "Shape":
+        self.types = tuple(protos[p].type for p in self.protos)
+        if not self.ids:
+            counts: dict[str, int] = {}
+            ids = []
+            for t in self.types:
+                ids.append(f"{t}.{counts.get(t, 0)}")
+                counts[t] = counts.get(t, 0) + 1
+            self.ids = tuple(ids)
+        centers = np.array([protos[p].center for p in self.protos], dtype=float)
+        rot, trans = self.transforms[:, :3, :3], self.transforms[:, :3, 3]
+        self.centroids = np.einsum("nij,nj->ni", rot, centers) + trans
+        self.sizes = np.array([protos[p].size for p in self.protos], dtype=float)
+        self.adj = adjacency_from_edges(len(self.protos), self.edges)
+        self.dist = distance_matrix(self.centroids)
+        by_type: dict[str, list[int]] = {}
+        for i, t in enumerate(self.types):
+            by_type.setdefault(t, []).append(i)
+        self.by_type = {t: np.array(v, dtype=np.int64) for t, v in by_type.items()}
+        return self
+
+    def histogram(self) -> dict[str, int]:
+        return dict(histogram_key(self.types))
+
+
+@dataclass
+class AttemptResult:
+    iteration: int
+    index: int
+    outcome: str
+    shape: Shape | None = None
+    detail: str = ""
+
+
+@dataclass
+class _Context:
+    """Everything an attempt reads; shipped to worker processes once per iteration."""
+
+    protos: list[Proto]
+    pool: list[Shape]
+    fresh: list[int]  # pool indices of the shapes new in the previous iteration
+    options: SamplerOptions
+    seed: int
+    rules: Any
+    contact_tolerance: float
+    max_parts: int
+    mesh_cache: dict = field(default_factory=dict)
+    bounds_cache: dict = field(default_factory=dict)
+
+    def bounds(self, shape_index: int) -> tuple[np.ndarray, np.ndarray]:
+        b = self.bounds_cache.get(shape_index)
+        if b is None:
+            shape = self.pool[shape_index]
+            b = geometry.bounds_of([self.world_mesh(shape_index, i) for i in range(len(shape))])
+            self.bounds_cache[shape_index] = b
+        return b
+
+    def world_mesh(self, shape_index: int, node: int):
+        key = (shape_index, node)
+        mesh = self.mesh_cache.get(key)
+        if mesh is None:
+            shape = self.pool[shape_index]
+            mesh = geometry.moved_mesh(self.protos[shape.protos[node]].mesh, shape.transforms[node])
+            self.mesh_cache[key] = mesh
+        return mesh
+
+
+def attempt_seed(seed: int, iteration: int, index: int) -> np.random.Generator:
+    return np.random.default_rng(np.random.SeedSequence([int(seed) & 0xFFFFFFFF, iteration, index]))
+
+
+def run_attempt(ctx: _Context, iteration: int, index: int, known: frozenset) -> AttemptResult:
+    """One subgraph replacement attempt (see the module docstring)."""
+    opt = ctx.options
+    rng = attempt_seed(ctx.seed, iteration, index)
+    pool = ctx.pool
+    a = ctx.fresh[int(rng.integers(len(ctx.fresh)))]
+    b = int(rng.integers(len(pool)))
+    donor_i, recip_i = (a, b) if rng.random() < 0.5 else (b, a)
+    donor, recip = pool[donor_i], pool[recip_i]
+
+    hi = max(opt.min_subgraph, int(opt.max_subgraph_fraction * len(donor)))
+    size = int(rng.integers(opt.min_subgraph, hi + 1))
+    nodes = random_connected_subgraph(donor.adj, size, rng, keep_prob=opt.keep_prob)
+    cut = cut_layers(donor.adj, nodes)
+    if not cut.interior or not cut.outer or len(cut.boundary) < 3:
+        return AttemptResult(iteration, index, "no-cut")
+
+    match = match_boundary(donor.types, donor.dist, cut.boundary, recip.by_type, recip.dist,
+                           recip.sizes, opt.tolerance, rng, max_steps=opt.max_match_steps)
+    if match is None:
+        return AttemptResult(iteration, index, "no-match")
+    inner2, outer2 = match[:len(cut.inner)], match[len(cut.inner):]
+    kept = kept_region(recip.adj, outer2, inner2)
+    inserted = list(cut.inserted)
+    n_new = len(kept) + len(inserted)
+    if n_new > ctx.max_parts:
+        return AttemptResult(iteration, index, "too-large", detail=f"{n_new} parts")
+    types = [recip.types[i] for i in kept] + [donor.types[i] for i in inserted]
+    hkey = histogram_key(types)
+    if opt.dedupe == "histogram" and hkey in known:
+        # Cheap early exit before any geometry: the merge would drop it anyway.
+        return AttemptResult(iteration, index, "known")
+
+    src = donor.centroids[list(cut.boundary)]
+    dst = recip.centroids[match]
+    docked = geometry.dock(src, dst)
+    if docked is None:
+        return AttemptResult(iteration, index, "docking", detail="boundary centroids are collinear")
+    matrix, residual = docked
+    moved = src @ matrix[:3, :3].T + matrix[:3, 3]
+    worst = float(np.max(np.linalg.norm(moved - dst, axis=1)))
+    both = np.vstack([src, dst])
+    diag = float(np.linalg.norm(both.max(axis=0) - both.min(axis=0)))
+    if worst > opt.dock_tolerance * max(diag, 1e-12):
+        return AttemptResult(iteration, index, "docking", detail=f"misalignment {worst:.4g}")
+
+    protos = tuple([recip.protos[i] for i in kept] + [donor.protos[i] for i in inserted])
+    transforms = np.concatenate([recip.transforms[kept],
+                                 np.einsum("ij,njk->nik", matrix, donor.transforms[inserted])])
+    meshes = [ctx.world_mesh(recip_i, i) for i in kept]
+    meshes += [geometry.moved_mesh(ctx.protos[p].mesh, t)
+               for p, t in zip(protos[len(kept):], transforms[len(kept):])]
+    k = len(kept)
+    rlo, rhi = ctx.bounds(recip_i)
+    nlo, nhi = geometry.bounds_of(meshes[k:])
+    lo, hi = np.concatenate([rlo[kept], nlo]), np.concatenate([rhi[kept], nhi])
+    if opt.incremental:
+        # Contacts among kept parts are the recipient's (they did not move); only pairs that
+        # involve an inserted part need the geometry.
+        remap = {old: new for new, old in enumerate(kept)}
+        edges = {(remap[u], remap[v]) for u, v in recip.edges if u in remap and v in remap}
+        try:
+            edges |= geometry.contacts_involving(meshes, types, range(k, n_new), ctx.contact_tolerance,
+                                                 lo, hi, ctx.rules)
+        except geometry.ForbiddenContact as exc:
+            return AttemptResult(iteration, index, "invalid", detail=str(exc))
+    else:
+        edges = geometry.all_contacts(meshes, types, ctx.contact_tolerance)
+    edges_t = tuple(sorted((min(u, v), max(u, v)) for u, v in edges))
+    centroids = np.concatenate([recip.centroids[kept],
+                                donor.centroids[inserted] @ matrix[:3, :3].T + matrix[:3, 3]])
+    problems = geometry.violations(ctx.rules, types, edges_t, meshes, centroids, ctx.contact_tolerance,
+                                   range(k, n_new) if opt.incremental else None, lo, hi)
+    if problems:
+        return AttemptResult(iteration, index, "invalid", detail=problems[0])
+    op = {
+        "donor": donor.key, "recipient": recip.key,
+        "subgraph": [int(v) for v in cut.nodes],
+        "inserted": [int(v) for v in inserted],
+        "boundary": [[int(u), int(v)] for u, v in zip(cut.boundary, match)],
+        "removed": sorted(set(range(len(recip))) - set(kept)),
+        "kept": [int(v) for v in kept],
+        "transform": np.round(matrix, 12).tolist(),
+        "residual": float(residual),
+        "max_misalignment": worst,
+    }
+    shape = Shape(key="", protos=protos, transforms=transforms, edges=edges_t, iteration=iteration,
+                  parents=(donor.key, recip.key), operation=op)
+    return AttemptResult(iteration, index, "valid", shape=shape)
+
+
+# -- worker processes ------------------------------------------------------------------------
+_WORKER_CTX: _Context | None = None
+
+
+def _init_worker(ctx: _Context) -> None:
+    global _WORKER_CTX
+    _WORKER_CTX = ctx
+
+
+def _run_chunk(args) -> list[AttemptResult]:
+    iteration, indices, known = args
+    assert _WORKER_CTX is not None
+    out = []
+    for i in indices:
+        res = run_attempt(_WORKER_CTX, iteration, i, known)
+        if res.shape is not None:  # derived arrays are rebuilt by the parent; keep pickles small
+            res.shape.adj = res.shape.dist = res.shape.by_type = None
+        out.append(res)
+    return out
+
+
+def default_workers() -> int:
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:  # pragma: no cover - non-Linux
+        return max(1, os.cpu_count() or 1)
+
+
+@dataclass
+class IterationStats:
+    iteration: int
+    shapes_before: int
+    fresh: int
+    attempts: int = 0
+    outcomes: dict = field(default_factory=lambda: {k: 0 for k in OUTCOMES})
+    new: int = 0
+    shapes_after: int = 0
+    seconds: float = 0.0
+
+    def row(self) -> dict:
+        return {"iteration": self.iteration, "shapes_before": self.shapes_before,
+                "fresh": self.fresh, "attempts": self.attempts,
+                "matched": self.attempts - self.outcomes["no-cut"] - self.outcomes["no-match"],
+                "valid": self.outcomes["valid"], "new": self.new,
+                "shapes": self.shapes_after, "outcomes": dict(self.outcomes),
+                "seconds": round(self.seconds, 3)}
+
+
+class GraphSampler:
+    """Sampler over the examples of one tiling grammar. `run()` yields kept variants."""
+
+    def __init__(self, grammar=None, *, seed: int = 0, workers: int | None = None,
+                 options: SamplerOptions | None = None, examples=None, rules=None):
+        """`grammar`: a tiling Grammar (its rules and examples); or give `rules` (a
+        grammarkit.tiling Rules) and `examples` (Assemblies) directly."""
+        if grammar is not None:
+            grammar = geometry.as_grammar(grammar)
+        elif rules is None or examples is None:
+            raise ValueError("GraphSampler needs a grammar, or both rules and examples")
+        self.grammar = grammar
+        self.seed = int(seed)
+        self.workers = default_workers() if workers is None else max(1, int(workers))
+        self.options = (options or SamplerOptions()).checked()
+        self.rules = rules if rules is not None else geometry.rules(grammar)
+        assemblies = list(examples) if examples is not None else geometry.load_examples(grammar)
+        if not assemblies:
+            raise geometry.no_examples_error(grammar)
+        self.protos: list[Proto] = []
+        self.examples: list[Shape] = []
+        tol = self.options.contact_tolerance
+        if tol is None:
+            tol = min(geometry.default_contact_tolerance(a) for a in assemblies)
+        self.contact_tolerance = float(tol)
+        for n, assembly in enumerate(assemblies):
+            name = assembly.name or f"example{n}"
+            geometry.check_example(self.rules, assembly, self.contact_tolerance, grammar)
+            first = len(self.protos)
+            for part in assembly.parts:
+                lo, hi = part.mesh.bounds
+                self.protos.append(Proto(part.type, part.mesh, np.asarray(part.transform, float),
+                                         f"{name}/{part.id}", geometry.surface_centroid(part.mesh),
+                                         float(np.linalg.norm(hi - lo)) / 3.0))
+            ids = [p.id for p in assembly.parts]
+            edges = geometry.example_edges(assembly, self.contact_tolerance)
+            index = {pid: i for i, pid in enumerate(ids)}
+            edge_t = tuple(sorted((min(index[a], index[b]), max(index[a], index[b])) for a, b in edges))
+            shape = Shape(key=f"example:{name}", protos=tuple(range(first, len(self.protos))),
+                          transforms=np.repeat(np.eye(4)[None], len(ids), axis=0), edges=edge_t,
+                          ids=tuple(ids))
+            self.examples.append(shape.prepare(self.protos))
+        largest = max(len(s) for s in self.examples)
+        self.max_parts = self.options.max_parts or 4 * largest
+        self.stats: list[IterationStats] = []
+        self.counter = 0
+        self.by_key: dict[str, Shape] = {s.key: s for s in self.examples}
+
+    # The pool grows as variants are kept; examples are never emitted.
+    def run(self, n: int, iterations: int, *, progress: Callable | None = None) -> Iterator[Shape]:
+        if n < 0 or iterations < 0:
+            raise ValueError("n and iterations must be >= 0")
+        opt = self.options
+        dedupe = Deduper(opt.dedupe)
+        for s in self.examples:
+            dedupe.add(s.types, s.edges)
+        pool: list[Shape] = list(self.examples)
+        fresh = list(range(len(pool)))
+        emitted = 0
+        self.stats = []
+        for it in range(1, iterations + 1):
+            if emitted >= n or not fresh:
+                break
+            t0 = time.perf_counter()
+            st = IterationStats(it, len(pool), len(fresh))
+            budget = min(opt.max_attempts, max(opt.min_attempts, opt.attempts_per_shape * len(fresh)))
+            # a snapshot: attempts of this iteration all see the pool as it was at its start
+            ctx = _Context(self.protos, list(pool), list(fresh), opt, self.seed, self.rules,
+                           self.contact_tolerance, self.max_parts)
+            advance = progress(f"iteration {it}/{iterations}", budget) if progress else None
+            new_this: list[int] = []
+            executor = _Executor(ctx, self.workers)
+            try:
+                for start in range(0, budget, opt.batch_size):
+                    indices = list(range(start, min(budget, start + opt.batch_size)))
+                    known = frozenset(dedupe.histograms)
+                    results = executor.run(it, indices, known)
+                    for res in results:
+                        st.attempts += 1
+                        st.outcomes[res.outcome] += 1
+                        if res.shape is None or emitted >= n:
+                            continue
+                        shape = res.shape.prepare(self.protos)
+                        if not dedupe.add(shape.types, shape.edges):
+                            continue
+                        self.counter += 1
+                        shape.key = f"variant_{self.counter:05d}"
+                        shape.operation["attempt"] = [it, res.index]
+                        pool.append(shape)
+                        self.by_key[shape.key] = shape
+                        new_this.append(len(pool) - 1)
+                        st.new += 1
+                        emitted += 1
+                        yield shape
+                    if advance:
+                        advance(len(indices), attempts=st.attempts, valid=st.outcomes["valid"],
+                                new=st.new, total_new=emitted)
+                    if emitted >= n:
+                        break
+            finally:
+                executor.close()
+            st.shapes_after = len(pool)
+            st.seconds = time.perf_counter() - t0
+            self.stats.append(st)
+            fresh = new_this
+
+    def growth_table(self) -> list[dict]:
+        rows = [{"iteration": 0, "shapes": len(self.examples), "new": len(self.examples)}]
+        rows += [{"iteration": s.iteration, "shapes": s.shapes_after, "new": s.new,
+                  "attempts": s.attempts, "valid": s.outcomes["valid"]} for s in self.stats]
+        return rows
+
+    def to_assembly(self, shape: Shape):
+        assembly = geometry.shape_to_assembly(shape, self.protos)
+        assembly.meta["graph_sampler"]["operation"] = self.describe(shape)
+        return assembly
+
+    def describe(self, shape: Shape) -> dict:
+        """The operation that made `shape`, with part ids instead of node indices."""
+        op = shape.operation
+        donor, recip = self.by_key[op["donor"]], self.by_key[op["recipient"]]
+        inserted_new = {old: len(op["kept"]) + k for k, old in enumerate(op["inserted"])}
+        kept_new = {old: k for k, old in enumerate(op["kept"])}
+        return {
+            "donor": donor.key, "recipient": recip.key,
+            "replaced": [recip.ids[i] for i in op["removed"]],
+            "inserted": {donor.ids[i]: shape.ids[inserted_new[i]] for i in op["inserted"]},
+            "subgraph": [donor.ids[i] for i in op["subgraph"]],
+            "boundary": [{"donor": donor.ids[a], "recipient": recip.ids[b],
+                          "variant": shape.ids[inserted_new[a]] if a in inserted_new
+                          else shape.ids[kept_new[b]]}
+                         for a, b in op["boundary"]],
+            "transform": op["transform"], "residual": op["residual"],
+            "max_misalignment": op["max_misalignment"], "attempt": op.get("attempt"),
+        }
+
+
+class _Executor:
+    """Runs a batch of attempts in this process or spread over worker processes, in order."""
+
+    def __init__(self, ctx: _Context, workers: int):
+        self.ctx = ctx
+        self.workers = workers
+        self.pool = None
+        if workers > 1:
+            method = "fork" if "fork" in mp.get_all_start_methods() else "spawn"
+            self.pool = mp.get_context(method).Pool(workers, initializer=_init_worker,
+                                                    initargs=(ctx,))
+
+    def run(self, iteration: int, indices: list[int], known: frozenset) -> list[AttemptResult]:
+        if self.pool is None:
+            return [run_attempt(self.ctx, iteration, i, known) for i in indices]
+        # Contiguous chunks, results concatenated in chunk order = attempt order.
+        k = self.workers
+        chunks = [indices[j * len(indices) // k:(j + 1) * len(indices) // k] for j in range(k)]
+        parts = self.pool.map(_run_chunk, [(iteration, c, known) for c in chunks if c])
+        return [r for part in parts for r in part]
+
+    def close(self) -> None:
+        if self.pool is not None:
+            self.pool.terminate()
+            self.pool.join()
+            self.pool = None
+
+
+def sample(grammar, n: int = 100, iterations: int = 4, seed: int = 0, workers: int | None = None,
+           *, options: SamplerOptions | None = None, progress: Callable | None = None,
+           **option_kwargs) -> Iterator:
+    """Yield up to `n` new valid assemblies made from `grammar`'s examples (Kalojanov 2019).
+
+    `grammar`: a Grammar, grammar text or a path (loaded with grammarkit.dsl.load).
+    Each yielded `Assembly` has `meta["graph_sampler"]` with its parents and operation.
+    Keyword options (`tolerance=0.1`, `dedupe="isomorphism"`, ...) are `SamplerOptions` fields.
+    """
+    grammar = geometry.as_grammar(grammar)
+    if option_kwargs:
+        options = SamplerOptions(**{**(options.__dict__ if options else {}), **option_kwargs})
+    sampler = GraphSampler(grammar, seed=seed, workers=workers, options=options)
+    for shape in sampler.run(n, iterations, progress=progress):
+        yield sampler.to_assembly(shape)

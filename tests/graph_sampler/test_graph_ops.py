@@ -1,0 +1,132 @@
+"""Graph-only steps of the sampler on synthetic graphs (no geometry)."""
+import networkx as nx
+import numpy as np
+import pytest
+
+from grammarkit_graph_sampler.dedupe import Deduper
+from grammarkit_graph_sampler.graph_ops import (
+    adjacency_from_edges, cut_layers, distance_matrix, histogram_key, kept_region, match_boundary,
+    random_connected_subgraph,
+)
+
+
+def grid_adj(w, h):
+    g = nx.convert_node_labels_to_integers(nx.grid_2d_graph(w, h), ordering="sorted")
+    return adjacency_from_edges(len(g), g.edges()), g
+
+
+def test_random_bfs_subgraphs_are_connected_sized_and_seeded():
+    adj, g = grid_adj(6, 5)
+    sizes = set()
+    for s in range(60):
+        k = 3 + s % 10
+        nodes = random_connected_subgraph(adj, k, np.random.default_rng(s))
+        assert len(nodes) == k == len(set(nodes))  # a 30-node grid always has room
+        assert nx.is_connected(g.subgraph(nodes))
+        again = random_connected_subgraph(adj, k, np.random.default_rng(s))
+        assert nodes == again
+        sizes.add(frozenset(nodes))
+    assert len(sizes) > 50  # randomised: different seeds give different subgraphs
+
+
+def test_random_bfs_stops_at_the_component():
+    adj = adjacency_from_edges(6, [(0, 1), (1, 2), (3, 4), (4, 5)])
+    nodes = random_connected_subgraph(adj, 5, np.random.default_rng(0), start=0)
+    assert sorted(nodes) == [0, 1, 2]
+
+
+def test_cut_layers_on_a_path():
+    adj = adjacency_from_edges(7, [(i, i + 1) for i in range(6)])
+    cut = cut_layers(adj, [3, 2, 4, 1, 5])
+    assert set(cut.outer) == {1, 5} and set(cut.inner) == {2, 4} and cut.interior == (3,)
+    assert set(cut.boundary) == {1, 2, 4, 5} and set(cut.inserted) == {2, 3, 4}
+    # every boundary edge of the inserted piece ends in `outer`
+    ins = set(cut.inserted)
+    for v in ins:
+        for nb in adj[v]:
+            assert nb in ins or nb in cut.outer
+
+
+def rot_z(deg):
+    a = np.radians(deg)
+    return np.array([[np.cos(a), -np.sin(a), 0], [np.sin(a), np.cos(a), 0], [0, 0, 1.0]])
+
+
+def by_type(types):
+    out = {}
+    for i, t in enumerate(types):
+        out.setdefault(t, []).append(i)
+    return {t: np.array(v) for t, v in out.items()}
+
+
+def test_match_boundary_finds_the_rigidly_moved_copy_among_distractors():
+    rng = np.random.default_rng(3)
+    src = rng.uniform(0, 10, (8, 3))
+    src_types = list("ABABCCAB")
+    # recipient: the same 8 points rotated + translated, shuffled, plus 12 distractors
+    moved = src @ rot_z(37).T + np.array([5.0, -2.0, 1.0])
+    distract = rng.uniform(-20, 30, (12, 3))
+    perm = rng.permutation(20)
+    dst = np.vstack([moved, distract])[perm]
+    dst_types = (src_types + list("ABCABCABCABC"))
+    dst_types = [dst_types[i] for i in perm]
+    inv = np.argsort(perm)  # src node i is dst node inv[i]
+    boundary = [0, 1, 2, 3, 4, 5]
+    found = match_boundary(src_types, distance_matrix(src), boundary, by_type(dst_types),
+                           distance_matrix(dst), np.full(20, 1.0), 0.01, np.random.default_rng(0))
+    assert found == [int(inv[i]) for i in boundary]
+
+
+def test_match_boundary_checks_types_and_every_pairwise_distance():
+    src = np.array([[0, 0, 0], [4, 0, 0], [0, 3, 0]], float)
+    dist = distance_matrix(src)
+    # same types, one distance off by 0.5 (> 0.1 * size 1): no match
+    dst = np.array([[0, 0, 0], [4, 0, 0], [0, 3.5, 0]], float)
+    assert match_boundary("ABC", dist, [0, 1, 2], by_type("ABC"), distance_matrix(dst),
+                          np.ones(3), 0.1, np.random.default_rng(0)) is None
+    # within tolerance: match
+    dst2 = np.array([[0, 0, 0], [4, 0, 0], [0, 3.05, 0]], float)
+    assert match_boundary("ABC", dist, [0, 1, 2], by_type("ABC"), distance_matrix(dst2),
+                          np.ones(3), 0.1, np.random.default_rng(0)) == [0, 1, 2]
+    # right distances, wrong types: no match
+    assert match_boundary("ABC", dist, [0, 1, 2], by_type("ACB"), distance_matrix(src),
+                          np.ones(3), 0.1, np.random.default_rng(0)) is None
+
+
+def test_match_boundary_is_injective_and_randomised():
+    # a ring of 12 equal nodes: every rotation of the ring matches; the random offset picks one
+    ang = np.linspace(0, 2 * np.pi, 12, endpoint=False)
+    ring = np.stack([np.cos(ang), np.sin(ang), 0 * ang], axis=1) * 5
+    types = ["T"] * 12
+    dist = distance_matrix(ring)
+    seen = set()
+    for s in range(20):
+        found = match_boundary(types, dist, [0, 1, 2], by_type(types), dist, np.ones(12), 0.01,
+                               np.random.default_rng(s))
+        assert found is not None and len(set(found)) == 3
+        d = dist[np.ix_(found, found)]
+        assert np.allclose(d, dist[np.ix_([0, 1, 2], [0, 1, 2])], atol=0.01)
+        seen.add(tuple(found))
+    assert len(seen) > 3
+
+
+def test_kept_region_does_not_cross_the_inner_layer():
+    adj = adjacency_from_edges(7, [(i, i + 1) for i in range(6)])
+    assert kept_region(adj, [1, 5], [2, 4]) == [0, 1, 5, 6]
+
+
+def test_dedupe_histogram_versus_isomorphism():
+    path = [(0, 1), (1, 2), (2, 3)]
+    star = [(0, 1), (0, 2), (0, 3)]
+    types = ["A", "A", "A", "A"]
+    h = Deduper("histogram")
+    assert h.add(types, path) and not h.add(types, star)
+    iso = Deduper("isomorphism")
+    assert iso.add(types, path) and iso.add(types, star)
+    relabelled = [(3, 2), (2, 0), (0, 1)]  # a path again
+    assert not iso.add(types, relabelled)
+    # types matter for isomorphism
+    assert iso.add(["B", "A", "A", "A"], path)
+    assert histogram_key("ABA") == (("A", 2), ("B", 1))
+    with pytest.raises(ValueError):
+        Deduper("nope")
