@@ -8,7 +8,7 @@ from pathlib import Path
 
 import click
 
-from ..errors import GrammarkitError, ShapeError
+from ..errors import ShapeError
 
 
 def _load_grammar(path: Path):  # noqa: ANN202
@@ -34,7 +34,7 @@ def _relative(path: Path, base: Path) -> str:
 @click.option("-o", "--output", type=click.Path(dir_okay=False, path_type=Path),
               help="grammar file to write (default: print to standard output)")
 @click.option("--name", default=None, help="grammar name (default: the output file's stem)")
-@click.option("--bandwidth", default=0.1, show_default=True, type=click.FloatRange(min=1e-6),
+@click.option("--bandwidth", default=0.05, show_default=True, type=click.FloatRange(min=1e-6),
               help="Mean Shift bandwidth for docking configurations, as a fraction of the parts' size")
 @click.option("--tolerance", default=None, type=click.FloatRange(min=0.0),
               help="contact tolerance in model units (default: 0.001 x the model's diagonal)")
@@ -109,4 +109,4 @@ def validate(grammar_file: Path, shapes: tuple[Path, ...], as_json: bool, tolera
         click.get_current_context().exit(1)
 
 
-__all__ = ["GrammarkitError", "learn", "validate"]
+__all__ = ["learn", "validate"]

@@ -36,7 +36,7 @@ def closest_first(name: str, known: Iterable[str]) -> list[str]:
     return close + [k for k in known if k not in close]
 
 
-def _known_hint(kind: str, name: str, known: Iterable[str], limit: int = 12) -> str | None:
+def _known_hint(kind: str, name: str, known: Iterable[str], limit: int = 40) -> str | None:
     ordered = closest_first(name, known)
     if not ordered:
         return f"there are no {kind}"

@@ -45,6 +45,9 @@ class Comment:
     text: str  # without the leading '#'
 
 
+_LINE_BREAKS = re.compile("[\r\x0b\x0c\x1c\x1d\x1e\x85\u2028\u2029]")
+
+
 class _NestingTooDeep(Exception):
     def __init__(self, token: Token):
         self.token = token
@@ -57,7 +60,9 @@ _comment_sink: contextvars.ContextVar[list | None] = contextvars.ContextVar("_co
 def _collect_comment(token: Token) -> Token:
     sink = _comment_sink.get()
     if sink is not None:
-        sink.append(Comment(token.line, token.column, token.value[1:].rstrip()))
+        # characters that other tools treat as line breaks would split the comment when printed
+        text = _LINE_BREAKS.sub(" ", token.value[1:]).rstrip()
+        sink.append(Comment(token.line, token.column, text))
     return token
 
 

@@ -19,7 +19,7 @@ import trimesh
 
 from ..errors import ShapeError
 
-__all__ = ["MESH_SUFFIXES", "load_mesh", "weld"]
+__all__ = ["MESH_SUFFIXES", "flatten", "load_mesh", "weld"]
 
 MESH_SUFFIXES = (".glb", ".gltf", ".obj", ".stl", ".ply", ".off")
 
@@ -38,6 +38,36 @@ def weld(mesh: trimesh.Trimesh) -> trimesh.Trimesh:
     out = trimesh.Trimesh(v[first], faces, process=False, metadata=dict(mesh.metadata))
     if colors is not None:
         out.visual.face_colors = colors
+    return out
+
+
+def flatten(scene: trimesh.Scene) -> trimesh.Trimesh:
+    """All mesh nodes of `scene` as one Trimesh in world coordinates; face colours are kept
+    when any part has colours (uncoloured parts get trimesh's default grey)."""
+    verts, faces, colors = [], [], []
+    offset, any_color = 0, False
+    for node in scene.graph.nodes_geometry:
+        matrix, name = scene.graph[node]
+        mesh = scene.geometry.get(name)
+        if not isinstance(mesh, trimesh.Trimesh) or len(mesh.faces) == 0:
+            continue
+        m = np.asarray(matrix, dtype=np.float64)
+        v = np.asarray(mesh.vertices, dtype=np.float64) @ m[:3, :3].T + m[:3, 3]
+        f = np.asarray(mesh.faces, dtype=np.int64)
+        if np.linalg.det(m[:3, :3]) < 0:  # a mirroring node flips the winding
+            f = f[:, ::-1]
+        verts.append(v)
+        faces.append(f + offset)
+        offset += len(v)
+        colored = mesh.visual.kind in ("face", "vertex")
+        any_color |= colored
+        colors.append(np.asarray(mesh.visual.face_colors, dtype=np.uint8) if colored
+                      else np.tile(np.array([200, 200, 200, 255], np.uint8), (len(f), 1)))
+    if not faces:
+        return trimesh.Trimesh()
+    out = trimesh.Trimesh(np.concatenate(verts), np.concatenate(faces), process=False)
+    if any_color:
+        out.visual.face_colors = np.concatenate(colors)
     return out
 
 
@@ -84,13 +114,13 @@ def _load_obj(path: Path) -> trimesh.Scene:
                 colors.append(nums[3:6] if len(nums) >= 6 else None)
             elif tag in ("o", "g"):
                 name = rest.strip() or f"group{len(groups)}"
-                if current is not None and current[0] == name:
-                    continue  # `o X` followed by `g X`: one group
                 if current is not None and not current[2] and tag == "g":
-                    current = (name, current[1], current[2])  # `o X` then `g Y`: use Y
-                    groups[-1] = current
-                    continue
-                current = (name, {}, [])
+                    continue  # `g` right after `o` (as grammarkit writes): the `o` names it
+                taken = {g[0] for g in groups}
+                unique, k = name, 1
+                while unique in taken:  # a name reused later in the file: keep both parts
+                    unique, k = f"{name}_{k}", k + 1
+                current = (unique, {}, [])
                 groups.append(current)
             elif tag == "f":
                 idx = []
@@ -125,10 +155,12 @@ def _load_obj(path: Path) -> trimesh.Scene:
     return scene
 
 
-def load_mesh(path: str | Path, *, weld_vertices: bool = True) -> trimesh.Trimesh | trimesh.Scene:
+def load_mesh(path: str | Path, *, weld_vertices: bool = True,
+              single: bool = False) -> trimesh.Trimesh | trimesh.Scene:
     """Read a mesh file: a Trimesh for single-mesh formats (STL, PLY, OFF), a Scene for GLB,
-    glTF and OBJ (a node per part). Raises `ShapeError` naming the file when it is missing,
-    not a mesh, empty, or has NaN/inf coordinates."""
+    glTF and OBJ (a node per part), or always one Trimesh in world coordinates with
+    `single=True` (e.g. for `i("part.glb")`). Raises `ShapeError` naming the file when it is
+    missing, not a mesh, empty, or has NaN/inf coordinates."""
     path = Path(path)
     if not path.exists():
         raise ShapeError(f"{path}: mesh file not found")
@@ -159,6 +191,9 @@ def load_mesh(path: str | Path, *, weld_vertices: bool = True) -> trimesh.Trimes
             _check(g, path, f"mesh {name!r}")
             if weld_vertices:
                 loaded.geometry[name] = weld(g)
+        if single:
+            mesh = flatten(loaded)
+            return weld(mesh) if weld_vertices else mesh
         return loaded
     if not isinstance(loaded, trimesh.Trimesh):
         raise ShapeError(f"{path}: the file contains a {type(loaded).__name__}, not a "

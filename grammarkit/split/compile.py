@@ -31,6 +31,7 @@ from .engine import fail, label_of
 BUILTIN_NAMES = {
     "scope.sx": 0, "scope.sy": 1, "scope.sz": 2,
 }
+ORIGIN_NAMES = {"scope.tx": 0, "scope.ty": 1, "scope.tz": 2}  # scope origin, world coordinates
 
 
 class CRule:
@@ -235,6 +236,9 @@ class _Compiler:
             self._check_snippet(d.snippet, d.span)
             self.defaults[d.object_type] = d.snippet
         self.global_names = {a.name for a in grammar.attrs} | {c.name for c in grammar.consts}
+        # A grammar attr named like a snippet attr configures it: the copy uses the grammar's
+        # attr (value and range) instead of its own, so a building can tune its snippets.
+        self.grammar_attrs = {a.name for a in grammar.attrs}
         self.pending: list[tuple[CRule, S.Rule, _Scope]] = []
 
     def _check_snippet(self, name: str, span: Span | None) -> None:
@@ -312,6 +316,8 @@ class _Compiler:
         scope = _Scope(anchor, snip)
         self.out.bindings[anchor] = snippet_name
         for a in snip.attrs:
+            if a.name in self.grammar_attrs:
+                continue
             key = f"{anchor}.{a.name}"
             self.out.attrs[key] = self._attr_info(key, a, anchor, snippet_name, _Scope(anchor, snip))
         cr = CRule(anchor, anchor, snip.object_type, start.params, start.span, snippet_name)
@@ -323,6 +329,7 @@ class _Compiler:
     def _expr(self, e: Any, scope: _Scope, params: tuple[str, ...]) -> Callable:
         V = self.out.values
         glob = self.global_names
+        grammar_attrs = self.grammar_attrs
 
         def resolve(name: str, span: Span | None) -> Callable | None:
             if name in params:
@@ -331,11 +338,14 @@ class _Compiler:
             if name in BUILTIN_NAMES:
                 i = BUILTIN_NAMES[name]
                 return lambda s, _i=i: s.sz[_i]
+            if name in ORIGIN_NAMES:
+                i = ORIGIN_NAMES[name]
+                return lambda s, _i=i: s.o[_i]
             if name in ("split.index", "comp.index"):
                 return lambda s: s.si
             if name in ("split.total", "comp.total"):
                 return lambda s: s.st
-            if name in scope.local_attrs:
+            if name in scope.local_attrs and name not in grammar_attrs:
                 key = f"{scope.anchor}.{name}"
                 return lambda s, _k=key: V[_k]
             if name in glob:
@@ -471,7 +481,7 @@ class _Compiler:
         if call.name == "i" and fns and is_constant(fns[0]):
             base = Path(call.span.file).parent if call.span and call.span.file else (
                 Path(self.out.base_dir) if self.out.base_dir else Path("."))
-            fns[0] = _const_fn(str(base / fns[0](None)))
+            fns[0] = _const_fn(str((base / str(fns[0](None))).resolve()))
         block = None
         if call.block is not None:
             if spec.block == "none":
@@ -572,7 +582,8 @@ def _op_step(apply: Callable, fns: tuple, block: tuple | None, span: Span | None
         except GrammarkitError:
             raise
         except (ValueError, TypeError, ArithmeticError, IndexError) as exc:
-            raise fail(s, f"{name}(): {exc}", span) from None
+            msg = str(exc)
+            raise fail(s, msg if msg.startswith(f"{name}(") else f"{name}(): {msg}", span) from None
         except Exception as exc:  # noqa: BLE001 - a plugin's operation crashed: report, no traceback
             raise fail(s, f"{name}() failed: {type(exc).__name__}: {exc}", span) from None
         if type(r) is list:

@@ -10,7 +10,7 @@ import manifold3d
 import numpy as np
 
 from ..errors import DerivationError, LimitError
-from .engine import Derivation, Tag
+from .engine import WELD, Derivation, Tag
 
 Manifold = manifold3d.Manifold
 
@@ -72,14 +72,18 @@ class TreeNode:
 
 def compose(ctx: Derivation, where: Any) -> tuple[Any, Any]:
     """Unite the added solids, subtract the cuts (one batched boolean each); check the result."""
-    adds = ctx.adds
-    if not adds:
+    adds, post = ctx.adds, ctx.post_adds
+    if not adds and not post:
         raise DerivationError("the derivation produced no volume: extrude a footprint (or end in a "
                               "volume) somewhere, faces alone have no thickness", where, code="empty-model")
     ctx.check_triangles(ctx.est_tris, where)
+    if not adds:
+        adds, post = post, []
     body = adds[0] if len(adds) == 1 else Manifold.batch_boolean(adds, manifold3d.OpType.Add)
     if ctx.cuts:
         body = Manifold.batch_boolean([body, *ctx.cuts], manifold3d.OpType.Subtract)
+    if post:
+        body = Manifold.batch_boolean([body, *post], manifold3d.OpType.Add)
     mesh = body.to_mesh()
     status = body.status()
     if status != manifold3d.Error.NoError:
@@ -116,9 +120,13 @@ class Model:
         self.manifold = manifold
         self._mesh = mesh
         self._ctx = ctx
-        self.tags: list[Tag] = ctx.tags
         self.warnings = warnings
         self.bindings = bindings
+
+    @cached_property
+    def tags(self) -> list[Tag]:
+        """Semantic tags of every solid and face terminal (indexed by `triangle_tags`)."""
+        return [Tag(*t) for t in self._ctx.tags]
 
     # -- mesh ----------------------------------------------------------------------------------
     @property
@@ -164,7 +172,7 @@ class Model:
         ln = np.linalg.norm(nrm, axis=1)
         ok = ln > 1e-12
         nrm[ok] /= ln[ok, None]
-        tol = 1e-4
+        tol = 2 * WELD
         # Group faces by plane and in-plane axes: one triangle selection per facade plane, then a
         # (faces x triangles) rectangle test with numpy broadcasting.
         groups: dict[tuple, list] = {}
@@ -178,7 +186,7 @@ class Model:
             _, o, ax, _, _ = members[0]
             ex, ey, ez = (np.asarray(v) for v in ax)
             d = cen - np.asarray(o)
-            m = (np.abs(d @ ez) < 1e-3) & (nrm @ ez > 0.99)
+            m = (np.abs(d @ ez) < 4 * WELD) & (nrm @ ez > 0.99)
             if not m.any():
                 continue
             rows = np.nonzero(m)[0]
@@ -218,18 +226,16 @@ class Model:
     @cached_property
     def parts(self) -> list[Part]:
         ctx = self._ctx
-        nodes = ctx.nodes
         out = []
-        for i, t in enumerate(ctx.leaves):
+        for i, (t, o, ax, sz) in enumerate(ctx.leaves):
             tag = self.tags[t]
-            n = nodes[tag.node]
             out.append(Part(i, tag.name, tag.rule, tag.object_type, tag.color, tag.material,
-                            "face" if tag.role == "face" else "volume", tag.node, n[3], n[4], n[5]))
+                            "face" if tag.role == "face" else "volume", tag.node, o, ax, sz))
         return out
 
     @cached_property
     def _tree_nodes(self) -> list[TreeNode]:
-        terminal = {self.tags[t].node: self.tags[t].name for t in self._ctx.leaves}
+        terminal = {self.tags[t].node: self.tags[t].name for t, *_ in self._ctx.leaves}
         nodes = []
         for i, (parent, rule, kind, o, ax, sz, seed, span, via) in enumerate(self._ctx.nodes):
             nodes.append(TreeNode(i, parent, rule, "face" if kind == "F" else "volume", via, o, ax, sz, seed,

@@ -483,13 +483,17 @@ def _load_part(path: str) -> manifold3d.Manifold:
         def load_mesh(p: str):  # type: ignore[no-redef]
             return trimesh.load(p, force="mesh", process=False)
     mesh = load_mesh(path)
+    if not hasattr(mesh, "faces"):  # a Scene (GLB, OBJ): all its nodes in world coordinates
+        import trimesh
+        mesh = trimesh.util.concatenate(mesh.dump()) if mesh.geometry else None
+        if mesh is None:
+            raise ValueError(f"i(): {path} contains no mesh")
     return to_manifold(mesh, what=path)
 
 
 def op_insert(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
-    rel = str(args[0])
-    base = Path(ctx.base_dir_for(s)) if hasattr(ctx, "base_dir_for") else Path(ctx.base_dir or ".")
-    path = (base / rel).resolve() if not Path(rel).is_absolute() else Path(rel)
+    rel = str(args[0])  # the compiler made constant paths absolute (relative to their file)
+    path = Path(rel) if Path(rel).is_absolute() else (Path(ctx.base_dir or ".") / rel).resolve()
     if not path.is_file():
         raise ValueError(f"i(): mesh file not found: {path}")
     solid, size = insert_fitted(_load_part(str(path)), s.sz)

@@ -60,6 +60,9 @@ class PartGeometry:
 
 
 def default_tolerance(assembly: Assembly | PartGeometry) -> float:
+    """`DEFAULT_RELATIVE_TOLERANCE` x the bounding-box diagonal of all parts."""
+    if len(assembly.lo if isinstance(assembly, PartGeometry) else assembly.parts) == 0:
+        return DEFAULT_RELATIVE_TOLERANCE
     if isinstance(assembly, PartGeometry):
         lo, hi = assembly.lo.min(axis=0), assembly.hi.max(axis=0)
     else:
@@ -175,18 +178,18 @@ def contacts(assembly: Assembly | Sequence[Part], tolerance: float | None = None
     sep = np.maximum(geom.lo[i] - geom.hi[j], geom.lo[j] - geom.hi[i])
     box_dist = np.linalg.norm(np.maximum(sep, 0.0), axis=1)
     both_boxy = geom.boxy[i] & geom.boxy[j]
-    out: list[Contact] = []
-    for k in range(len(pairs)):
+    depth = np.maximum(0.0, -sep.max(axis=1))
+    box_hit = both_boxy & (box_dist <= tolerance)
+    out: list[Contact] = [
+        Contact(a, b, gap, d, "overlap" if d > tolerance else "touch")
+        for a, b, gap, d in zip(i[box_hit].tolist(), j[box_hit].tolist(), box_dist[box_hit].tolist(),
+                                depth[box_hit].tolist())]
+    for k in np.flatnonzero(~both_boxy):
         a, b = int(i[k]), int(j[k])
-        if both_boxy[k]:
-            if box_dist[k] <= tolerance:
-                depth = float(max(0.0, -sep[k].max()))
-                out.append(Contact(a, b, float(box_dist[k]), depth,
-                                   "overlap" if depth > tolerance else "touch"))
-            continue
         gap = _surface_gap(parts[a], parts[b], a, b, geom, tolerance)
         if gap <= tolerance:
             out.append(Contact(a, b, float(gap)))
+    out.sort(key=lambda c: (c.a, c.b))
     return out
 
 
@@ -239,7 +242,9 @@ def _open_gap(ma: trimesh.Trimesh, mb: trimesh.Trimesh, geom: PartGeometry, a: i
         edges = np.asarray(m1.vertices)[m1.edges_unique]
         if not len(edges) or not len(m2.faces):
             continue
-        inside = (((edges >= lo) & (edges <= hi)).all(axis=2)).any(axis=1)
+        # edges whose own bounding box meets the overlap region (an edge may cross it with
+        # both end points far outside, as when two thin plates intersect crosswise)
+        inside = ((edges.min(axis=1) <= hi) & (edges.max(axis=1) >= lo)).all(axis=1)
         edges = edges[inside]
         if not len(edges):
             continue

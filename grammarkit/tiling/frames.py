@@ -196,21 +196,42 @@ def local_frames(meshes) -> np.ndarray:  # noqa: ANN001
     return out
 
 
+# Symmetries by local-geometry key, kept across calls: a sampler validating thousands of
+# variants made of the same few part meshes pays for each symmetry search once per process.
+_SYMMETRY_CACHE: dict[bytes, np.ndarray] = {}
+_SYMMETRY_CACHE_SIZE = 4096
+
+
 def symmetry_classes(meshes, frames: np.ndarray) -> tuple[np.ndarray, list[np.ndarray]]:  # noqa: ANN001
     """For each mesh (with its `local_frames` entry), the index of its symmetry class, and per
     class the (k, 3, 3) rotations `symmetry_offsets` finds. Rigid copies of one mesh share their
-    local geometry and so their class: the (costlier) symmetry search runs once per class."""
+    local geometry and so their class: the (costlier) symmetry search runs once per class, and
+    the class keys are computed in batches of meshes with equal vertex/face counts."""
+    meshes = list(meshes)
     classes: list[np.ndarray] = []
     index: dict[bytes, int] = {}
     out = np.zeros(len(meshes), dtype=np.int64)
-    for i, mesh in enumerate(meshes):
-        verts, faces = np.asarray(mesh.vertices, dtype=np.float64), np.asarray(mesh.faces)
-        F = frames[i]
-        local = (verts - F[:3, 3]) @ F[:3, :3]
-        size = float(np.linalg.norm(verts.max(axis=0) - verts.min(axis=0))) or 1.0
-        key = np.round(local / (1e-5 * size)).astype(np.int64).tobytes() + faces.tobytes()
-        if key not in index:
-            index[key] = len(classes)
-            classes.append(np.array([S[:3, :3] for S in symmetry_offsets(verts, faces)]))
-        out[i] = index[key]
+    groups: dict[tuple[int, int], list[int]] = {}
+    for i, m in enumerate(meshes):
+        groups.setdefault((len(m.vertices), len(m.faces)), []).append(i)
+    for idx in groups.values():
+        V = np.stack([np.asarray(meshes[i].vertices, dtype=np.float64) for i in idx])  # (g, nv, 3)
+        F = frames[idx]
+        local = np.einsum("gvk,gkj->gvj", V - F[:, None, :3, 3], F[:, :3, :3])
+        size = np.linalg.norm(V.max(axis=1) - V.min(axis=1), axis=1)
+        size[size <= 0] = 1.0
+        keys = np.round(local / (1e-5 * size)[:, None, None]).astype(np.int64)
+        for r, i in enumerate(idx):
+            faces = np.asarray(meshes[i].faces)
+            key = keys[r].tobytes() + faces.tobytes()
+            if key not in index:
+                index[key] = len(classes)
+                syms = _SYMMETRY_CACHE.get(key)
+                if syms is None:
+                    syms = np.array([S[:3, :3] for S in symmetry_offsets(V[r], faces)])
+                    if len(_SYMMETRY_CACHE) >= _SYMMETRY_CACHE_SIZE:  # bounded: drop the oldest
+                        _SYMMETRY_CACHE.pop(next(iter(_SYMMETRY_CACHE)))
+                    _SYMMETRY_CACHE[key] = syms
+                classes.append(syms)
+            out[i] = index[key]
     return out, classes

@@ -39,9 +39,9 @@ def shape_graph(assembly: Assembly, tolerance: float | None = None) -> nx.Graph:
         from ..errors import ShapeError
         dup = [k for k, v in Counter(p.id for p in parts).items() if v > 1]
         raise ShapeError(f"assembly {assembly.name!r}: duplicate part ids {dup[:5]}")
-    for c in contacts(parts, tolerance, geom=geom, pairs=candidate_pairs(geom, tolerance)):
-        attrs = {"gap": c.gap, "kind": c.kind}
-        if c.depth is not None:
-            attrs["depth"] = c.depth
-        g.add_edge(parts[c.a].id, parts[c.b].id, **attrs)
+    ids = [p.id for p in parts]
+    g.add_edges_from(
+        (ids[c.a], ids[c.b], {"gap": c.gap, "kind": c.kind} if c.depth is None
+         else {"gap": c.gap, "kind": c.kind, "depth": c.depth})
+        for c in contacts(parts, tolerance, geom=geom, pairs=candidate_pairs(geom, tolerance)))
     return g

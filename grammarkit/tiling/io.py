@@ -43,6 +43,9 @@ __all__ = [
 ]
 
 MESH_SUFFIXES = (".glb", ".gltf", ".obj", ".stl", ".ply", ".off")
+# Resource guard: models beyond this many triangles in total are refused (contacts and frames
+# hold a few arrays per triangle; 20 million is several GB).
+MAX_TRIANGLES = 20_000_000
 
 
 class ShapeWarning(UserWarning):
@@ -60,10 +63,11 @@ def type_from_name(name: str) -> str:
 # reading
 # --------------------------------------------------------------------------------------------
 def read_assembly(path: str | os.PathLike, *, grammar: "Grammar | None" = None,
-                  name: str | None = None) -> Assembly:
+                  name: str | None = None, max_triangles: int = MAX_TRIANGLES) -> Assembly:
     """Read a segmented model (GLB/glTF/OBJ file or a folder of part meshes).
 
-    With `grammar`, part types the grammar does not know are an error."""
+    With `grammar`, part types the grammar does not know are an error. Models with more than
+    `max_triangles` triangles in total are refused (ShapeError)."""
     path = Path(path)
     if not path.exists():
         raise ShapeError(f"{path}: no such file or folder")
@@ -82,6 +86,10 @@ def read_assembly(path: str | os.PathLike, *, grammar: "Grammar | None" = None,
                              "or a folder of part meshes)")
     if not parts:
         raise ShapeError(f"{path}: the file holds no mesh parts")
+    total = sum(len(p.mesh.faces) for p in parts)
+    if total > max_triangles:
+        raise ShapeError(f"{path}: {total} triangles in {len(parts)} parts exceed the limit of "
+                         f"{max_triangles} (read_assembly(max_triangles=...))")
     asm = Assembly(parts, name=name or path.stem, meta={"source": str(path)})
     finish_assembly(asm, str(path), grammar)
     return asm

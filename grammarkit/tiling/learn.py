@@ -14,7 +14,7 @@ Mean Shift (flat kernel, written here in numpy): every sample is a seed and move
 of the samples within `bandwidth` until it stops; modes closer than half a bandwidth merge.
 Features are the translation (x, y, z) plus the relative rotation matrix's nine entries scaled
 so that a rotation of `ANGLE_SCALE_DEG` weighs like one bandwidth. The bandwidth is
-`bandwidth` (default 0.1) times the median bounding-box diagonal of the two part types in the
+`bandwidth` (default 0.05) times the median bounding-box diagonal of the two part types in the
 pair, i.e. relative to the model's own size - the same fraction that validation uses as its
 position tolerance, so every learned example validates against its own grammar.
 """
@@ -24,7 +24,7 @@ import math
 import os
 from collections import defaultdict
 from pathlib import Path
-from typing import Iterable, Sequence
+from typing import Sequence
 
 import networkx as nx
 import numpy as np
@@ -173,7 +173,7 @@ def _placement(t: np.ndarray, R: np.ndarray) -> Placement:
 
 def learn(assemblies: Sequence[Assembly | str | os.PathLike], name: str = "learned", *,
           example_paths: Sequence[str] | None = None, tolerance: float | None = None,
-          bandwidth: float = 0.1, docks: bool = True, constraints: bool = True) -> Grammar:
+          bandwidth: float = 0.05, docks: bool = True, constraints: bool = True) -> Grammar:
     """The tiling grammar the examples exhibit (see the module docstring).
 
     `assemblies` are Assembly objects or file/folder paths (read with `read_assembly`).
@@ -261,6 +261,3 @@ def _identifier(text: str, used: set[str]) -> str:
     used.add(name)
     return name
 
-
-def learn_files(paths: Iterable[str | os.PathLike], **kw) -> Grammar:  # noqa: ANN003
-    return learn(list(paths), **kw)

@@ -66,7 +66,7 @@ class Rules:
     docks: dict[tuple[str, str], tuple[DockPlacement, ...]] = field(default_factory=dict)
     # (constraint name, evaluated arguments by parameter name, source span text)
     constraints: tuple[tuple[str, dict[str, Any], str], ...] = ()
-    position_tolerance: float = 0.1  # fraction of the larger part's bounding-box diagonal
+    position_tolerance: float = 0.05  # fraction of the larger part's bounding-box diagonal
     angle_tolerance: float = 20.0  # degrees
 
     def allows_pair(self, a: str, b: str) -> bool:
@@ -262,6 +262,13 @@ def rules_from_grammar(grammar: "Grammar", *, resolve_constraints: bool = True) 
             docks.setdefault((d.b, d.a), []).append(back)
     for s in grammar.sites:
         types.add(s.part)
+    for d in grammar.docks:
+        if d.a_site is not None and d.b_site is not None:
+            for fwd in _site_placements(grammar, d, env):
+                docks.setdefault((d.a, d.b), []).append(fwd)
+                inv = np.linalg.inv(fwd.matrix())
+                back = DockPlacement(tuple(float(x) for x in inv[:3, 3]), euler_degrees(inv[:3, :3]))  # type: ignore[arg-type]
+                docks.setdefault((d.b, d.a), []).append(back)
     rules.pairs = frozenset(pairs) if grammar.docks else None
     rules.docks = {k: tuple(v) for k, v in docks.items()}
     compiled = []
@@ -276,6 +283,59 @@ def rules_from_grammar(grammar: "Grammar", *, resolve_constraints: bool = True) 
         types.update(ip.type for ip in ex.parts)
     rules.types = frozenset(types)
     return rules
+
+
+_AXES = {"+x": (1, 0, 0), "-x": (-1, 0, 0), "+y": (0, 1, 0), "-y": (0, -1, 0), "+z": (0, 0, 1), "-z": (0, 0, -1)}
+
+
+def _site_frames(grammar: "Grammar", part: str, site: str, env: dict[str, Any], span) -> list[np.ndarray]:  # noqa: ANN001
+    """The site's frame(s) in the part's modelling frame: origin at the site, x = facing,
+    z = up (+z, or +y for sites facing up or down); `mirror AXIS` adds the mirror image."""
+    defs = [s for s in grammar.sites if s.part == part and s.name == site]
+    if not defs:
+        raise GrammarError(f"part '{part}' has no site '{site}'", span)
+    out = []
+    for sd in defs:
+        pos = np.array([_num(e, env) for e in sd.position])
+        facing = np.array(_AXES[sd.facing], dtype=np.float64)
+        variants = [(pos, facing)]
+        if sd.mirror is not None:
+            k = "xyz".index(sd.mirror)
+            flip = np.ones(3)
+            flip[k] = -1.0
+            variants.append((pos * flip, facing * flip))
+        for p, x in variants:
+            up = np.array([0.0, 1.0, 0.0]) if abs(x[2]) > 0.5 else np.array([0.0, 0.0, 1.0])
+            y = np.cross(up, x)
+            F = np.eye(4)
+            F[:3, 0], F[:3, 1], F[:3, 2], F[:3, 3] = x, y, np.cross(x, y), p
+            out.append(F)
+    return out
+
+
+def _site_placements(grammar: "Grammar", d, env: dict[str, Any]) -> list[DockPlacement]:  # noqa: ANN001
+    """`dock A.s -- B.t`: B placed so that its site t meets A's site s face to face (t's facing
+    opposite to s's, up kept), converted from the parts' modelling frames (the frames their
+    `part` geometry is defined in) to their Kalojanov frames, in which validation compares."""
+    from ..errors import ShapeError
+    from .frames import local_frame
+    from .io import part_prototype
+
+    try:
+        protos = {t: part_prototype(grammar, t) for t in {d.a, d.b}}
+    except ShapeError as exc:
+        raise GrammarError(f"dock {d.a}.{d.a_site} -- {d.b}.{d.b_site}: the sites' placement needs the "
+                           f"parts' geometry: {exc}", d.span) from None
+    Fa = local_frame(np.asarray(protos[d.a].vertices, dtype=np.float64), np.asarray(protos[d.a].faces))
+    Fb = local_frame(np.asarray(protos[d.b].vertices, dtype=np.float64), np.asarray(protos[d.b].faces))
+    turn = np.diag([-1.0, -1.0, 1.0, 1.0])  # half a turn about the site's up axis: facings oppose
+    out = []
+    for Sa in _site_frames(grammar, d.a, d.a_site, env, d.span):
+        for Sb in _site_frames(grammar, d.b, d.b_site, env, d.span):
+            model = Sa @ turn @ np.linalg.inv(Sb)  # B's modelling frame in A's
+            rel = np.linalg.inv(Fa) @ model @ Fb  # B's Kalojanov frame in A's
+            out.append(DockPlacement(tuple(float(x) for x in rel[:3, 3]), euler_degrees(rel[:3, :3])))  # type: ignore[arg-type]
+    return out
 
 
 def _num(expr, env) -> float:  # noqa: ANN001

@@ -53,9 +53,10 @@ class Report:
         return not self.violations
 
     def format(self) -> str:
+        name = self.assembly or "<assembly>"
         if self.ok:
-            return f"OK: {self.assembly}: {self.parts} parts, {self.contacts} contacts"
-        head = f"{self.assembly}: {len(self.violations)} violation(s) ({self.parts} parts, {self.contacts} contacts)"
+            return f"OK: {name}: {self.parts} parts, {self.contacts} contacts"
+        head = f"{name}: {len(self.violations)} violation(s) ({self.parts} parts, {self.contacts} contacts)"
         return "\n".join([head, *("  " + v.format() for v in self.violations)])
 
     __str__ = format
@@ -158,6 +159,12 @@ def _dock_violations(rules: Rules, assembly: Assembly, graph: nx.Graph, types: d
                                      np.array([F0[n] for n in nodes]))
     sym_of = dict(zip(nodes, cls.tolist()))
 
+    def diag_of(ns) -> np.ndarray:  # noqa: ANN001
+        ns = list(ns)
+        lo = np.array([graph.nodes[n]["lo"] for n in ns])
+        hi = np.array([graph.nodes[n]["hi"] for n in ns])
+        return np.linalg.norm(hi - lo, axis=1)
+
     groups: dict[tuple, list[tuple[str, str]]] = {}
     for u, v in edges:
         groups.setdefault((types[u], types[v], sym_of[u], sym_of[v]), []).append((u, v))
@@ -178,8 +185,7 @@ def _dock_violations(rules: Rules, assembly: Assembly, graph: nx.Graph, types: d
         Fv = np.array([F0[v] for _, v in group])
         rel_t = np.einsum("eji,ej->ei", Fu[:, :3, :3], Fv[:, :3, 3] - Fu[:, :3, 3])  # (e, 3)
         rel_R = np.einsum("eji,ejk->eik", Fu[:, :3, :3], Fv[:, :3, :3])  # (e, 3, 3)
-        size = np.array([max(np.linalg.norm(graph.nodes[n]["hi"] - graph.nodes[n]["lo"]) for n in e)
-                         for e in group])
+        size = np.maximum(diag_of(u for u, _ in group), diag_of(v for _, v in group))
         pos_tol = rules.position_tolerance * size
         dist = np.linalg.norm(rel_t[:, None, :] - T_all[None, :, :], axis=2)  # (e, m)
         cos = (np.einsum("eij,mij->em", rel_R, Q_all) - 1.0) / 2.0

@@ -177,6 +177,8 @@ EXAMPLES = {
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", type=Path, default=Path(__file__).resolve().parent)
+    ap.add_argument("--picture", type=Path, default=None,
+                    help="also render the larger example of each grammar side by side (PNG)")
     args = ap.parse_args(argv)
     for gname, asms in EXAMPLES.items():
         folder = args.out / gname
@@ -197,7 +199,33 @@ def main(argv: list[str] | None = None) -> int:
                 return 1
         sizes = ", ".join(f"{a.name}: {len(a)} parts" for a in asms)
         print(f"{folder}/{gname}.grammar ({sizes})")
+    if args.picture:
+        render_picture(args.picture)
     return 0
+
+
+def render_picture(path: Path) -> None:
+    """The larger example of each grammar, parts coloured by type (docs/images/tiling_examples.png)."""
+    from PIL import Image
+
+    from grammarkit.geometry.render import render
+
+    palette = [(200, 170, 120), (150, 150, 160), (170, 80, 60), (90, 130, 170), (110, 160, 90), (220, 200, 90)]
+    tiles = []
+    for asms in EXAMPLES.values():
+        asm = asms[1]
+        types = sorted({p.type for p in asm.parts})
+        parts = []
+        for p in asm.parts:
+            m = p.mesh.copy()
+            m.visual.face_colors = (*palette[types.index(p.type) % len(palette)], 255)
+            parts.append(Part(p.id, p.type, m, p.transform))
+        tiles.append(render(Assembly(parts), size=(360, 280)))
+    out = Image.new("RGB", (360 * len(tiles), 280), "white")
+    for i, t in enumerate(tiles):
+        out.paste(t.convert("RGB"), (360 * i, 0))
+    path.parent.mkdir(parents=True, exist_ok=True)
+    out.save(path, optimize=True)
 
 
 if __name__ == "__main__":

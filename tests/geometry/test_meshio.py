@@ -76,3 +76,27 @@ def test_weld_keeps_face_colours():
     welded = weld(soup)
     assert len(welded.vertices) == 8 and welded.is_watertight
     assert np.array_equal(welded.visual.face_colors, colours)
+
+
+def test_single_flattens_scene_in_world_coordinates(tmp_path):
+    from grammarkit.geometry.exporters import export, scene_from_parts
+
+    a = trimesh.creation.box((1, 1, 1))
+    a.visual.face_colors = [255, 0, 0, 255]
+    b = trimesh.creation.box((1, 1, 1))
+    b.apply_translation([5, 0, 0])
+    path = export(scene_from_parts([("A.0", "A", a), ("B.1", "B", b)]), tmp_path / "two.glb")
+    mesh = load_mesh(path, single=True)
+    assert isinstance(mesh, trimesh.Trimesh)
+    assert len(mesh.faces) == 24 and mesh_report(mesh).ok
+    assert mesh.volume == pytest.approx(2.0)
+    assert np.allclose(mesh.bounds, [[-0.5, -0.5, -0.5], [5.5, 0.5, 0.5]])
+    assert (mesh.visual.face_colors[:, :3] == [255, 0, 0]).all(axis=1).sum() == 12
+
+
+def test_obj_group_naming(tmp_path):
+    p = tmp_path / "names.obj"
+    tri = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf -3 -2 -1\n"
+    p.write_text("o Tower.0\ng Tower_material\n" + tri + "o Wall.1\n" + tri + "o Wall.1\n" + tri)
+    scene = load_mesh(p)
+    assert list(scene.geometry) == ["Tower.0", "Wall.1", "Wall.1_1"]

@@ -259,3 +259,25 @@ def test_save_image_is_atomic(tmp_path, box, monkeypatch):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["a.png"]
     with pytest.raises(ValueError, match="unknown image format"):
         save_image(img, tmp_path / "c.unknown")
+
+
+def test_raster_depth_key_matches_the_surface(box):
+    geom = prepare(box)
+    view = Camera.orthographic(pitch=0, yaw=0).resolve(geom.vertices, (64, 64))
+    raster = rasterize(geom, view)
+    front_depth = view.depth([[0, -0.5, 0]])[0]
+    assert raster.key[32, 32] == pytest.approx(front_depth)
+    assert np.isinf(raster.key[0, 0]) and raster.face[0, 0] == -1
+    assert box.face_normals[raster.face[32, 32]] @ [0, -1, 0] == pytest.approx(1.0)
+    persp = Camera(pitch=0, yaw=0, target=(0, 0, 0), distance=5).resolve(geom.vertices, (64, 64))
+    raster = rasterize(geom, persp)
+    assert raster.key[32, 32] == pytest.approx(-1 / 4.5)  # -1/depth; front face 4.5 away
+
+
+def test_rasterizer_chunking_does_not_change_the_result(building):
+    geom = prepare(building)
+    view = Camera().resolve(geom.vertices, (200, 200))
+    reference = rasterize(geom, view).face
+    assert (reference >= 0).sum() > 5000
+    for chunk in (500, 1 << 12):
+        assert np.array_equal(rasterize(geom, view, chunk=chunk).face, reference)

@@ -102,3 +102,18 @@ def test_lattice_graph_structure():
             assert set(nbr) == {"Beam"}
     n_beams = sum(1 for p in a.parts if p.type == "Beam")
     assert g.number_of_edges() == 2 * n_beams
+
+
+def test_empty_and_single_part_assemblies():
+    assert shape_graph(Assembly([])).number_of_nodes() == 0
+    g = shape_graph(Assembly([box_part("A.0", "A", (0, 0, 0))]))
+    assert g.number_of_nodes() == 1 and g.number_of_edges() == 0
+
+
+def test_open_meshes_crossing_without_any_vertex_near():
+    quad = lambda v: trimesh.Trimesh(np.array(v, float), [[0, 1, 2], [0, 2, 3]], process=False)  # noqa: E731
+    flat = quad([(-1, -1, 0), (1, -1, 0), (1, 1, 0), (-1, 1, 0)])
+    upright = quad([(0, -0.5, -1), (0, 0.5, -1), (0, 0.5, 1), (0, -0.5, 1)])
+    far = quad([(5, -0.5, -1), (5, 0.5, -1), (5, 0.5, 1), (5, -0.5, 1)])
+    g = shape_graph(Assembly([Part("F.0", "F", flat), Part("U.0", "U", upright), Part("U.1", "U", far)]))
+    assert edges(g) == {("F.0", "U.0")}

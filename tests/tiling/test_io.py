@@ -128,3 +128,9 @@ def test_example_parts_are_watertight():
         assert 15 <= len(a) <= 70
         for p in a.parts:
             assert mesh_report(p.mesh).ok, (f, p.id)
+
+
+def test_triangle_limit(tmp_path):
+    path = write_assembly(castle(), tmp_path / "c.glb")
+    with pytest.raises(ShapeError, match="exceed the limit of 100"):
+        read_assembly(path, max_triangles=100)

@@ -131,22 +131,21 @@ def match_boundary(src_types: Sequence[str], src_dist: np.ndarray, boundary: Seq
         nonlocal steps
         rest = domains[1:]
         if rest:
-            lens = np.array([len(d) for d in rest])
+            lens = [len(d) for d in rest]
             cat = np.concatenate(rest)
             lab = np.repeat(np.arange(len(rest)), lens)
             want = target[level + 1 + lab, level]
-            size_cat = dst_sizes[cat]
-        for x in domains[0]:
-            x = int(x)
+            tol_cat = tolerance * dst_sizes[cat]
+        for x in domains[0].tolist():
             steps += 1
             if steps > max_steps:
                 return None
             if not rest:
                 return [x]
-            ok = np.abs(dst_dist[cat, x] - want) <= tolerance * np.maximum(size_cat, dst_sizes[x])
+            ok = np.abs(dst_dist[cat, x] - want) <= np.maximum(tol_cat, tolerance * dst_sizes[x])
             ok &= cat != x
             counts = np.bincount(lab[ok], minlength=len(rest))
-            if not counts.all():
+            if counts.min() == 0:
                 continue  # some later boundary node would have no candidate
             kept = cat[ok]
             ends = np.cumsum(counts).tolist()

@@ -1,0 +1,204 @@
+"""`grammarkit derive`: grammar file -> model file(s).
+
+Split grammars are derived by the split engine (`grammarkit.split`); tiling grammars (or any
+grammar with `--backend NAME`) are handed to a back end plugin with a DeriveRequest. Every
+output is computed in memory first and written atomically (temporary file + rename), so a
+failure never leaves a half-written file behind.
+"""
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any, Callable
+
+import click
+
+from ..errors import GrammarError, GrammarkitError
+
+FORMATS = ("glb", "obj", "stl", "ply")
+
+
+def _pairs(values: tuple[str, ...], option: str) -> dict[str, str]:
+    out: dict[str, str] = {}
+    for item in values:
+        key, sep, value = item.partition("=")
+        key = key.strip()
+        if not sep or not key:
+            raise click.BadParameter(f"expected KEY=VALUE, got {item!r}", param_hint=option)
+        out[key] = value.strip()
+    return out
+
+
+def _progress_factory(console: Any) -> tuple[Any, Callable[..., Callable[..., None]]]:
+    """A rich Progress and a `progress(description, total)` factory for back ends."""
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+
+    progress = Progress(TextColumn("[bold]{task.description}"), BarColumn(), MofNCompleteColumn(),
+                        TimeElapsedColumn(), TextColumn("{task.fields[info]}"), console=console,
+                        transient=False)
+
+    def factory(description: str, total: int | None = None) -> Callable[..., None]:
+        task = progress.add_task(description, total=total, info="")
+
+        def advance(n: int = 1, **fields: Any) -> None:
+            info = " ".join(f"{k}={v}" for k, v in fields.items())
+            progress.update(task, advance=n, info=info)
+        return advance
+    return progress, factory
+
+
+def _write_text(path: Path, text: str) -> None:
+    from ..geometry.exporters import atomic_output
+
+    with atomic_output(path) as tmp:
+        tmp.write_text(text, encoding="utf-8")
+
+
+def _check_format(out: Path, fmt: str | None) -> str:
+    if fmt:
+        return fmt
+    suffix = out.suffix.lower().lstrip(".")
+    if suffix in FORMATS or suffix == "gltf":
+        return suffix
+    raise click.BadParameter(f"cannot tell the format of {out.name!r} from its suffix; "
+                             f"use --format ({'|'.join(FORMATS)})", param_hint="-o/--format")
+
+
+@click.command("derive")
+@click.argument("file", type=click.Path(exists=True, dir_okay=False, path_type=Path))
+@click.option("-o", "--out", required=True, type=click.Path(path_type=Path),
+              help="model file (split grammar), or folder (--variations, back ends)")
+@click.option("--preview", type=click.Path(path_type=Path), default=None,
+              help="also render a PNG preview (a folder with --variations)")
+@click.option("--seed", type=int, default=0, show_default=True, help="run seed")
+@click.option("--set", "sets", multiple=True, metavar="KEY=VALUE",
+              help="set an attr (checked against its range/enum); repeatable")
+@click.option("--format", "fmt", type=click.Choice(FORMATS), default=None,
+              help="output format (default: from the file suffix)")
+@click.option("--tree", type=click.Path(path_type=Path), default=None,
+              help="write the derivation tree as JSON")
+@click.option("--variations", type=click.IntRange(min=1), default=None,
+              help="derive N variations into the -o folder")
+@click.option("--backend", default=None, help="back end for tiling grammars (see `grammarkit plugins`)")
+@click.option("-n", "count", type=click.IntRange(min=1), default=1, show_default=True,
+              help="number of models a back end should make")
+@click.option("--iterations", type=click.IntRange(min=1), default=1, show_default=True,
+              help="back end iterations (sampler steps)")
+@click.option("--workers", type=click.IntRange(min=1), default=None, help="worker processes for back ends")
+@click.option("--option", "options", multiple=True, metavar="KEY=VALUE", help="back end option; repeatable")
+def derive(file: Path, out: Path, preview: Path | None, seed: int, sets: tuple[str, ...],
+           fmt: str | None, tree: Path | None, variations: int | None, backend: str | None,
+           count: int, iterations: int, workers: int | None, options: tuple[str, ...]) -> None:
+    """Derive a model from the grammar FILE.
+
+    \b
+    grammarkit derive grammars/paris.grammar -o paris.glb --preview paris.png
+    grammarkit derive grammars/paris.grammar -o out/ --variations 20
+    grammarkit derive castle.grammar -o out/ -n 10 --backend graph-sampler
+    """
+    from rich.console import Console
+
+    from ..dsl import load
+
+    console = Console(stderr=True)
+    grammar = load(file)
+    if backend is not None or grammar.family == "tiling":
+        _run_backend(grammar, backend, out, count, iterations, seed, workers, _pairs(options, "--option"),
+                     console)
+        return
+    if grammar.family != "split":
+        raise GrammarError(f"{file}: the grammar has no rules to derive", None)
+    attrs = _pairs(sets, "--set")
+    if variations is not None:
+        _run_variations(grammar, out, variations, seed, attrs, fmt or "glb", preview, tree, console)
+        return
+    _run_single(grammar, out, seed, attrs, _check_format(out, fmt), preview, tree, console)
+
+
+def _run_single(grammar: Any, out: Path, seed: int, attrs: dict[str, str], fmt: str,
+                preview: Path | None, tree: Path | None, console: Any) -> None:
+    from ..geometry.exporters import export
+    from ..split import derive as derive_model
+
+    for p in [out, preview, tree]:
+        if p is not None and not p.parent.exists():
+            raise click.BadParameter(f"folder {p.parent} does not exist", param_hint=str(p))
+    model = derive_model(grammar, seed=seed, attrs=attrs)
+    image = _preview(model) if preview is not None else None
+    tree_text = model.tree_json(indent=1) if tree is not None else None
+    export(model.to_scene(), out, fmt)
+    if image is not None:
+        from ..geometry.render import save_image
+        save_image(image, preview)
+    if tree_text is not None:
+        _write_text(tree, tree_text)
+    for w in model.warnings:
+        console.print(f"[yellow]warning:[/] {w}", highlight=False)
+    click.echo(f"wrote {out} ({fmt}): {model.triangle_count} triangles, {len(model.parts)} terminals, "
+               f"{model.shape_count} shapes" + (f"; preview {preview}" if preview else "")
+               + (f"; tree {tree}" if tree else ""))
+
+
+def _preview(model: Any) -> Any:
+    from ..geometry.render import render
+
+    return render(model.mesh, style="shaded+lines", size=(640, 640))
+
+
+def _run_variations(grammar: Any, out: Path, n: int, seed: int, attrs: dict[str, str], fmt: str,
+                    preview: Path | None, tree: Path | None, console: Any) -> None:
+    from ..geometry.exporters import export
+    from ..split import variations as split_variations
+
+    if out.suffix and out.suffix.lower().lstrip(".") in FORMATS:
+        raise click.BadParameter("with --variations, -o is a folder", param_hint="-o")
+    out.mkdir(parents=True, exist_ok=True)
+    if preview is not None:
+        preview.mkdir(parents=True, exist_ok=True)
+    progress, factory = _progress_factory(console)
+    manifest = []
+    name = grammar.name or "model"
+    with progress:
+        advance = factory(f"deriving {n} variations of {name}", n)
+        for var, model in split_variations(grammar, n, seed=seed, attrs=attrs):
+            stem = f"{name}_{var.index:04d}"
+            path = out / f"{stem}.{fmt}"
+            export(model.to_scene(), path, fmt)
+            entry = {"file": path.name, **var.to_dict(), "triangles": model.triangle_count,
+                     "terminals": len(model.parts)}
+            if preview is not None:
+                from ..geometry.render import save_image
+                save_image(_preview(model), preview / f"{stem}.png")
+                entry["preview"] = str(preview / f"{stem}.png")
+            if tree is not None:
+                _write_text(out / f"{stem}.tree.json", model.tree_json())
+            manifest.append(entry)
+            advance(1, file=path.name)
+    _write_text(out / "variations.json", json.dumps({"grammar": name, "seed": seed, "variations": manifest},
+                                                    indent=1, default=str))
+    click.echo(f"wrote {n} variations to {out}/ (manifest: {out / 'variations.json'})")
+
+
+def _run_backend(grammar: Any, name: str | None, out: Path, n: int, iterations: int, seed: int,
+                 workers: int | None, options: dict[str, str], console: Any) -> None:
+    from ..plugins import get_plugin_manager
+    from ..registry import DeriveRequest
+
+    pm = get_plugin_manager()
+    family = grammar.family
+    spec = pm.backend(name) if name is not None else pm.default_backend(family)
+    if spec is None:
+        known = ", ".join(sorted(pm.backends())) or "none installed"
+        raise GrammarkitError(f"no default back end for {family} grammars; pass --backend NAME "
+                              f"(known: {known})")
+    if family not in spec.families:
+        raise GrammarkitError(f"back end {spec.name!r} does not derive {family} grammars "
+                              f"(it accepts: {', '.join(sorted(spec.families))})")
+    if spec.derive is None:
+        raise GrammarkitError(f"back end {spec.name!r} (plugin {spec.plugin!r}) has no derive function")
+    progress, factory = _progress_factory(console)
+    request = DeriveRequest(out=out, n=n, iterations=iterations, seed=seed, workers=workers,
+                            options=options, progress=factory)
+    with progress:
+        summary = spec.derive(grammar, request)
+    click.echo(json.dumps(summary, indent=1, default=str))

@@ -1,0 +1,326 @@
+"""The split engine end to end: semantics, seeds, snippets, limits, errors, tags, tree."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from grammarkit.errors import DerivationError, GrammarError, LimitError
+from grammarkit.geometry.convert import mesh_report
+from grammarkit.split import Limits, derive
+
+BOX = """
+Lot --> footprint(rect(10, 6)) extrude(4) Mass
+"""
+
+
+def near(v):
+    """Mesh measurements: added solids are grown by WELD (1 mm) so touching solids fuse."""
+    return pytest.approx(v, rel=3e-3, abs=3e-3)
+
+
+def ok(model):
+    rep = mesh_report(model.mesh)
+    assert rep.watertight and rep.manifold, rep
+    return rep
+
+
+def test_box_volume_and_leaf_name(G):
+    m = derive(G(BOX))
+    rep = ok(m)
+    assert rep.volume == near(240.0)
+    assert [p.name for p in m.parts] == ["Mass"]  # no rule for Mass: a leaf (with a warning)
+    assert any("Mass" in w for w in m.warnings)
+
+
+def test_comp_face_frames(G):
+    g = G(BOX.replace("Mass", "Mass\nMass --> comp(f) { front: F. | back: B. | left: L. | right: R. | top: T. | bottom: D. }"))
+    m = derive(g)
+    by = {p.name: p for p in m.parts}
+    assert set(by) == {"F", "B", "L", "R", "T", "D", "Mass"} - {"Mass"} or set(by) == {"F", "B", "L", "R", "T", "D"}
+    # x along the face's first edge, z along the outward normal
+    assert by["F"].axes[0] == pytest.approx((1, 0, 0)) and by["F"].axes[2] == pytest.approx((0, -1, 0))
+    assert by["R"].axes[0] == pytest.approx((0, 1, 0)) and by["R"].axes[2] == pytest.approx((1, 0, 0))
+    assert by["B"].axes[2] == pytest.approx((0, 1, 0)) and by["L"].axes[2] == pytest.approx((-1, 0, 0))
+    assert by["T"].axes[2] == pytest.approx((0, 0, 1)) and by["T"].origin == pytest.approx((0, 0, 4))
+    assert by["D"].axes[2] == pytest.approx((0, 0, -1))
+    assert by["F"].size[:2] == pytest.approx((10, 4)) and by["R"].size[:2] == pytest.approx((6, 4))
+    # the comp'd volume stays as the body: the mesh is the box
+    assert ok(m).volume == near(240.0)
+
+
+def test_side_selector_first_match_wins(G):
+    g = G(BOX.replace("Mass", "Mass\nMass --> comp(f) { front: F. | side: S. | all: A. }"))
+    names = sorted(p.name for p in derive(g).parts)
+    assert names == ["A", "A", "F", "S", "S", "S"]
+
+
+def test_split_index_total_and_params(G):
+    g = G("""
+Lot --> footprint(rect(12, 4)) split(x) { { ~3: Bay(split.index, split.total) }* }
+Bay(i, n) --> extrude(1 + i) color("#00ff00") Bay.
+""")
+    m = derive(g)
+    hs = [p.size[2] for p in m.parts]
+    assert hs == [1, 2, 3, 4]
+    ok(m)
+
+
+def test_offset_inside_border_and_recess(G):
+    g = G("""
+Lot --> footprint(rect(10, 10)) extrude(5) comp(f) { front: Win | all: NIL }
+Win --> offset(-1) { inside: recess(0.5) Glass. | border: Frame. }
+""")
+    m = derive(g)
+    names = sorted(p.name for p in m.parts)
+    assert names == ["Frame", "Glass"]
+    glass = next(p for p in m.parts if p.name == "Glass")
+    assert glass.size[:2] == pytest.approx((8, 3))
+    assert glass.origin[1] == pytest.approx(0.5)  # moved to the bottom of the recess (into +y)
+    rep = ok(m)
+    assert rep.volume == near(500 - 8 * 3 * 0.5)
+
+
+def test_extrude_negative_is_a_clear_error(G):
+    g = G("Lot --> footprint(rect(4, 4)) extrude(-1) A.")
+    with pytest.raises(DerivationError) as e:
+        derive(g)
+    assert "extrude" in str(e.value) and e.value.span is not None and e.value.span.line == 1
+
+
+def test_division_by_zero_has_span(G):
+    g = G("attr w = 0 @range(0, 5)\nLot --> footprint(rect(4, 4)) extrude(1 / w) A.")
+    with pytest.raises(DerivationError, match="division by zero") as e:
+        derive(g)
+    assert e.value.span.line == 2 and e.value.span.column > 1
+
+
+def test_depth_limit_names_rule(G):
+    g = G("Lot --> footprint(rect(4, 4)) A\nA --> t(0, 0, 1) A")
+    with pytest.raises(LimitError) as e:
+        derive(g, limits=Limits(max_depth=20))
+    assert "'A'" in str(e.value) and e.value.span.line == 2
+
+
+def test_shape_and_triangle_limits(G):
+    g = G("Lot --> footprint(rect(40, 4)) extrude(2) split(x) { { ~0.5: B. }* }")
+    with pytest.raises(LimitError, match="shape limit"):
+        derive(g, limits=Limits(max_shapes=20))
+    with pytest.raises(LimitError, match="triangle limit"):
+        derive(g, limits=Limits(max_triangles=100))
+
+
+def test_determinism_and_seed_sensitivity(G):
+    g = G("""
+Lot --> footprint(rect(20, 4)) split(x) { { ~2: Bay }* }
+Bay --> 50%: extrude(rand(1, 5)) A. | else: extrude(1) B.
+""")
+    a, b = derive(g, seed=7), derive(g, seed=7)
+    assert np.array_equal(a.vertices, b.vertices)
+    assert [p.name for p in a.parts] == [p.name for p in b.parts]
+    c = derive(g, seed=8)
+    assert [(p.name, p.size) for p in a.parts] != [(p.name, p.size) for p in c.parts]
+
+
+def test_editing_one_subtree_does_not_reroll_others(G):
+    text = """
+Lot --> footprint(rect(20, 10)) split(y) { ~1: Left | ~1: Right }
+Left --> split(x) { { ~2: L }* }
+L --> extrude(rand(1, 9)) L.
+Right --> split(x) { { ~2: R }* }
+R --> extrude(rand(1, 9)) R.
+"""
+    a = derive(G(text), seed=3)
+    b = derive(G(text.replace("R --> extrude(rand(1, 9)) R.", "R --> extrude(rand(2, 4) * 2) R.")), seed=3)
+    la = [p.size for p in a.parts if p.name == "L"]
+    lb = [p.size for p in b.parts if p.name == "L"]
+    assert la == lb and len(la) == 10
+    assert [p.size for p in a.parts if p.name == "R"] != [p.size for p in b.parts if p.name == "R"]
+
+
+def test_choice_over_100_percent_is_error(G):
+    g = G("Lot --> footprint(rect(4, 4)) X(80)\nX(p) --> p%: extrude(1) A. | p%: extrude(2) B.")
+    with pytest.raises(DerivationError, match="add up to 160"):
+        derive(g)
+
+
+def test_stochastic_frequencies_follow_percentages(G):
+    g = G("""
+Lot --> footprint(rect(400, 1)) split(x) { { ~1: C }* }
+C --> 30%: extrude(1) A. | else: extrude(2) B.
+""")
+    m = derive(g, seed=1)
+    frac = sum(p.name == "A" for p in m.parts) / len(m.parts)
+    assert 0.22 < frac < 0.38
+
+
+def test_push_pop_and_transforms(G):
+    g = G("""
+Lot --> footprint(rect(4, 4)) extrude(2) Body
+Body --> [ t(1, 1, 2) s(1, 1, 3) Chimney. ] Box.
+""")
+    m = derive(g)
+    ch = next(p for p in m.parts if p.name == "Chimney")
+    assert ch.origin == pytest.approx((1, 1, 2)) and ch.size == pytest.approx((1, 1, 3))
+    assert ok(m).volume == near(32 + 3)
+
+
+def test_rotation_and_center(G):
+    g = G("""
+Lot --> footprint(rect(4, 2)) extrude(1) A
+A --> s(2, 2, 1) center(xy) r(0, 0, 90) B.
+""")
+    m = derive(g)
+    b = m.parts[0]
+    assert b.axes[0] == pytest.approx((0, 1, 0))
+    assert b.origin[:2] == pytest.approx((1, 0))
+    ok(m)
+
+
+@pytest.mark.parametrize("roof, expect_h", [
+    ("roofGable(45, ridge=x)", 3.0), ("roofGable(45, ridge=y)", 5.0),
+    ("roofHip(45)", 3.0), ("roofPyramid(45)", 3.0), ("roofShed(45)", 6.0),
+    ("roofMansard(60, 1, 20)", None),
+])
+def test_roofs(G, roof, expect_h):
+    g = G(f"Lot --> footprint(rect(10, 6)) extrude(3) comp(f) {{ top: {roof} R. | all: NIL }}")
+    m = derive(g)
+    ok(m)
+    r = next(p for p in m.parts if p.name == "R")
+    if expect_h is not None:
+        assert r.size[2] == pytest.approx(expect_h, abs=1e-6)
+    assert m.mesh.bounds[1][2] > 3.0
+
+
+def test_roof_overhang_and_bad_angle(G):
+    m = derive(G("Lot --> footprint(rect(10, 6)) extrude(3) comp(f) { top: roofHip(30, overhang=0.5) R. | all: NIL }"))
+    assert m.mesh.bounds[0][:2] == near((-0.5, -0.5))
+    with pytest.raises(DerivationError, match="angle"):
+        derive(G("Lot --> footprint(rect(10, 6)) extrude(3) comp(f) { top: roofHip(95) R. | all: NIL }"))
+
+
+def test_hip_roof_on_l_footprint_is_skeleton_like(G):
+    g = G("Lot --> footprint(lshape(20, 16, 6, 6)) extrude(3) comp(f) { top: roofHip(45) R. | all: NIL }")
+    m = derive(g)
+    ok(m)
+    # both wings are 6 wide: the ridge height is 3 everywhere, and the roof covers the L exactly
+    assert m.mesh.bounds[1][2] == near(6.0)
+    assert len(m.manifold.decompose()) == 1
+
+
+def test_polygon_footprint_split_and_comp(G):
+    g = G("""
+Lot --> footprint(polygon(0, 0, 10, 0, 10, 4, 6, 4, 6, 8, 0, 8)) extrude(3) Mass
+Mass --> split(x) { ~1: P | ~1: P }
+P --> comp(f) { side: F. | top: T. | bottom: NIL }
+""")
+    m = derive(g)
+    rep = ok(m)
+    assert rep.volume == near((10 * 4 + 6 * 4) * 3)
+    tops = [p for p in m.parts if p.name == "T"]
+    assert len(tops) == 2
+
+
+def test_bad_footprint_is_clear(G):
+    with pytest.raises(DerivationError, match="not simple"):
+        derive(G("Lot --> footprint(polygon(0, 0, 4, 0, 4, 4, 2, -1, 0, 4)) extrude(1) A."))
+
+
+def test_insert_part_mesh_fitted_to_scope(G, tmp_path):
+    from pathlib import Path
+
+    from grammarkit.dsl import load
+
+    part = Path(__file__).resolve().parents[2] / "grammars" / "parts" / "chimney.glb"
+    (tmp_path / "parts").mkdir()
+    (tmp_path / "parts" / "c.glb").write_bytes(part.read_bytes())
+    gfile = tmp_path / "ins.grammar"
+    gfile.write_text('Lot --> footprint(rect(4, 4)) extrude(1) [ t(1, 1, 1) s(2, 1, 3) i("parts/c.glb") C. ] B.\n')
+    m = derive(load(gfile))
+    ok(m)
+    c = next(p for p in m.parts if p.name == "C")
+    assert c.size == pytest.approx((2, 1, 3))
+    assert m.mesh.bounds[1][2] == near(4.0)
+    gfile.write_text('Lot --> footprint(rect(4, 4)) extrude(1) i("parts/missing.glb") C.\n')
+    with pytest.raises(DerivationError, match="not found"):
+        derive(load(gfile))
+
+
+def test_snippets_use_default_and_private_rules(G):
+    g = G("""
+snippet tower : Mass {
+  attr h = 5 @range(2, 9)
+  Start --> extrude(h) comp(f) { top: Roof | side: Wall | bottom: NIL }
+  Wall --> color("#ff0000") Wall.
+}
+snippet flat : Roof {
+  Start --> color("#00ff00") Flat.
+}
+snippet peaked : Roof {
+  attr deg = 30 @range(10, 50)
+  Start --> roofPyramid(deg) Peak.
+}
+Lot --> footprint(rect(6, 6)) Mass
+use tower as Mass
+default flat for Roof
+variants Roof { flat: 50% | peaked: 50% }
+""")
+    m = derive(g)
+    ok(m)
+    assert m.bindings == {"Mass": "tower", "Roof": "flat"}
+    assert {p.name for p in m.parts} == {"Wall", "Flat"}
+    wall = next(p for p in m.parts if p.name == "Wall")
+    assert wall.rule == "Wall" and wall.object_type == "Mass" and wall.color == "#ff0000"
+    assert m.attrs == {"Mass.h": 5}
+    assert derive(g, attrs={"h": 8}).mesh.bounds[1][2] == near(8)
+    with pytest.raises(GrammarError, match="outside its range"):
+        derive(g, attrs={"h": 10})
+    # swap the Roof snippet, as variations do
+    m2 = derive(g, choices={"Roof": "peaked"})
+    assert "Peak" in {p.name for p in m2.parts} and "Roof.deg" in m2.attrs
+
+
+def test_pattern_sugar(G):
+    g = G("""
+Lot --> footprint(rect(10.3, 2)) Bay
+Bay --> repeat(x, 2, 0.3) (W P)* W
+W --> extrude(1) W.
+P --> extrude(2) P.
+""")
+    m = derive(g)
+    names = [p.name for p in sorted(m.parts, key=lambda p: p.origin[0])]
+    assert names == ["W", "P", "W", "P", "W", "P", "W", "P", "W"]
+    assert all(p.size[0] == pytest.approx(0.3) for p in m.parts if p.name == "P")
+    ok(m)
+
+
+def test_colors_reach_mesh_faces_and_tree(G):
+    g = G("""
+Lot --> footprint(rect(10, 10)) extrude(6) color("#808080") comp(f) { front: Facade | top: roofGable(30) color("#aa0000") Roof. | all: NIL }
+Facade --> color("#00aa00") split(x) { ~1: Wall. | 2: Window | ~1: Wall. }
+Window --> split(y) { 1: Wall. | 2: recess(0.3) color("#0000aa") Glass. | ~1: Wall. }
+""")
+    m = derive(g, seed=5)
+    ok(m)
+    colors = {tuple(c[:3]) for c in m.mesh.visual.face_colors}
+    assert {(0xAA, 0, 0), (0, 0xAA, 0), (0, 0, 0xAA), (0x80, 0x80, 0x80)} <= colors
+    t = m.tree_dict()
+    assert t["nodes"][0]["rule"] == "Lot" and t["nodes"][0]["line"] == 2
+    glass = [n for n in t["nodes"] if n["terminal"] == "Glass"]
+    assert glass and glass[0]["line"] == 4 and isinstance(glass[0]["seed"], int)
+    scene = m.to_scene()
+    assert len(scene.geometry) == 1
+
+
+def test_solids_inside_a_recess_survive_the_cut(G):
+    g = G("""
+Lot --> footprint(rect(6, 6)) extrude(4) comp(f) { front: Win | all: NIL }
+Win --> offset(-1) { inside: recess(0.5) split(x) { ~1: Glass. | 0.2: extrude(0.3) Mullion. | ~1: Glass. } | border: Wall. }
+""")
+    m = derive(g)
+    rep = ok(m)
+    hole = 4 * 2 * 0.5
+    mullion = 0.2 * 2 * 0.3
+    assert rep.volume == near(144 - hole + mullion)
+    assert any(t.name == "Mullion" for t in m.tags)
