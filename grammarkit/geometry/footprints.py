@@ -116,7 +116,7 @@ def polygons_of(cs: manifold3d.CrossSection, min_area: float = 1e-9) -> list[Pol
     only handle simple polygons; contours with negative area are holes)."""
     out = []
     for contour in cs.to_polygons():
-        poly = tuple((float(x), float(y)) for x, y in contour)
+        poly = tuple(map(tuple, contour.tolist()))
         if area(poly) > min_area:
             out.append(poly)
     return out

@@ -62,7 +62,7 @@ def _piece(s: Shape, cs: manifold3d.CrossSection, kind: str, extra_o: tuple[floa
     """A child shape from a CrossSection given in `s`'s scope coordinates (normalized bbox)."""
     contours = []
     for c in cs.to_polygons():
-        poly = tuple((float(x), float(y)) for x, y in c)
+        poly = tuple(map(tuple, c.tolist()))
         if abs(fp.area(poly)) > 1e-9:
             contours.append(poly)
     if not contours:

@@ -286,6 +286,8 @@ def _read_folder(path: Path) -> list[Part]:
             if len(sub) == 1:
                 p = sub[0]
                 name = f.name[: -len(f.suffix)]
+                # the file stem is the id; the type is the node's extras.type if it has one,
+                # else derived from the stem (`Tower.3.glb` -> Tower)
                 parts.append(Part(name, p.type if p.type != type_from_name(p.id) else type_from_name(name),
                                   p.mesh, p.transform, p.meta))
                 continue

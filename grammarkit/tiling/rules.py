@@ -223,11 +223,16 @@ def placement_matrix(placement: "Placement", grammar: "Grammar | None" = None) -
 # grammar -> rules
 # --------------------------------------------------------------------------------------------
 def known_types(grammar: "Grammar") -> frozenset[str]:
-    return rules_from_grammar(grammar, resolve_constraints=False).types
+    """Every part type the grammar mentions (no geometry is loaded, no plugin consulted)."""
+    return rules_from_grammar(grammar, resolve_constraints=False, site_placements=False).types
 
 
-def rules_from_grammar(grammar: "Grammar", *, resolve_constraints: bool = True) -> Rules:
-    """Compile a tiling grammar's statements into `Rules` (raises GrammarError with spans)."""
+def rules_from_grammar(grammar: "Grammar", *, resolve_constraints: bool = True,
+                       site_placements: bool = True) -> Rules:
+    """Compile a tiling grammar's statements into `Rules` (raises GrammarError with spans).
+
+    `site_placements=False` skips turning `dock A.s -- B.t` into placements (which needs the
+    parts' geometry)."""
     env = _env(grammar)
     rules = Rules(name=grammar.name)
     types: set[str] = {p.name for p in grammar.parts}
@@ -263,7 +268,7 @@ def rules_from_grammar(grammar: "Grammar", *, resolve_constraints: bool = True) 
     for s in grammar.sites:
         types.add(s.part)
     for d in grammar.docks:
-        if d.a_site is not None and d.b_site is not None:
+        if site_placements and d.a_site is not None and d.b_site is not None:
             for fwd in _site_placements(grammar, d, env):
                 docks.setdefault((d.a, d.b), []).append(fwd)
                 inv = np.linalg.inv(fwd.matrix())
