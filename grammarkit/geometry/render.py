@@ -569,7 +569,7 @@ def _rgba(color: Sequence[float] | None) -> tuple[np.ndarray, float] | None:
 def render(obj: Any, camera: Camera | View | None = None, style: str = "shaded",
            size: tuple[int, int] = (512, 512), line_style: LineStyle | None = None,
            background: Sequence[float] | None = (255, 255, 255), *, supersample: int = 2,
-           light: Sequence[float] = (-0.5, 0.75, 0.45), ambient: float = 0.35,
+           light: Sequence[float] = (-0.35, 0.6, 0.7), ambient: float = 0.45,
            max_triangles: int = MAX_TRIANGLES) -> Image.Image:
     """Render a Trimesh, Scene, Model, Assembly (or a `prepare`d geometry) to a PIL image.
 

@@ -27,6 +27,7 @@ __all__ = ["Limits", "Model", "Part", "Shape", "TreeNode", "compile", "derive", 
 _lock = threading.RLock()
 _cache: dict[tuple, tuple[Grammar, CompiledGrammar]] = {}
 _CACHE_SIZE = 32
+_files: dict[tuple[str, int], Grammar] = {}
 
 DEFAULT_LOT = ((0.0, 0.0), (10.0, 0.0), (10.0, 10.0), (0.0, 10.0))
 
@@ -41,6 +42,21 @@ def load_grammar(source: Any) -> Grammar:
         raise GrammarError(f"the grammar parser is not available: {exc}") from None
     if isinstance(source, str) and "\n" not in source and source.endswith(".grammar"):
         source = Path(source)
+    if isinstance(source, Path):
+        # the same unchanged file gives the same Grammar object, so its compilation is reused
+        try:
+            key = (str(source.resolve()), source.stat().st_mtime_ns)
+        except OSError:
+            return load(source)  # the loader reports the missing file with its name
+        with _lock:
+            hit = _files.get(key)
+        if hit is None:
+            hit = load(source)
+            with _lock:
+                if len(_files) >= _CACHE_SIZE:
+                    _files.pop(next(iter(_files)))
+                _files[key] = hit
+        return hit
     return load(source)
 
 

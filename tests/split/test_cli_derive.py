@@ -90,3 +90,47 @@ def test_variations_folder_and_manifest(tmp_path):
     assert all(3 <= h <= 12 and isinstance(h, int) for h in hs)
     samples = {(v["attrs"]["h"], v["attrs"]["roof"], v["seed"]) for v in manifest["variations"]}
     assert len(samples) == 3
+
+
+class _FakeBackend:
+    """A back end plugin recording the DeriveRequest it gets."""
+
+    seen: list = []
+
+    @staticmethod
+    def derive(grammar, request):
+        advance = request.progress("sampling", request.n)
+        for _ in range(request.n):
+            advance(1, ok=1)
+        _FakeBackend.seen.append((grammar.family, request))
+        return {"models": request.n, "out": str(request.out)}
+
+
+def test_tiling_grammar_goes_to_backend(tmp_path):
+    from grammarkit import hookimpl
+    from grammarkit.plugins import get_plugin_manager
+    from grammarkit.registry import BackendSpec
+
+    class Plugin:
+        @staticmethod
+        @hookimpl
+        def grammarkit_backends():
+            return [BackendSpec("fake-test", "records requests", frozenset({"tiling"}), _FakeBackend.derive)]
+
+    pm = get_plugin_manager()
+    pm.register(Plugin, name="fake-backend-test")
+    try:
+        g = tmp_path / "castle.grammar"
+        g.write_text("part Wall = box(4, 0.8, 3)\npart Tower = box(2, 2, 6)\n")
+        r = CliRunner().invoke(main, ["derive", str(g), "-o", str(tmp_path / "out"), "--backend", "fake-test",
+                                      "-n", "3", "--iterations", "7", "--seed", "5", "--workers", "2",
+                                      "--option", "temperature=0.5"])
+        assert r.exit_code == 0, r.output
+        family, req = _FakeBackend.seen[-1]
+        assert family == "tiling" and req.n == 3 and req.iterations == 7 and req.seed == 5
+        assert req.workers == 2 and req.options == {"temperature": "0.5"}
+        assert '"models": 3' in r.output
+        r = CliRunner().invoke(main, ["derive", str(g), "-o", str(tmp_path / "o2"), "--backend", "nope"])
+        assert r.exit_code == 1 and "unknown back end 'nope'" in r.output
+    finally:
+        pm.unregister("fake-backend-test")
