@@ -39,7 +39,7 @@ def _load():
 def record_recipe(grammar):
     """Derive once with a recording Derivation: which solids, where (the floor's input)."""
     from grammarkit.split import compile as compile_split
-    from grammarkit.split.engine import CUT_OUTSET, Derivation, Limits, local_solid, welded_frame
+    from grammarkit.split.engine import CUT_OUTSET, Derivation, Limits, frame, welded_frame
     from grammarkit.split.shape import FACE, Shape
 
     adds, cuts = [], []
@@ -59,7 +59,6 @@ def record_recipe(grammar):
         def add_cut(self, s, depth):
             z = s.ax[2]
             o = (s.o[0] - z[0] * depth, s.o[1] - z[1] * depth, s.o[2] - z[2] * depth)
-            from grammarkit.split.engine import frame
             size = (s.sz[0], s.sz[1], depth + CUT_OUTSET)
             cuts.append(("box", size, frame(o, s.ax)) if s.poly is None else
                         ("prism", (s.poly, size[2]), frame(o, s.ax)))
@@ -71,7 +70,6 @@ def record_recipe(grammar):
     ctx.start(compiled.axiom, Shape((0.0, 0.0, 0.0), ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0)),
                                     (10.0, 10.0, 0.0), FACE))
     ctx.run()
-    _ = local_solid
     return adds, cuts
 
 
@@ -138,11 +136,12 @@ def main(argv=None):
     med_d, med_m, med_f = (statistics.median(t) * 1e3 for t in (t_derive, t_mesh, t_floor))
 
     n = args.variations
-    t = time.perf_counter()
-    _variation_chunk((0, n, 1))
-    seq = time.perf_counter() - t
-    par = None
-    if args.workers > 1:
+    seq = par = None
+    if n > 0:
+        t = time.perf_counter()
+        _variation_chunk((0, n, 1))
+        seq = time.perf_counter() - t
+    if n > 0 and args.workers > 1:
         chunks = [(i * n // args.workers, (i + 1) * n // args.workers - i * n // args.workers, 1)
                   for i in range(args.workers)]
         t = time.perf_counter()
@@ -157,7 +156,8 @@ def main(argv=None):
     print(f"{'derive + coloured trimesh':44s} {med_m:10.1f} {'':>10s}")
     print(f"{'floor (same solids, direct manifold3d)':44s} {med_f:10.1f} {'':>10s}")
     print(f"{'ratio derive / floor':44s} {med_d / med_f:10.2f} {'<= 2.0':>10s}")
-    print(f"{'variations: buildings/s, 1 process':44s} {n / seq:10.1f} {f'({n} in {seq:.1f} s)':>10s}")
+    if seq is not None:
+        print(f"{'variations: buildings/s, 1 process':44s} {n / seq:10.1f} {f'({n} in {seq:.1f} s)':>10s}")
     if par is not None:
         print(f"{f'variations: buildings/s, {args.workers} processes':44s} {n / par:10.1f} "
               f"{f'({n} in {par:.1f} s)':>10s}")

@@ -84,7 +84,8 @@ def _check_format(out: Path, fmt: str | None) -> str:
               help="number of models a back end should make")
 @click.option("--iterations", type=click.IntRange(min=1), default=1, show_default=True,
               help="back end iterations (sampler steps)")
-@click.option("--workers", type=click.IntRange(min=1), default=None, help="worker processes for back ends")
+@click.option("--workers", type=click.IntRange(min=1), default=None,
+              help="worker processes (back ends, and --variations)")
 @click.option("--option", "options", multiple=True, metavar="KEY=VALUE", help="back end option; repeatable")
 def derive(file: Path, out: Path, preview: Path | None, seed: int, sets: tuple[str, ...],
            fmt: str | None, tree: Path | None, variations: int | None, backend: str | None,
@@ -110,7 +111,8 @@ def derive(file: Path, out: Path, preview: Path | None, seed: int, sets: tuple[s
         raise GrammarError(f"{file}: the grammar has no rules to derive", None)
     attrs = _pairs(sets, "--set")
     if variations is not None:
-        _run_variations(grammar, out, variations, seed, attrs, fmt or "glb", preview, tree, console)
+        _run_variations(grammar, out, variations, seed, attrs, fmt or "glb", preview, tree, console,
+                        file, workers)
         return
     _run_single(grammar, out, seed, attrs, _check_format(out, fmt), preview, tree, console)
 
@@ -120,12 +122,12 @@ def _run_single(grammar: Any, out: Path, seed: int, attrs: dict[str, str], fmt: 
     from ..geometry.exporters import export
     from ..split import derive as derive_model
 
-    for p in [out, preview, tree]:
-        if p is not None and not p.parent.exists():
-            raise click.BadParameter(f"folder {p.parent} does not exist", param_hint=str(p))
     model = derive_model(grammar, seed=seed, attrs=attrs)
     image = _preview(model) if preview is not None else None
     tree_text = model.tree_json(indent=1) if tree is not None else None
+    for p in [out, preview, tree]:  # only now that everything is computed
+        if p is not None:
+            p.parent.mkdir(parents=True, exist_ok=True)
     export(model.to_scene(), out, fmt)
     if image is not None:
         from ..geometry.render import save_image
@@ -145,35 +147,59 @@ def _preview(model: Any) -> Any:
     return render(model.mesh, style="shaded+lines", size=(640, 640))
 
 
-def _run_variations(grammar: Any, out: Path, n: int, seed: int, attrs: dict[str, str], fmt: str,
-                    preview: Path | None, tree: Path | None, console: Any) -> None:
+def _variation_job(job: tuple) -> dict:
+    """Derive and write variation `index` (in a worker process or in the main one)."""
+    grammar, index, seed, attrs, fmt, out, preview, tree = job
     from ..geometry.exporters import export
-    from ..split import variations as split_variations
+    from ..split import load_grammar, variations as split_variations
 
+    g = load_grammar(grammar)
+    name = g.name or "model"
+    (var, model), = split_variations(g, 1, seed=seed, attrs=attrs, start=index)
+    stem = f"{name}_{var.index:04d}"
+    path = Path(out) / f"{stem}.{fmt}"
+    export(model.to_scene(), path, fmt)
+    entry = {"file": path.name, **var.to_dict(), "triangles": model.triangle_count,
+             "terminals": len(model.parts)}
+    if preview is not None:
+        from ..geometry.render import save_image
+        save_image(_preview(model), Path(preview) / f"{stem}.png")
+        entry["preview"] = str(Path(preview) / f"{stem}.png")
+    if tree:
+        _write_text(Path(out) / f"{stem}.tree.json", model.tree_json())
+    return entry
+
+
+def _run_variations(grammar: Any, out: Path, n: int, seed: int, attrs: dict[str, str], fmt: str,
+                    preview: Path | None, tree: Path | None, console: Any, file: Path,
+                    workers: int | None) -> None:
     if out.suffix and out.suffix.lower().lstrip(".") in FORMATS:
         raise click.BadParameter("with --variations, -o is a folder", param_hint="-o")
     out.mkdir(parents=True, exist_ok=True)
     if preview is not None:
         preview.mkdir(parents=True, exist_ok=True)
     progress, factory = _progress_factory(console)
-    manifest = []
     name = grammar.name or "model"
+    # workers re-load the grammar from its file (a Grammar object does not cross processes
+    # cheaply); the main process passes its own object
+    jobs = [(grammar if not workers or workers < 2 else str(file), i, seed, attrs, fmt, str(out),
+             str(preview) if preview is not None else None, tree is not None) for i in range(n)]
+    manifest: list[dict] = []
     with progress:
         advance = factory(f"deriving {n} variations of {name}", n)
-        for var, model in split_variations(grammar, n, seed=seed, attrs=attrs):
-            stem = f"{name}_{var.index:04d}"
-            path = out / f"{stem}.{fmt}"
-            export(model.to_scene(), path, fmt)
-            entry = {"file": path.name, **var.to_dict(), "triangles": model.triangle_count,
-                     "terminals": len(model.parts)}
-            if preview is not None:
-                from ..geometry.render import save_image
-                save_image(_preview(model), preview / f"{stem}.png")
-                entry["preview"] = str(preview / f"{stem}.png")
-            if tree is not None:
-                _write_text(out / f"{stem}.tree.json", model.tree_json())
-            manifest.append(entry)
-            advance(1, file=path.name)
+        if workers and workers > 1:
+            import multiprocessing as mp
+            from concurrent.futures import ProcessPoolExecutor
+
+            with ProcessPoolExecutor(workers, mp_context=mp.get_context("spawn")) as pool:
+                for entry in pool.map(_variation_job, jobs, chunksize=max(1, n // (8 * workers))):
+                    manifest.append(entry)
+                    advance(1, file=entry["file"])
+        else:
+            for job in jobs:
+                entry = _variation_job(job)
+                manifest.append(entry)
+                advance(1, file=entry["file"])
     _write_text(out / "variations.json", json.dumps({"grammar": name, "seed": seed, "variations": manifest},
                                                     indent=1, default=str))
     click.echo(f"wrote {n} variations to {out}/ (manifest: {out / 'variations.json'})")

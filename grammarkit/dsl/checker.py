@@ -785,20 +785,38 @@ class Checker:
                                hint=_known_hint("constraints", c.name, known),
                                code="unknown-constraint")
             spec = self.reg.constraints.get(c.name)
-            if spec is not None and spec.params:
-                pnames = {p.name for p in spec.params}
-                npos = sum(1 for a in c.args if a.name is None)
-                if npos > len(spec.params):
-                    self.bag.error(f"too many arguments: constraint {c.name} takes at most "
-                                   f"{len(spec.params)}", c.span, code="operation-arity")
-                for a in c.args:
-                    if a.name is not None and a.name not in pnames:
+            bound: dict[int, Any] = {}  # argument index -> Param
+            if spec is not None:
+                params = list(spec.params)
+                by_name = {p.name: p for p in params}
+                npos = 0
+                for k, a in enumerate(c.args):
+                    if a.name is None:
+                        if npos < len(params):
+                            bound[k] = params[npos]
+                        else:
+                            self.bag.error(f"too many arguments: constraint {c.name} takes at "
+                                           f"most {len(params)}", a.span or c.span,
+                                           code="operation-arity")
+                        npos += 1
+                    elif a.name in by_name:
+                        bound[k] = by_name[a.name]
+                    else:
                         self.bag.error(f"constraint {c.name} has no argument named '{a.name}'",
-                                       a.span or c.span, hint=_known_hint("arguments", a.name, pnames),
+                                       a.span or c.span,
+                                       hint=_known_hint("arguments", a.name, by_name) if by_name
+                                       else f"{c.name} takes no arguments",
                                        code="unknown-argument")
-            for a in c.args:
+            for k, a in enumerate(c.args):
                 v = a.value
-                if isinstance(v, Ref) and "." not in v.name:
+                p = bound.get(k)
+                if p is not None and p.type in ("axis", "selector"):
+                    if not isinstance(v, Ref) or (p.choices and v.name not in p.choices):
+                        shown = "|".join(p.choices) if p.choices else "a name"
+                        self.bag.error(f"argument '{p.name}' of constraint {c.name} must be "
+                                       f"{shown}", a.span or c.span, code="bad-argument-type")
+                elif isinstance(v, Ref) and "." not in v.name:
+                    # bare names in constraint arguments name part types (or values)
                     if v.name not in self.parts and v.name not in self._values:
                         self._part_ref(v.name, v.span or c.span, f"constraint {c.name}")
                 else:

@@ -313,7 +313,7 @@ def describe_terminal(name: str) -> str:
         return name.lower()
     pattern = term.pattern
     if getattr(pattern, "type", "") == "str":
-        return f"'{pattern.value}'"
+        return f'"{pattern.value}"' if "'" in pattern.value else f"'{pattern.value}'"
     return name.lower()
 
 

@@ -10,7 +10,7 @@ import math
 import re
 from typing import Any, Iterable
 
-from lark import Token, Transformer, Tree, v_args
+from lark import Token, Tree
 
 from ..errors import DiagnosticBag
 from ..ir import (
@@ -20,6 +20,7 @@ from ..ir import (
     Variants, VariantOption, Vector,
 )
 from ..ir.base import Span
+from ..ir.expr import PRECEDENCE, UNARY_PRECEDENCE
 from .parser import KEYWORDS
 
 MAX_EXPR_DEPTH = 64  # operator chains deeper than this are refused (printer/checker recurse)
@@ -53,24 +54,24 @@ def call_names(tree: Tree) -> set[str]:
     return names
 
 
-@v_args(meta=True)
-class ToIR(Transformer):
+class ToIR:
     """Builds IR nodes bottom-up. `rule_names` decides whether `Name(args)` is a successor."""
 
     def __init__(self, filename: str | None, bag: DiagnosticBag, rule_names: Iterable[str] = ()):
-        super().__init__(visit_tokens=False)
         self.filename = filename
         self.bag = bag
         self.rule_names = set(rule_names)
         self._depth: dict[int, int] = {}
         self._literal_nums: set[int] = set()  # ids of Num built straight from a NUMBER token
+        # The two maps above are keyed by id(): keep their nodes alive so ids are never reused.
+        self._alive: list[Any] = []
 
     # -- helpers ---------------------------------------------------------------------------
     def span(self, meta) -> Span:
         if getattr(meta, "empty", True):
             return Span(file=self.filename)
-        return Span(file=self.filename, line=meta.line, column=meta.column,
-                    end_line=meta.end_line, end_column=meta.end_column)
+        return Span.model_construct(file=self.filename, line=meta.line, column=meta.column,
+                                    end_line=meta.end_line, end_column=meta.end_column)
 
     def tspan(self, tok: Token) -> Span:
         return Span(file=self.filename, line=tok.line or 0, column=tok.column or 0,
@@ -96,6 +97,7 @@ class ToIR(Transformer):
                 self._reported_deep = True
             return Num(value=0, span=span)
         self._depth[id(node)] = d
+        self._alive.append(node)
         return node
 
     # -- statements ------------------------------------------------------------------------
@@ -404,6 +406,7 @@ class ToIR(Transformer):
             value = 0.0
         num = Num(value=value, span=self.tspan(tok))
         self._literal_nums.add(id(num))
+        self._alive.append(num)
         return num
 
     def number(self, meta, c):
@@ -470,53 +473,75 @@ class ToIR(Transformer):
         return Span(file=self.filename, line=sa.line, column=sa.column, end_line=sb.end_line,
                     end_column=sb.end_column)
 
-    def _left_chain(self, meta, c):
-        left = c[0]
-        for i in range(1, len(c), 2):
-            right = c[i + 1]
-            span = self._span_of(left, right)
-            left = self._deep(Binary(op=str(c[i]), left=left, right=right, span=span),
-                              (left, right), span)
-        return left
+    def expr(self, meta, c):
+        """Fold `prefix* atom (binop prefix* atom)*` with an operator stack (shunting-yard).
 
-    or_expr = and_expr = eq_expr = rel_expr = sum = product = _left_chain
+        Unary prefix operators bind tighter than every binary operator except `^`, so `-2 ^ 2`
+        is -(2 ^ 2) and `-a * b` is (-a) * b; `^` is right-associative. A `-` applied directly
+        to a number literal folds into a negative number.
+        """
+        out: list[Any] = []
+        ops: list[tuple[str, bool, Token]] = []  # (operator, is_prefix, token)
 
-    def _apply_unary(self, ops: list[Token], operand: Any) -> Any:
-        for tok in reversed(ops):
-            op = str(tok)
-            span = self._span_of(_TokSpan(self.tspan(tok)), operand)
-            if op == "-" and isinstance(operand, Num) and id(operand) in self._literal_nums:
-                # `-3` is the number -3 (so `offset(-0.1)` carries a plain negative number)
-                operand = Num(value=-operand.value, span=span)
+        def reduce_top() -> None:
+            op, prefix, tok = ops.pop()
+            if prefix:
+                operand = out.pop()
+                out.append(self._unary(op, tok, operand))
+            else:
+                right = out.pop()
+                left = out.pop()
+                span = self._span_of(left, right)
+                out.append(self._deep(Binary(op=op, left=left, right=right, span=span),
+                                      (left, right), span))
+
+        expect_operand = True
+        for child in c:
+            if not isinstance(child, Token):
+                out.append(child)
+                expect_operand = False
                 continue
-            operand = self._deep(Unary(op=op, operand=operand, span=span), (operand,), span)
-        return operand
+            op = str(child)
+            if expect_operand:
+                ops.append((op, True, child))
+                continue
+            prec = PRECEDENCE[op]
+            while ops:
+                top, top_prefix, _ = ops[-1]
+                top_prec = UNARY_PRECEDENCE if top_prefix else PRECEDENCE[top]
+                if top_prec > prec or (top_prec == prec and op != "^" and not top_prefix):
+                    reduce_top()
+                else:
+                    break
+            ops.append((op, False, child))
+            expect_operand = True
+        while ops:
+            reduce_top()
+        return out[0]
 
-    def unary(self, meta, c):
-        return self._apply_unary(list(c[:-1]), c[-1])
+    def _unary(self, op: str, tok: Token, operand: Any) -> Any:
+        span = self._span_of(_TokSpan(self.tspan(tok)), operand)
+        if op == "-" and isinstance(operand, Num) and id(operand) in self._literal_nums:
+            # `-3` is the number -3 (so `offset(-0.1)` carries a plain negative number)
+            return Num(value=-operand.value, span=span)
+        return self._deep(Unary(op=op, operand=operand, span=span), (operand,), span)
 
-    def power(self, meta, c):
-        # atom ("^" uops* atom)*: right-associative, unary ops bind looser than ^ on their right.
-        groups: list[tuple[list[Token], Any]] = []
-        i = 1
-        while i < len(c):
-            assert str(c[i]) == "^"
-            i += 1
-            ops = []
-            while isinstance(c[i], Token) and str(c[i]) in ("-", "+", "!"):
-                ops.append(c[i])
-                i += 1
-            groups.append((ops, c[i]))
-            i += 1
-        result = groups[-1][1]
-        for k in range(len(groups) - 1, -1, -1):
-            ops, _ = groups[k]
-            result = self._apply_unary(ops, result)
-            base = c[0] if k == 0 else groups[k - 1][1]
-            span = self._span_of(base, result)
-            result = self._deep(Binary(op="^", left=base, right=result, span=span), (base, result),
-                                span)
-        return result
+    # -- walking the tree without recursion ------------------------------------------------
+    def transform(self, root: Tree) -> Any:
+        results: list[list[Any]] = [[]]
+        work: list[tuple[Any, bool]] = [(root, False)]
+        while work:
+            node, done = work.pop()
+            if not isinstance(node, Tree):
+                results[-1].append(node)
+            elif done:
+                children = results.pop()
+                results[-1].append(getattr(self, node.data)(node.meta, children))
+            else:
+                work.append((node, True))
+                results.append([])
+                work.extend((child, False) for child in reversed(node.children))
+        return results[0][0]
 
 
 class _TokSpan:

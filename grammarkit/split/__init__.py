@@ -109,6 +109,6 @@ def derive(grammar: Any, *, seed: int = 0, attrs: Mapping[str, Any] | None = Non
 
 def variations(grammar: Any, n: int, *, seed: int = 0, attrs: Mapping[str, Any] | None = None,
                limits: Limits | None = None, start: int = 0) -> Iterator[tuple[Any, Model]]:
-    """(Variation, Model) pairs; see grammarkit.split.variations.variations."""
-    from .variations import variations as _variations
+    """(Variation, Model) pairs; see grammarkit.split.variation.variations."""
+    from .variation import variations as _variations
     return _variations(grammar, n, seed=seed, attrs=attrs, limits=limits, start=start)

@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Mapping
 
-from ..errors import DerivationError, GrammarError, GrammarkitError
+from ..errors import GrammarError, GrammarkitError
 from ..expr_eval import compile_expr, is_constant
 from ..ir import expr as E
 from ..ir import split as S
@@ -351,7 +351,12 @@ class _Compiler:
             if name in glob:
                 return lambda s, _k=name: V[_k]
             return None
-        return compile_expr(e, resolve, self.functions)
+        f = compile_expr(e, resolve, self.functions)
+        try:
+            f._shape_free = _shape_free(e, params)  # type: ignore[attr-defined]
+        except AttributeError:  # a shared constant closure: constants are shape-free anyway
+            pass
+        return f
 
     # -- sequences -----------------------------------------------------------------------------
     def _seq(self, seq: S.Seq, scope: _Scope, params: tuple[str, ...], rule: CRule) -> tuple:
@@ -518,7 +523,7 @@ class _Compiler:
                                            code="bad-selector")
                     out.append(Slot("sel", sel=it.key.name, body=body, label=lab, span=it.span))
             return tuple(out)
-        return build(call.block or (), "")
+        return _make_block(build(call.block or (), ""))
 
     def _repeat(self, call: S.OpCall, pat: S.Pattern, scope: _Scope, params: tuple[str, ...],
                 rule: CRule, index: int) -> Callable:
@@ -544,7 +549,46 @@ class _Compiler:
             slots.append(Slot("float", size=size_fn, body=succ_body(pat.tail),
                               label=label_of(rule.key, index, "pattern-tail") << 12, span=span))
         apply = spec.apply.target() if hasattr(spec.apply, "target") else spec.apply
-        return _op_step(apply, (axis_fn, size_fn, sep_fn), tuple(slots), call.span, "repeat")
+        return _op_step(apply, (axis_fn, size_fn, sep_fn), _make_block(slots), call.span, "repeat")
+
+
+def _shape_free(e: Any, params: tuple[str, ...]) -> bool:
+    """True if an expression reads only attrs, consts and literals (no scope, split index, rule
+    parameter or rand): its value is the same for every shape of one derivation."""
+    if isinstance(e, E.Ref):
+        return e.name not in params and not e.name.startswith(("scope.", "split.", "comp."))
+    if isinstance(e, E.Call):
+        return e.func != "rand" and all(_shape_free(a, params) for a in e.args)
+    if isinstance(e, E.Unary):
+        return _shape_free(e.operand, params)
+    if isinstance(e, E.Binary):
+        return _shape_free(e.left, params) and _shape_free(e.right, params)
+    if isinstance(e, E.Vector):
+        return all(_shape_free(a, params) for a in e.items)
+    return True
+
+
+def _block_is_fixed(items: tuple) -> bool:
+    for it in items:
+        if it.mode == "repeat":
+            if not _block_is_fixed(it.items):
+                return False
+        elif it.size is not None and not getattr(it.size, "_shape_free", False):
+            return False
+    return True
+
+
+class Block(tuple):
+    """The compiled slots of an operation block; `fixed` says whether every size is the same
+    for all shapes of a derivation (then split layouts can be cached per length)."""
+
+    fixed: bool = False
+
+
+def _make_block(slots: Any) -> Block:
+    b = Block(slots)
+    b.fixed = _block_is_fixed(b)
+    return b
 
 
 # -- step factories -------------------------------------------------------------------------------
@@ -627,4 +671,3 @@ def _choice_step(arms: tuple, other: tuple | None, span: Span | None) -> Callabl
 
 
 __all__ = ["AttrInfo", "CRule", "CompiledGrammar", "Slot", "check_attr_value", "compile_grammar"]
-_ = DerivationError

@@ -23,6 +23,7 @@ import manifold3d
 
 from ..errors import DerivationError, LimitError
 from ..geometry.footprints import cross_section
+from ..geometry.solids import frame_matrix as frame
 from .shape import FACE, Shape
 
 Manifold = manifold3d.Manifold
@@ -96,6 +97,7 @@ class Derivation:
         self.leaves: list[tuple] = []  # (tag, origin, axes, size) of each terminal, in order
         self.warnings: list[str] = []
         self.est_tris = 0
+        self.layouts: dict[tuple, list] = {}  # split layouts of fixed-size blocks, by length
 
     # -- bookkeeping --------------------------------------------------------------------
     def _node(self, s: Shape, parent: int, via: str) -> None:
@@ -252,11 +254,6 @@ def welded_frame(o: tuple, ax: tuple, sz: tuple) -> list[list[float]]:
     oz = o[2] + a2 * sh[0] + b2 * sh[1] + c2 * sh[2]
     return [[a0 * f[0], b0 * f[1], c0 * f[2], ox], [a1 * f[0], b1 * f[1], c1 * f[2], oy],
             [a2 * f[0], b2 * f[1], c2 * f[2], oz]]
-
-
-def frame(o: tuple, ax: tuple) -> list[list[float]]:
-    (a0, a1, a2), (b0, b1, b2), (c0, c1, c2) = ax
-    return [[a0, b0, c0, o[0]], [a1, b1, c1, o[1]], [a2, b2, c2, o[2]]]
 
 
 def local_solid(s: Shape) -> tuple[Any, int, int]:

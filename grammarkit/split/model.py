@@ -9,7 +9,7 @@ from typing import Any
 import manifold3d
 import numpy as np
 
-from ..errors import DerivationError, LimitError
+from ..errors import DerivationError
 from .engine import WELD, Derivation, Tag
 
 Manifold = manifold3d.Manifold
@@ -297,5 +297,3 @@ def _in_contours(u: np.ndarray, v: np.ndarray, contours: Any) -> np.ndarray:
             inside ^= cond & (u < xc)
     return inside
 
-
-_ = LimitError

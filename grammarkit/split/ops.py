@@ -313,7 +313,14 @@ def op_split(ctx: Any, s: Shape, args: Any, block: Any) -> list:
     if length <= EPS:
         raise ValueError(f"split({args[0]}) on a shape of size 0 along {args[0]}"
                          + (" (faces are flat: split them along x or y)" if a == 2 and s.kind == FACE else ""))
-    parts = layout(ctx, s, block, length)
+    if getattr(block, "fixed", False):
+        # sizes read only attrs/consts: the layout depends on the length alone (floors of a facade)
+        key = (id(block), length)
+        parts = ctx.layouts.get(key)
+        if parts is None:
+            parts = ctx.layouts[key] = layout(ctx, s, block, length)
+    else:
+        parts = layout(ctx, s, block, length)
     out = []
     for slot, start, size in parts:
         c = _split_geometry(s, a, start, size)
@@ -501,6 +508,7 @@ def op_insert(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
 
 
 # -- tags ------------------------------------------------------------------------------------
+@lru_cache(maxsize=1024)
 def _hex_color(v: Any) -> str:
     text = str(v).strip()
     h = text[1:] if text.startswith("#") else ""

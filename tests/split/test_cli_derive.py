@@ -134,3 +134,24 @@ def test_tiling_grammar_goes_to_backend(tmp_path):
         assert r.exit_code == 1 and "unknown back end 'nope'" in r.output
     finally:
         pm.unregister("fake-backend-test")
+
+
+def test_variations_with_workers_match_single_process(tmp_path):
+    g = _write(tmp_path)
+    runs = {}
+    for workers in ("1", "2"):
+        out = tmp_path / f"w{workers}"
+        r = CliRunner().invoke(main, ["derive", str(g), "-o", str(out), "--variations", "2", "--seed", "9",
+                                      "--workers", workers])
+        assert r.exit_code == 0, r.output
+        runs[workers] = json.loads((out / "variations.json").read_text())["variations"]
+    strip = lambda vs: [(v["index"], v["seed"], v["attrs"], v["triangles"]) for v in vs]  # noqa: E731
+    assert strip(runs["1"]) == strip(runs["2"])
+
+
+def test_output_folders_are_created(tmp_path):
+    g = _write(tmp_path)
+    out = tmp_path / "new" / "dir" / "m.glb"
+    r = CliRunner().invoke(main, ["derive", str(g), "-o", str(out), "--preview", str(tmp_path / "pics" / "m.png")])
+    assert r.exit_code == 0, r.output
+    assert out.exists() and (tmp_path / "pics" / "m.png").exists()

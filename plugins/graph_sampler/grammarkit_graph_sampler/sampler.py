@@ -299,24 +299,101 @@ def run_attempt(ctx: _Context, iteration: int, index: int, known: frozenset) -> 
 
 
 # -- worker processes ------------------------------------------------------------------------
-_WORKER_CTX: _Context | None = None
+# Workers are started with "spawn", not "fork": manifold3d (the contact narrow phase for
+# non-box parts) runs a TBB thread pool, and a child forked from a process whose pool is
+# running deadlocks on its first manifold call. Each worker keeps its own copy of the pool of
+# shapes; the parent sends each iteration's new shapes once, then batches of attempt indices.
+def _strip(shape: "Shape") -> "Shape":
+    """A copy without the derived arrays (rebuilt on arrival; keeps pickles small)."""
+    return Shape(shape.key, shape.protos, shape.transforms, shape.edges, shape.iteration,
+                 shape.parents, shape.operation, shape.ids)
 
 
-def _init_worker(ctx: _Context) -> None:
-    global _WORKER_CTX
-    _WORKER_CTX = ctx
+def _worker_main(conn, init) -> None:  # pragma: no cover - runs in the child process
+    protos, options, seed, rules, tolerance, max_parts = init
+    ctx = _Context(protos, [], [], options, seed, rules, tolerance, max_parts)
+    while True:
+        msg = conn.recv()
+        if msg[0] == "pool":
+            _, added, fresh = msg
+            ctx.pool.extend(sh.prepare(protos) for sh in added)
+            ctx.fresh = list(fresh)
+        elif msg[0] == "run":
+            _, iteration, indices, known = msg
+            out = []
+            for i in indices:
+                res = run_attempt(ctx, iteration, i, known)
+                if res.shape is not None:
+                    res.shape = _strip(res.shape)
+                out.append(res)
+            conn.send(out)
+        else:
+            conn.close()
+            return
 
 
-def _run_chunk(args) -> list[AttemptResult]:
-    iteration, indices, known = args
-    assert _WORKER_CTX is not None
-    out = []
-    for i in indices:
-        res = run_attempt(_WORKER_CTX, iteration, i, known)
-        if res.shape is not None:  # derived arrays are rebuilt by the parent; keep pickles small
-            res.shape.adj = res.shape.dist = res.shape.by_type = None
-        out.append(res)
-    return out
+class _Executor:
+    """Runs a batch of attempts in this process or spread over worker processes, in order."""
+
+    def __init__(self, ctx: _Context, workers: int):
+        self.ctx = ctx
+        self.workers = workers
+        self.conns: list = []
+        self.procs: list = []
+        self.sent = 0  # pool shapes the workers already have
+        if workers > 1:
+            mpc = mp.get_context("spawn")
+            init = (ctx.protos, ctx.options, ctx.seed, ctx.rules, ctx.contact_tolerance, ctx.max_parts)
+            for _ in range(workers):
+                parent, child = mpc.Pipe()
+                proc = mpc.Process(target=_worker_main, args=(child, init), daemon=True)
+                proc.start()
+                child.close()
+                self.conns.append(parent)
+                self.procs.append(proc)
+
+    def start_iteration(self, pool: list[Shape], fresh: list[int]) -> None:
+        """The pool as of the start of an iteration (a snapshot: attempts see no later shapes)."""
+        self.ctx.pool = list(pool)
+        self.ctx.fresh = list(fresh)
+        if self.conns:
+            added = [_strip(sh) for sh in pool[self.sent:]]
+            for conn in self.conns:
+                conn.send(("pool", added, list(fresh)))
+            self.sent = len(pool)
+
+    def run(self, iteration: int, indices: list[int], known: frozenset) -> list[AttemptResult]:
+        if not self.conns:
+            return [run_attempt(self.ctx, iteration, i, known) for i in indices]
+        # Contiguous chunks, results concatenated in chunk order = attempt order.
+        k = len(self.conns)
+        chunks = [indices[j * len(indices) // k:(j + 1) * len(indices) // k] for j in range(k)]
+        busy = []
+        for conn, chunk in zip(self.conns, chunks):
+            if chunk:
+                conn.send(("run", iteration, chunk, known))
+                busy.append(conn)
+        out: list[AttemptResult] = []
+        for conn in busy:
+            try:
+                out.extend(conn.recv())
+            except EOFError:
+                raise RuntimeError("a graph-sampler worker process died") from None
+        return out
+
+    def close(self) -> None:
+        for conn in self.conns:
+            try:
+                conn.send(("stop",))
+                conn.close()
+            except (OSError, BrokenPipeError):
+                pass
+        for proc in self.procs:
+            proc.join(timeout=5)
+            if proc.is_alive():
+                proc.terminate()
+                proc.join()
+        self.conns, self.procs = [], []
 
 
 def default_workers() -> int:
@@ -403,27 +480,30 @@ class GraphSampler:
         for s in self.examples:
             dedupe.add(s.types, s.edges)
         pool: list[Shape] = list(self.examples)
+        self.by_key = {s.key: s for s in self.examples}
+        self.counter = 0
         fresh = list(range(len(pool)))
         emitted = 0
         self.stats = []
-        for it in range(1, iterations + 1):
-            if emitted >= n or not fresh:
-                break
-            t0 = time.perf_counter()
-            st = IterationStats(it, len(pool), len(fresh))
-            budget = min(opt.max_attempts, max(opt.min_attempts, opt.attempts_per_shape * len(fresh)))
-            # a snapshot: attempts of this iteration all see the pool as it was at its start
-            ctx = _Context(self.protos, list(pool), list(fresh), opt, self.seed, self.rules,
-                           self.contact_tolerance, self.max_parts)
-            advance = progress(f"iteration {it}/{iterations}", budget) if progress else None
-            new_this: list[int] = []
-            executor = _Executor(ctx, self.workers)
-            try:
+        if n == 0 or iterations == 0:
+            return
+        ctx = _Context(self.protos, [], [], opt, self.seed, self.rules, self.contact_tolerance,
+                       self.max_parts)
+        executor = _Executor(ctx, self.workers)
+        try:
+            for it in range(1, iterations + 1):
+                if emitted >= n or not fresh:
+                    break
+                t0 = time.perf_counter()
+                st = IterationStats(it, len(pool), len(fresh))
+                budget = min(opt.max_attempts, max(opt.min_attempts, opt.attempts_per_shape * len(fresh)))
+                executor.start_iteration(pool, fresh)
+                advance = progress(f"iteration {it}/{iterations}", budget) if progress else None
+                new_this: list[int] = []
                 for start in range(0, budget, opt.batch_size):
                     indices = list(range(start, min(budget, start + opt.batch_size)))
                     known = frozenset(dedupe.histograms)
-                    results = executor.run(it, indices, known)
-                    for res in results:
+                    for res in executor.run(it, indices, known):
                         st.attempts += 1
                         st.outcomes[res.outcome] += 1
                         if res.shape is None or emitted >= n:
@@ -445,12 +525,12 @@ class GraphSampler:
                                 new=st.new, total_new=emitted)
                     if emitted >= n:
                         break
-            finally:
-                executor.close()
-            st.shapes_after = len(pool)
-            st.seconds = time.perf_counter() - t0
-            self.stats.append(st)
-            fresh = new_this
+                st.shapes_after = len(pool)
+                st.seconds = time.perf_counter() - t0
+                self.stats.append(st)
+                fresh = new_this
+        finally:
+            executor.close()
 
     def growth_table(self) -> list[dict]:
         rows = [{"iteration": 0, "shapes": len(self.examples), "new": len(self.examples)}]
@@ -481,34 +561,6 @@ class GraphSampler:
             "transform": op["transform"], "residual": op["residual"],
             "max_misalignment": op["max_misalignment"], "attempt": op.get("attempt"),
         }
-
-
-class _Executor:
-    """Runs a batch of attempts in this process or spread over worker processes, in order."""
-
-    def __init__(self, ctx: _Context, workers: int):
-        self.ctx = ctx
-        self.workers = workers
-        self.pool = None
-        if workers > 1:
-            method = "fork" if "fork" in mp.get_all_start_methods() else "spawn"
-            self.pool = mp.get_context(method).Pool(workers, initializer=_init_worker,
-                                                    initargs=(ctx,))
-
-    def run(self, iteration: int, indices: list[int], known: frozenset) -> list[AttemptResult]:
-        if self.pool is None:
-            return [run_attempt(self.ctx, iteration, i, known) for i in indices]
-        # Contiguous chunks, results concatenated in chunk order = attempt order.
-        k = self.workers
-        chunks = [indices[j * len(indices) // k:(j + 1) * len(indices) // k] for j in range(k)]
-        parts = self.pool.map(_run_chunk, [(iteration, c, known) for c in chunks if c])
-        return [r for part in parts for r in part]
-
-    def close(self) -> None:
-        if self.pool is not None:
-            self.pool.terminate()
-            self.pool.join()
-            self.pool = None
 
 
 def sample(grammar, n: int = 100, iterations: int = 4, seed: int = 0, workers: int | None = None,
