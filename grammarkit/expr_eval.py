@@ -55,7 +55,15 @@ def _truthy(v: Any) -> bool:
 
 
 def _pow(a: Any, b: Any) -> Any:
-    return a ** b
+    """`a ^ b` as a real number. Integer powers are exact only while they stay small: Python
+    would otherwise compute `9 ^ 9 ^ 9` as an integer of 370 million digits (minutes, GBs),
+    so large ones go through floats, which overflow to a clear error instead."""
+    if type(a) is int and type(b) is int and (b < 0 or b * max(abs(a).bit_length(), 1) > 256):
+        a = float(a)
+    r = a ** b
+    if isinstance(r, complex):
+        raise ValueError(f"{a!r} ^ {b!r} is not a real number")
+    return r
 
 
 _ARITH: dict[str, Callable[[Any, Any], Any]] = {

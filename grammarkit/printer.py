@@ -422,5 +422,5 @@ def format_grammar(source: "str | Path | Grammar", *, filename: str | None = Non
 
 
 def _default_name(grammar: Grammar) -> str:
-    from .dsl.frontend import DEFAULT_NAME
-    return Path(grammar.source_path).stem if grammar.source_path else DEFAULT_NAME
+    from .dsl.frontend import DEFAULT_NAME, default_name
+    return default_name(grammar.source_path) if grammar.source_path else DEFAULT_NAME

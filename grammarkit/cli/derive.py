@@ -13,9 +13,13 @@ from typing import Any, Callable
 
 import click
 
-from ..errors import GrammarError, GrammarkitError
+from ..errors import GrammarError, GrammarkitError, ShapeError
 
 FORMATS = ("glb", "obj", "stl", "ply")
+# Resource guards of the command line: one run writes at most MAX_MODELS files (the manifest
+# of all of them is held in memory) and starts at most MAX_WORKERS processes.
+MAX_MODELS = 100_000
+MAX_WORKERS = 64
 
 
 def _pairs(values: tuple[str, ...], option: str) -> dict[str, str]:
@@ -77,14 +81,14 @@ def _check_format(out: Path, fmt: str | None) -> str:
               help="output format (default: from the file suffix)")
 @click.option("--tree", type=click.Path(path_type=Path), default=None,
               help="write the derivation tree as JSON")
-@click.option("--variations", type=click.IntRange(min=1), default=None,
-              help="derive N variations into the -o folder")
+@click.option("--variations", type=click.IntRange(min=1, max=MAX_MODELS), default=None,
+              help=f"derive N variations into the -o folder (at most {MAX_MODELS})")
 @click.option("--backend", default=None, help="back end for tiling grammars (see `grammarkit plugins`)")
-@click.option("-n", "count", type=click.IntRange(min=1), default=1, show_default=True,
+@click.option("-n", "count", type=click.IntRange(min=1, max=MAX_MODELS), default=1, show_default=True,
               help="number of models a back end should make")
 @click.option("--iterations", type=click.IntRange(min=1), default=1, show_default=True,
               help="back end iterations (sampler steps)")
-@click.option("--workers", type=click.IntRange(min=1), default=None,
+@click.option("--workers", type=click.IntRange(min=1, max=MAX_WORKERS), default=None,
               help="worker processes (back ends, and --variations)")
 @click.option("--option", "options", multiple=True, metavar="KEY=VALUE", help="back end option; repeatable")
 def derive(file: Path, out: Path, preview: Path | None, seed: int, sets: tuple[str, ...],
@@ -117,28 +121,68 @@ def derive(file: Path, out: Path, preview: Path | None, seed: int, sets: tuple[s
     _run_single(grammar, out, seed, attrs, _check_format(out, fmt), preview, tree, console)
 
 
+def _check_out_file(path: Path, option: str) -> None:
+    """Refuse an output path that can never be written, before any work is done."""
+    if path.is_dir():
+        raise click.BadParameter(f"{str(path)!r} is a folder; give a file name", param_hint=option)
+
+
+def _check_image(path: Path, option: str) -> None:
+    from PIL import Image
+
+    _check_out_file(path, option)
+    if Image.registered_extensions().get(path.suffix.lower()) is None:
+        raise click.BadParameter(f"cannot tell the image format of {path.name!r} from its suffix; "
+                                 "use .png (or .jpg, .webp, ...)", param_hint=option)
+
+
+def _make_folder(folder: Path) -> None:
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise ShapeError(f"{folder}: cannot create folder: {exc.strerror or exc}") from None
+
+
 def _run_single(grammar: Any, out: Path, seed: int, attrs: dict[str, str], fmt: str,
                 preview: Path | None, tree: Path | None, console: Any) -> None:
-    from ..geometry.exporters import export
+    from contextlib import ExitStack
+
+    from ..geometry.exporters import atomic_output, export
     from ..split import derive as derive_model
 
+    _check_out_file(out, "-o")
+    if preview is not None:
+        _check_image(preview, "--preview")
+    if tree is not None:
+        _check_out_file(tree, "--tree")
     model = derive_model(grammar, seed=seed, attrs=attrs)
     image = _preview(model) if preview is not None else None
     tree_text = model.tree_json(indent=1) if tree is not None else None
     for p in [out, preview, tree]:  # only now that everything is computed
         if p is not None:
-            p.parent.mkdir(parents=True, exist_ok=True)
-    export(model.to_scene(), out, fmt)
-    if image is not None:
-        from ..geometry.render import save_image
-        save_image(image, preview)
-    if tree_text is not None:
-        _write_text(tree, tree_text)
+            _make_folder(p.parent)
+    # one transaction: every file is written to its temporary name first and the renames
+    # happen only when all of them were written, so a failing preview or tree (a full disk,
+    # an unwritable folder) leaves an existing model file untouched, and vice versa
+    with ExitStack() as stack:
+        export(model.to_scene(), stack.enter_context(atomic_output(out)), fmt)
+        if image is not None:
+            from ..geometry.render import save_image
+            save_image(image, stack.enter_context(atomic_output(preview)),
+                       format=_image_format(preview))
+        if tree_text is not None:
+            stack.enter_context(atomic_output(tree)).write_text(tree_text, encoding="utf-8")
     for w in model.warnings:
         console.print(f"[yellow]warning:[/] {w}", highlight=False)
     click.echo(f"wrote {out} ({fmt}): {model.triangle_count} triangles, {len(model.parts)} terminals, "
                f"{model.shape_count} shapes" + (f"; preview {preview}" if preview else "")
                + (f"; tree {tree}" if tree else ""))
+
+
+def _image_format(path: Path) -> str:
+    from PIL import Image
+
+    return Image.registered_extensions()[path.suffix.lower()]
 
 
 def _preview(model: Any) -> Any:
@@ -173,11 +217,21 @@ def _variation_job(job: tuple) -> dict:
 def _run_variations(grammar: Any, out: Path, n: int, seed: int, attrs: dict[str, str], fmt: str,
                     preview: Path | None, tree: Path | None, console: Any, file: Path,
                     workers: int | None) -> None:
-    if out.suffix and out.suffix.lower().lstrip(".") in FORMATS:
+    from ..split import check_attrs
+
+    if out.suffix and out.suffix.lower().lstrip(".") in FORMATS + ("gltf",):
         raise click.BadParameter("with --variations, -o is a folder", param_hint="-o")
-    out.mkdir(parents=True, exist_ok=True)
+    if out.exists() and not out.is_dir():
+        raise click.BadParameter(f"with --variations, -o is a folder; {str(out)!r} is a file",
+                                 param_hint="-o")
+    if preview is not None and preview.exists() and not preview.is_dir():
+        raise click.BadParameter(f"with --variations, --preview is a folder; {str(preview)!r} is a file",
+                                 param_hint="--preview")
+    check_attrs(grammar, attrs)  # a bad --set fails before any folder is made
+    _make_folder(out)
     if preview is not None:
-        preview.mkdir(parents=True, exist_ok=True)
+        _make_folder(preview)
+    workers = min(workers, n) if workers else None
     progress, factory = _progress_factory(console)
     name = grammar.name or "model"
     # workers re-load the grammar from its file (a Grammar object does not cross processes

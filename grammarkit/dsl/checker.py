@@ -7,14 +7,15 @@ it folds constant expressions only to compare ranges, enums and percentages.
 from __future__ import annotations
 
 import difflib
+import functools
 import math
 from dataclasses import dataclass, field
 from typing import Any, Iterable, Mapping
 
 from ..errors import Diagnostic, DiagnosticBag
 from ..ir import (
-    Attr, Binary, Bool, Branch, Call, Case, Choice, Const, ConstraintDef, Default, DockDef, ExampleDef,
-    Grammar, NeighborRule, Nil, Num, OpCall, PartDef, Pattern, Push, Ref, Repeat, Rule, Seq, SiteDef,
+    Attr, Binary, Bool, Branch, Call, Case, Choice, Const, Default, ExampleDef,
+    Grammar, Nil, Num, OpCall, PartDef, Pattern, Push, Ref, Repeat, Rule, Seq, SiteDef,
     Snippet, Str, Successor, Terminal, Unary, Use, Variants, Vector,
 )
 from ..ir.base import Span
@@ -31,9 +32,15 @@ START = "Start"
 
 
 def closest_first(name: str, known: Iterable[str]) -> list[str]:
-    known = sorted(set(known))
-    close = difflib.get_close_matches(name, known, n=3, cutoff=0.5)
-    return close + [k for k in known if k not in close]
+    return list(_closest_first(name, frozenset(known)))
+
+
+@functools.lru_cache(maxsize=4096)
+def _closest_first(name: str, known: frozenset[str]) -> tuple[str, ...]:
+    # cached: a file with many misspellings of one name against many known names stays fast
+    ordered = sorted(known)
+    close = difflib.get_close_matches(name, ordered, n=3, cutoff=0.5)
+    return tuple(close + [k for k in ordered if k not in close])
 
 
 def _known_hint(kind: str, name: str, known: Iterable[str], limit: int = 40) -> str | None:
@@ -41,8 +48,9 @@ def _known_hint(kind: str, name: str, known: Iterable[str], limit: int = 40) -> 
     if not ordered:
         return f"there are no {kind}"
     shown = ", ".join(ordered[:limit]) + (", ..." if len(ordered) > limit else "")
-    close = difflib.get_close_matches(name, ordered, n=1, cutoff=0.5)
-    prefix = f"did you mean '{close[0]}'? " if close else ""
+    best = ordered[0]
+    close = difflib.SequenceMatcher(None, name, best).ratio() >= 0.5
+    prefix = f"did you mean '{best}'? " if close else ""
     return f"{prefix}known {kind}: {shown}"
 
 
@@ -729,6 +737,8 @@ class Checker:
                     if rr is not None:
                         todo.extend(x for x in self._successors(rr.body) if x not in local)
         for r in rules:
+            if r.span is not None and self.main_file is not None and r.span.file != self.main_file:
+                continue  # an imported library may hold rules this grammar does not need
             if r.name not in seen and self.top_rules.get(r.name) is r:
                 self.bag.warning(f"rule '{r.name}' is never used (unreachable from the start rule "
                                  f"'{start.name}')", r.span, code="unreachable")

@@ -70,8 +70,8 @@ class ToIR:
     def span(self, meta) -> Span:
         if getattr(meta, "empty", True):
             return Span(file=self.filename)
-        return Span.model_construct(file=self.filename, line=meta.line, column=meta.column,
-                                    end_line=meta.end_line, end_column=meta.end_column)
+        return Span(file=self.filename, line=meta.line, column=meta.column,
+                    end_line=meta.end_line, end_column=meta.end_column)
 
     def tspan(self, tok: Token) -> Span:
         return Span(file=self.filename, line=tok.line or 0, column=tok.column or 0,
@@ -528,20 +528,60 @@ class ToIR:
 
     # -- walking the tree without recursion ------------------------------------------------
     def transform(self, root: Tree) -> Any:
-        results: list[list[Any]] = [[]]
+        """Post-order walk without recursion; computes each node's source span from its tokens.
+
+        The parser keeps every token (keywords and punctuation too) so that a statement's span
+        starts at its keyword; methods receive only the tokens that carry values (names,
+        numbers, strings, ...), plus the operator tokens of `expr`.
+        """
+        values: list[list[Any]] = [[]]
+        starts: list[tuple[int, int] | None] = [None]
+        ends: list[tuple[int, int] | None] = [None]
+        keep_ops: list[bool] = [False]
         work: list[tuple[Any, bool]] = [(root, False)]
         while work:
             node, done = work.pop()
             if not isinstance(node, Tree):
-                results[-1].append(node)
+                if node.type == "_NL":
+                    continue
+                if starts[-1] is None:
+                    starts[-1] = (node.line, node.column)
+                ends[-1] = (node.end_line, node.end_column)
+                if keep_ops[-1] or node.type in _VALUE_TOKENS:
+                    values[-1].append(node)
             elif done:
-                children = results.pop()
-                results[-1].append(getattr(self, node.data)(node.meta, children))
+                children = values.pop()
+                start = starts.pop()
+                end = ends.pop()
+                keep_ops.pop()
+                values[-1].append(getattr(self, node.data)(_Meta(start, end), children))
+                if start is not None:
+                    if starts[-1] is None:
+                        starts[-1] = start
+                    ends[-1] = end
             else:
                 work.append((node, True))
-                results.append([])
+                values.append([])
+                starts.append(None)
+                ends.append(None)
+                keep_ops.append(node.data == "expr")
                 work.extend((child, False) for child in reversed(node.children))
-        return results[0][0]
+        return values[0][0]
+
+
+_VALUE_TOKENS = frozenset({"NAME", "CALL_NAME", "DOTTED_NAME", "TERMINAL_NAME", "NUMBER", "PERCENT",
+                           "INT", "STRING", "FACING"})
+
+
+class _Meta:
+    """Source range of a tree node (what Lark's `meta` would hold)."""
+
+    __slots__ = ("line", "column", "end_line", "end_column", "empty")
+
+    def __init__(self, start: tuple[int, int] | None, end: tuple[int, int] | None):
+        self.empty = start is None
+        self.line, self.column = start or (0, 0)
+        self.end_line, self.end_column = end or (0, 0)
 
 
 class _TokSpan:

@@ -168,6 +168,21 @@ def check_attr_value(info: AttrInfo, value: Any, env: Any = None) -> Any:
                                    code="bad-attr-value") from None
             if value.is_integer() and isinstance(default, int):
                 value = int(value)
+    # the value must have the default's type: a number (finite), a boolean or a string
+    if isinstance(default, bool):
+        if not isinstance(value, bool):
+            raise GrammarError(f"attr {info.key!r} is a boolean; got {value!r}", info.attr.span,
+                               code="bad-attr-value")
+    elif isinstance(default, (int, float)):
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise GrammarError(f"attr {info.key!r} is a number; got {value!r}", info.attr.span,
+                               code="bad-attr-value")
+        if not math.isfinite(value):
+            raise GrammarError(f"attr {info.key!r} must be a finite number; got {value!r}",
+                               info.attr.span, code="bad-attr-value")
+    elif isinstance(default, str) and not isinstance(value, str):
+        raise GrammarError(f"attr {info.key!r} is a string; got {value!r}", info.attr.span,
+                           code="bad-attr-value")
     if info.lo is not None:
         lo, hi = info.lo(env), info.hi(env)  # type: ignore[misc]
         if not isinstance(value, (int, float)) or isinstance(value, bool) or not (lo <= value <= hi):
@@ -623,8 +638,13 @@ def _op_step(apply: Callable, fns: tuple, block: tuple | None, span: Span | None
     def step(ctx: Any, s: Any) -> Any:
         try:
             r = apply(ctx, s, const if const is not None else [f(s) for f in fns], block)
-        except GrammarkitError:
-            raise
+        except GrammarkitError as exc:
+            if exc.span is not None or span is None:
+                raise
+            # an error from a helper that knows no grammar location (a bad mesh file for i()):
+            # same class, located at the operation
+            raise type(exc)(f"in rule {s.rule.name!r} (shape #{s.node}): {name}(): {exc}", span,
+                            code=exc.diagnostics[0].code, hint=exc.diagnostics[0].hint) from None
         except (ValueError, TypeError, ArithmeticError, IndexError) as exc:
             msg = str(exc)
             raise fail(s, msg if msg.startswith(f"{name}(") else f"{name}(): {msg}", span) from None

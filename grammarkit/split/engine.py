@@ -45,6 +45,21 @@ class Limits:
     max_shapes: int = 100_000  # shapes created in one derivation
     max_repeat: int = 2_000  # repetitions of one repeat group / pattern
     max_triangles: int = 2_000_000  # triangles of the final mesh
+    # largest coordinate or size of any solid, in model units (metres): beyond ~1e5 the float32
+    # vertices of GLB/STL files cannot hold the 1 mm weld between touching solids, and at 1e300
+    # the solids' vertices overflow to inf/NaN
+    max_extent: float = 100_000.0
+
+    def __post_init__(self) -> None:
+        for name in ("max_depth", "max_shapes", "max_repeat", "max_triangles"):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, int) or v < 1:
+                raise DerivationError(f"Limits({name}=...) must be a positive integer, got {v!r}",
+                                      None, code="bad-argument")
+        v = self.max_extent
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not 0 < v < math.inf:
+            raise DerivationError(f"Limits(max_extent=...) must be a positive finite number, got {v!r}",
+                                  None, code="bad-argument")
 
 
 def mix(a: int, b: int) -> int:
@@ -183,8 +198,28 @@ class Derivation:
         tags.append([name, rule.name, rule.otype, s.color, s.material, s.node, role])
         return len(tags) - 1
 
+    def check_extent(self, s: Shape, box: tuple | None = None) -> None:
+        """LimitError naming the rule if the scope of `s` (or `box`, its solid's bounds in scope
+        coordinates) is not finite or exceeds Limits.max_extent."""
+        lim = self.limits.max_extent
+        o, sz = s.o, s.sz
+        # written so that NaN fails too (every comparison with NaN is false)
+        if (abs(o[0]) <= lim and abs(o[1]) <= lim and abs(o[2]) <= lim and sz[0] <= lim
+                and sz[1] <= lim and sz[2] <= lim
+                and (box is None or all(abs(v) <= lim for v in box))):
+            return
+        what = "a solid" if box is not None else "the scope"
+        raise LimitError(
+            f"extent limit exceeded: {what} of rule {s.rule.name!r} reaches beyond "
+            f"{lim:g} model units (scope origin {tuple(float(f'{v:.4g}') for v in o)}, "
+            f"size {tuple(float(f'{v:.4g}') for v in sz)})", s.rule.span, code="limit-extent",
+            hint="a size or translation is far too large (or not a number)")
+
     def _add(self, s: Shape, tag: int) -> None:
+        self.check_extent(s)
         solid, oid, tris = local_solid(s)
+        if solid is not None and s.solid is not None:
+            self.check_extent(s, solid.bounding_box())
         if solid is None:
             self.warnings.append(f"rule {s.rule.name!r}: a volume of size {tuple(round(v, 4) for v in s.sz)} "
                                  "has no thickness and was left out of the mesh")
@@ -218,6 +253,9 @@ class Derivation:
 
     def add_cut(self, s: Shape, depth: float) -> int:
         """Subtract the prism of face `s` from z = -depth to just above its plane."""
+        self.check_extent(s)
+        if not depth <= self.limits.max_extent:
+            self.check_extent(s, (depth,))
         tag = self._tag(s, s.rule.name, "cut-pending")
         h = depth + CUT_OUTSET
         if s.poly is None:

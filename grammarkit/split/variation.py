@@ -16,7 +16,7 @@ import random
 from dataclasses import dataclass
 from typing import Any, Iterator, Mapping
 
-from ..errors import GrammarError
+from ..errors import DerivationError, GrammarError
 from ..expr_eval import compile_expr
 from .compile import CompiledGrammar, _ValueEnv
 from .engine import Limits
@@ -76,11 +76,18 @@ def variations(grammar: Any, n: int, *, seed: int = 0, attrs: Mapping[str, Any] 
     from . import compile as compile_split
     from . import derive, load_grammar
 
+    for what, v, lo in (("n", n, 0), ("start", start, 0), ("seed", seed, None)):
+        if isinstance(v, bool) or not isinstance(v, int) or (lo is not None and v < lo):
+            raise DerivationError(f"variations(): {what}= must be an integer"
+                                  + (f" >= {lo}" if lo is not None else "") + f", got {v!r}",
+                                  None, code="bad-argument")
     g = load_grammar(grammar)
     base = compile_split(g)
     tables = _weights(g)
     snippets = {s.name: s for s in g.snippets}
-    fixed = dict(attrs or {})
+    from . import _mapping
+
+    fixed = _mapping(attrs, "attrs")
     for i in range(start, start + n):
         rng = random.Random(hash((seed, i)) & ((1 << 64) - 1))
         choices: dict[str, str] = {}

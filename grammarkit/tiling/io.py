@@ -23,7 +23,6 @@ import json
 import os
 import re
 import struct
-import tempfile
 import warnings
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -363,21 +362,16 @@ def _obj_text(assembly: Assembly) -> str:
 
 
 def _atomic_write(path: Path, data: bytes) -> None:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    """Write `data` to `path` atomically (grammarkit.geometry.exporters.atomic_output: temp +
+    rename, file-system failures as ShapeError naming the path)."""
+    from ..geometry.exporters import atomic_output
+
     try:
-        with os.fdopen(fd, "wb") as fh:
-            fh.write(data)
-        umask = os.umask(0)
-        os.umask(umask)
-        os.chmod(tmp, 0o666 & ~umask)  # mkstemp creates 0600; give the file normal permissions
-        os.replace(tmp, path)
-    except BaseException:
-        try:
-            os.unlink(tmp)
-        except OSError:
-            pass
-        raise
+        path.parent.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise ShapeError(f"{path}: cannot create folder {path.parent}: {exc.strerror or exc}") from None
+    with atomic_output(path) as tmp:
+        tmp.write_bytes(data)
 
 
 # --------------------------------------------------------------------------------------------

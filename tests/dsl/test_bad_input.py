@@ -102,7 +102,7 @@ def mutated(draw):
     return " ".join(tokens).replace(" \n ", "\n")
 
 
-@settings(max_examples=2000, deadline=None, derandomize=True,
+@settings(max_examples=1500, deadline=None, derandomize=True,
           suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
 @given(mutated())
 def test_mutated_grammars_give_only_located_diagnostics(source):

@@ -214,3 +214,11 @@ def test_plugin_operations_are_checked_like_builtins():
     finally:
         pm.unregister("test-bevel")
     assert one("A --> bevel(0.1) B.", "unknown-operation")
+
+
+def test_unused_rules_of_an_imported_library_are_not_reported(tmp_path):
+    (tmp_path / "lib.grammar").write_text("Used --> NIL\nUnused --> NIL\n")
+    main = tmp_path / "main.grammar"
+    main.write_text('import "lib.grammar"\nLot --> extrude(1) Used\nOrphan --> NIL\n')
+    warnings = [d for d in check(main) if d.code == "unreachable"]
+    assert [w.message.split("'")[1] for w in warnings] == ["Orphan"]

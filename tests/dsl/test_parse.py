@@ -9,9 +9,8 @@ import grammarkit
 from grammarkit.dsl import parse
 from grammarkit.errors import GrammarError
 from grammarkit.ir import (
-    Attr, Binary, Bool, Branch, Call, Case, Choice, Const, ConstraintDef, Default, DockDef, ExampleDef,
-    Import, NeighborRule, Nil, Num, OpCall, PartDef, Pattern, Push, Ref, Repeat, Rule, SiteDef, Snippet,
-    Str, Successor, Terminal, Unary, Use, Variants, Vector,
+    Attr, Binary, Bool, Branch, Call, Case, Choice, Const, Default, Import, Nil, Num, OpCall, PartDef,
+    Pattern, Push, Ref, Repeat, Rule, Str, Successor, Terminal, Unary, Use, Vector,
 )
 
 DATA = Path(__file__).parent / "data"
@@ -33,6 +32,9 @@ def test_header_and_default_name(tmp_path):
     f.write_text("A --> B\n")
     assert parse(f).name == "castle"
     assert parse(f).source_path == str(f)
+    odd = tmp_path / "3-storey.grammar"
+    odd.write_text("A --> B\n")
+    assert parse(odd).name == "_3_storey"  # always a printable identifier
 
 
 def test_attr_range_enum_const():

@@ -51,8 +51,8 @@ class SamplerOptions:
     min_subgraph: int = 4  # sampled subgraph sizes: min_subgraph .. 3/4 of the donor's parts
     max_subgraph_fraction: float = 0.75
     keep_prob: float = 0.5  # randomised BFS: chance a seen neighbour joins in a round
-    attempts_per_shape: int = 512  # attempts per iteration = this x new shapes of last iteration
-    min_attempts: int = 1024
+    attempts_per_shape: int = 256  # attempts per iteration = this x new shapes of last iteration
+    min_attempts: int = 512
     max_attempts: int = 100000  # per iteration (resource guard)
     batch_size: int = 32  # attempts evaluated against the same state (fixed: determinism)
     dedupe: str = "histogram"  # or "isomorphism"
