@@ -129,7 +129,11 @@ def _load_model(path: Path, seed: int):
         derive = getattr(split, "derive", None)
         if derive is None:
             raise ShapeError(f"{path}: the split engine is not available to derive it")
-        return derive(path, seed=seed)
+        grammar = split.load_grammar(path)
+        if grammar.family == "tiling":
+            raise ShapeError(f"{path}: a tiling grammar has no single model to render; render one "
+                             "of its assemblies (a .glb file, e.g. from `grammarkit derive`)")
+        return derive(grammar, seed=seed)
     from ..geometry.meshio import load_mesh
 
     return load_mesh(path)

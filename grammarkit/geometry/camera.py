@@ -72,10 +72,18 @@ class Camera:
             raise ValueError(f"fov must be between 1 and 170 degrees, got {self.fov}")
         if not 0.0 <= self.margin < 0.5:
             raise ValueError(f"margin must be in [0, 0.5), got {self.margin}")
-        if self.distance is not None and self.distance <= 0:
-            raise ValueError(f"distance must be positive, got {self.distance}")
-        if self.ortho_height is not None and self.ortho_height <= 0:
-            raise ValueError(f"ortho_height must be positive, got {self.ortho_height}")
+        # `not x > 0` (rather than `x <= 0`) so that NaN is refused too
+        if self.distance is not None and not 0 < self.distance < math.inf:
+            raise ValueError(f"distance must be a positive finite number, got {self.distance}")
+        if self.ortho_height is not None and not 0 < self.ortho_height < math.inf:
+            raise ValueError(f"ortho_height must be a positive finite number, got {self.ortho_height}")
+        for name in ("pitch", "yaw"):
+            if not math.isfinite(getattr(self, name)):
+                raise ValueError(f"{name} must be a finite number of degrees, got {getattr(self, name)}")
+        for name in ("target", "eye", "up"):
+            v = getattr(self, name)
+            if v is not None and not (len(v) == 3 and all(math.isfinite(c) for c in v)):
+                raise ValueError(f"{name} must be three finite numbers, got {v}")
 
     # -- constructors for the common cases ---------------------------------------------------
     @classmethod

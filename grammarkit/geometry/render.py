@@ -68,7 +68,7 @@ class LineStyle:
     seed: int = 0
 
     def __post_init__(self) -> None:
-        if not self.width > 0:
+        if not 0 < self.width < math.inf:
             raise ValueError(f"line width must be positive, got {self.width}")
         if not 0 <= self.crease_angle <= 180:
             raise ValueError(f"crease_angle must be within [0, 180] degrees, got {self.crease_angle}")

@@ -59,6 +59,24 @@ class PartGeometry:
     _manifolds: dict = field(default_factory=dict)
 
 
+def check_tolerance(tolerance: object, where: str = "tolerance") -> float | None:
+    """A user's contact tolerance as a float (None: the default), or a ShapeError: NaN would
+    silently make every part lonely (no distance is <= NaN), a negative one likewise."""
+    import math
+    import numbers
+
+    from ..errors import ShapeError
+
+    if tolerance is None:
+        return None
+    if isinstance(tolerance, bool) or not isinstance(tolerance, numbers.Real):
+        raise ShapeError(f"{where}: the contact tolerance must be a number, got {tolerance!r}")
+    t = float(tolerance)
+    if not (math.isfinite(t) and t >= 0):
+        raise ShapeError(f"{where}: the contact tolerance must be a finite number >= 0, got {tolerance!r}")
+    return t
+
+
 def default_tolerance(assembly: Assembly | PartGeometry) -> float:
     """`DEFAULT_RELATIVE_TOLERANCE` x the bounding-box diagonal of all parts."""
     if len(assembly.lo if isinstance(assembly, PartGeometry) else assembly.parts) == 0:

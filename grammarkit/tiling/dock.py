@@ -21,8 +21,11 @@ __all__ = ["apply", "dock"]
 
 def dock(a_points, b_points, *, allow_translation: bool = True) -> tuple[np.ndarray, float]:  # noqa: ANN001
     """(4x4 rigid transform taking `a_points` onto `b_points`, RMS residual)."""
-    a = np.asarray(a_points, dtype=np.float64)
-    b = np.asarray(b_points, dtype=np.float64)
+    try:
+        a = np.asarray(a_points, dtype=np.float64)
+        b = np.asarray(b_points, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise ShapeError(f"dock: expected two (n, 3) arrays of numbers: {exc}") from None
     if a.ndim != 2 or a.shape[1] != 3 or b.shape != a.shape:
         raise ShapeError(f"dock: expected two (n, 3) point sets of the same size, got shapes "
                          f"{a.shape} and {b.shape}")

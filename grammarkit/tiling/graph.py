@@ -9,7 +9,8 @@ import networkx as nx
 import numpy as np
 
 from .assembly import Assembly
-from .contacts import candidate_pairs, contacts, default_tolerance, prepare
+from ..errors import ShapeError
+from .contacts import candidate_pairs, check_tolerance, contacts, default_tolerance, prepare
 
 __all__ = ["shape_graph"]
 
@@ -23,6 +24,9 @@ def shape_graph(assembly: Assembly, tolerance: float | None = None) -> nx.Graph:
     box parts that interpenetrate deeper than the tolerance, "overlap"). Graph attributes:
     `tolerance`, `scale` (bounding-box diagonal), `name`.
     """
+    if not isinstance(assembly, Assembly):
+        raise ShapeError(f"shape_graph: expected an Assembly (see read_assembly), got {type(assembly).__name__}")
+    tolerance = check_tolerance(tolerance, f"shape_graph({assembly.name or 'assembly'})")
     parts = assembly.parts
     geom = prepare(parts)
     if tolerance is None:
@@ -36,7 +40,6 @@ def shape_graph(assembly: Assembly, tolerance: float | None = None) -> nx.Graph:
     if len(g) != len(parts):
         from collections import Counter
 
-        from ..errors import ShapeError
         dup = [k for k, v in Counter(p.id for p in parts).items() if v > 1]
         raise ShapeError(f"assembly {assembly.name!r}: duplicate part ids {dup[:5]}")
     ids = [p.id for p in parts]

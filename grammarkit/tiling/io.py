@@ -67,6 +67,8 @@ def read_assembly(path: str | os.PathLike, *, grammar: "Grammar | None" = None,
 
     With `grammar`, part types the grammar does not know are an error. Models with more than
     `max_triangles` triangles in total are refused (ShapeError)."""
+    if not isinstance(path, (str, os.PathLike)):
+        raise ShapeError(f"read_assembly: expected a file or folder path, got {type(path).__name__}")
     path = Path(path)
     if not path.exists():
         raise ShapeError(f"{path}: no such file or folder")

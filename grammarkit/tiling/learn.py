@@ -180,8 +180,15 @@ def learn(assemblies: Sequence[Assembly | str | os.PathLike], name: str = "learn
     `example_paths` are the file names written into `example NAME = assembly("...")`
     statements (default: the given paths; omitted for in-memory assemblies without a source).
     `docks=False` writes `dock A -- B` without placements (type pairs only)."""
+    from .contacts import check_tolerance
     from .io import read_assembly
 
+    if isinstance(assemblies, (Assembly, str, os.PathLike)):
+        assemblies = [assemblies]  # one example
+    if isinstance(bandwidth, bool) or not isinstance(bandwidth, (int, float)) \
+            or not (math.isfinite(bandwidth) and bandwidth > 0):
+        raise ShapeError(f"learn: bandwidth must be a finite number > 0, got {bandwidth!r}")
+    tolerance = check_tolerance(tolerance, "learn")
     asms: list[Assembly] = []
     paths: list[str | None] = []
     for a in assemblies:
@@ -195,7 +202,8 @@ def learn(assemblies: Sequence[Assembly | str | os.PathLike], name: str = "learn
         raise ShapeError("learn: no example assemblies given")
     if example_paths is not None:
         if len(example_paths) != len(asms):
-            raise ValueError("learn: example_paths must have one entry per assembly")
+            raise ShapeError(f"learn: example_paths must have one entry per assembly "
+                             f"({len(example_paths)} paths for {len(asms)} assemblies)")
         paths = list(example_paths)
 
     multisets: dict[str, set[tuple[str, ...]]] = defaultdict(set)

@@ -233,6 +233,16 @@ def rules_from_grammar(grammar: "Grammar", *, resolve_constraints: bool = True,
 
     `site_placements=False` skips turning `dock A.s -- B.t` into placements (which needs the
     parts' geometry)."""
+    from ..ir.grammar import Grammar
+
+    if not isinstance(grammar, Grammar):
+        raise GrammarError(f"expected a tiling Grammar (grammarkit.dsl.load), got {type(grammar).__name__}",
+                           None, code="bad-argument")
+    if grammar.family == "split":
+        where = grammar.source_path or grammar.name or "the grammar"
+        raise GrammarError(f"{where}: this is a split grammar (rules, snippets); tiling rules come from "
+                           "`part`, `dock`, `neighbors` and `constraint` statements", None,
+                           code="not-tiling")
     env = _env(grammar)
     rules = Rules(name=grammar.name)
     types: set[str] = {p.name for p in grammar.parts}

@@ -87,6 +87,14 @@ def validate(grammar_or_rules: "Grammar | Rules", assembly: Assembly, *, toleran
 
     `docks=False` skips the docking-placement check (type pairs and neighbourhoods are still
     checked). At most `max_violations` are listed (a broken 10,000-part model stays readable)."""
+    from ..errors import GrammarError, ShapeError
+    from ..ir.grammar import Grammar
+
+    if not isinstance(grammar_or_rules, (Rules, Grammar)):
+        raise GrammarError(f"validate: expected a tiling Grammar (grammarkit.dsl.load) or Rules, "
+                           f"got {type(grammar_or_rules).__name__}", None, code="bad-argument")
+    if not isinstance(assembly, Assembly):
+        raise ShapeError(f"validate: expected an Assembly (see read_assembly), got {type(assembly).__name__}")
     rules = grammar_or_rules if isinstance(grammar_or_rules, Rules) else rules_from_grammar(grammar_or_rules)
     if graph is None:
         graph = shape_graph(assembly, tolerance)

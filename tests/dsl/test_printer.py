@@ -148,7 +148,7 @@ def grammars(draw):
                    trailing_comments=tuple(draw(st.lists(comment_text, max_size=2))))
 
 
-@settings(max_examples=100, deadline=None, derandomize=True,
+@settings(max_examples=60, deadline=None, derandomize=True,
           suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
 @given(grammars())
 def test_parse_print_round_trip_for_generated_irs(g):

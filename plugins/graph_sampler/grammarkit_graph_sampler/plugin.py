@@ -2,7 +2,7 @@
 
 `grammarkit derive castle.grammar [--backend graph-sampler] -n 200 --iterations 4 --seed 7 -o out/`
 calls `derive(grammar, request)`: it samples up to `n` new valid variants from the grammar's
-examples and writes `out/variant_NNNNN.glb` plus `out/manifest.jsonl`. Options (`-O key=value`)
+examples and writes `out/variant_NNNNN.glb` plus `out/manifest.jsonl`. Options (`--option key=value`)
 are the fields of `SamplerOptions` (tolerance, dock-tolerance, dedupe=histogram|isomorphism, ...).
 """
 from __future__ import annotations

@@ -54,7 +54,7 @@ class SamplerOptions:
     attempts_per_shape: int = 256  # attempts per iteration = this x new shapes of last iteration
     min_attempts: int = 512
     max_attempts: int = 100000  # per iteration (resource guard)
-    batch_size: int = 32  # attempts evaluated against the same state (fixed: determinism)
+    batch_size: int = 64  # attempts evaluated against the same state (fixed: determinism)
     dedupe: str = "histogram"  # or "isomorphism"
     max_parts: int | None = None  # default: 4 x the largest example
     max_match_steps: int = 2000  # assignments tried per boundary search
@@ -63,7 +63,7 @@ class SamplerOptions:
 
     @classmethod
     def from_strings(cls, options: dict[str, str]) -> "SamplerOptions":
-        """Build from CLI `-O key=value` strings; unknown keys and bad values are errors."""
+        """Build from CLI `--option key=value` strings; unknown keys and bad values are errors."""
         kwargs: dict[str, Any] = {}
         fields_ = cls.__dataclass_fields__
         for key, raw in options.items():
@@ -312,6 +312,7 @@ def _strip(shape: "Shape") -> "Shape":
 def _worker_main(conn, init) -> None:  # pragma: no cover - runs in the child process
     protos, options, seed, rules, tolerance, max_parts = init
     ctx = _Context(protos, [], [], options, seed, rules, tolerance, max_parts)
+    known: set = set()
     while True:
         msg = conn.recv()
         if msg[0] == "pool":
@@ -319,7 +320,8 @@ def _worker_main(conn, init) -> None:  # pragma: no cover - runs in the child pr
             ctx.pool.extend(sh.prepare(protos) for sh in added)
             ctx.fresh = list(fresh)
         elif msg[0] == "run":
-            _, iteration, indices, known = msg
+            _, iteration, indices, known_added = msg
+            known.update(known_added)  # the parent sends each known histogram once
             out = []
             for i in indices:
                 res = run_attempt(ctx, iteration, i, known)
@@ -341,6 +343,7 @@ class _Executor:
         self.conns: list = []
         self.procs: list = []
         self.sent = 0  # pool shapes the workers already have
+        self.known_sent: list[set] = []  # per worker: histogram keys it already has
         if workers > 1:
             mpc = mp.get_context("spawn")
             init = (ctx.protos, ctx.options, ctx.seed, ctx.rules, ctx.contact_tolerance, ctx.max_parts)
@@ -351,6 +354,7 @@ class _Executor:
                 child.close()
                 self.conns.append(parent)
                 self.procs.append(proc)
+                self.known_sent.append(set())
 
     def start_iteration(self, pool: list[Shape], fresh: list[int]) -> None:
         """The pool as of the start of an iteration (a snapshot: attempts see no later shapes)."""
@@ -369,16 +373,21 @@ class _Executor:
         k = len(self.conns)
         chunks = [indices[j * len(indices) // k:(j + 1) * len(indices) // k] for j in range(k)]
         busy = []
-        for conn, chunk in zip(self.conns, chunks):
+        for conn, chunk, have in zip(self.conns, chunks, self.known_sent):
             if chunk:
-                conn.send(("run", iteration, chunk, known))
+                added = known - have
+                have |= added
+                conn.send(("run", iteration, chunk, sorted(added)))
                 busy.append(conn)
         out: list[AttemptResult] = []
         for conn in busy:
             try:
                 out.extend(conn.recv())
             except EOFError:
-                raise RuntimeError("a graph-sampler worker process died") from None
+                from grammarkit.errors import DerivationError
+
+                raise DerivationError("graph-sampler: a worker process died (out of memory?); "
+                                      "try fewer --workers") from None
         return out
 
     def close(self) -> None:
