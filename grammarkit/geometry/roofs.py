@@ -20,7 +20,8 @@ half-spaces, one inclined plane per roof face, with `Manifold.trim_by_plane`.
   footprint inset by the steep part's run.
 
 `overhang` offsets the footprint outwards (mitred corners) before building the roof; the eaves
-are then a thin wedge starting at z = 0.
+are then a thin wedge ending in a `FASCIA`-high (2 cm) vertical band at z = 0, not in a knife
+edge (which comes out of the booleans with pinched, non-manifold corners).
 """
 from __future__ import annotations
 
@@ -33,6 +34,32 @@ from .footprints import Polygon, bbox, convex_cover, cross_section, is_convex, p
 Manifold = manifold3d.Manifold
 
 __all__ = ["gable", "hip", "mansard", "pyramid", "shed", "overhung"]
+
+# Trimming a prism by a plane through one of its bottom edges (every roof with an overhang:
+# the eave planes start at z = 0) leaves zero-area sliver triangles and duplicated vertices
+# where the prism's side wall collapsed. The mesh is still an index-level manifold, but any
+# reader that welds vertices by position (trimesh, Blender, grammarkit's own load_mesh) sees
+# a non-manifold edge. `Manifold.simplify` collapses edges shorter than this (model units).
+CLEAN_EPS = 1e-6
+
+# The upper roof of a mansard starts this far below the break, so the two halves overlap
+# instead of sharing the break face exactly (a shared face leaves pinched corners).
+MANSARD_OVERLAP = 1e-3
+
+
+# An overhanging eave ends in a fascia this high (model units) instead of a knife edge: where
+# a sloped plane meets the bottom face at zero thickness, the eave corners come out of
+# manifold3d as pinched vertices (and anything touching the edge, such as a recess cut, leaves
+# zero-volume slivers). Without overhang the eave sits on the wall top and needs none.
+FASCIA = 0.02
+
+
+def _fascia(overhang: float) -> float:
+    return FASCIA if overhang > 0 else 0.0
+
+
+def _clean(solid: Manifold) -> Manifold:
+    return solid.simplify(CLEAN_EPS)
 
 
 def _check_angle(angle: float, lo: float = 0.0, hi: float = 89.0) -> float:
@@ -51,17 +78,18 @@ def overhung(poly: Polygon, overhang: float) -> list[Polygon]:
     return polygons_of(cs)
 
 
-def _keep_below(solid: Manifold, nx: float, ny: float, c: float, t: float) -> Manifold:
-    """Keep z <= t * (n . p - c) (the side under a plane rising at slope t away from a line)."""
-    # condition: t*nx*x + t*ny*y - z >= t*c
+def _keep_below(solid: Manifold, nx: float, ny: float, c: float, t: float, lift: float = 0.0) -> Manifold:
+    """Keep z <= lift + t * (n . p - c) (the side under a plane rising at slope t away from a
+    line at height `lift`)."""
+    # condition: t*nx*x + t*ny*y - z >= t*c - lift
     vx, vy, vz = t * nx, t * ny, -1.0
     ln = math.sqrt(vx * vx + vy * vy + vz * vz)
-    return solid.trim_by_plane((vx / ln, vy / ln, vz / ln), t * c / ln)
+    return solid.trim_by_plane((vx / ln, vy / ln, vz / ln), (t * c - lift) / ln)
 
 
-def _hip_convex(poly: Polygon, t: float) -> Manifold:
+def _hip_convex(poly: Polygon, t: float, lift: float = 0.0) -> Manifold:
     x0, y0, x1, y1 = bbox(poly)
-    top = t * max(x1 - x0, y1 - y0) + 1.0
+    top = t * max(x1 - x0, y1 - y0) + 1.0 + lift
     solid = Manifold.extrude(cross_section(poly), top)
     n = len(poly)
     for i in range(n):
@@ -71,21 +99,22 @@ def _hip_convex(poly: Polygon, t: float) -> Manifold:
         if ln < 1e-12:
             continue
         nx, ny = -dy / ln, dx / ln  # inward normal of a counter-clockwise polygon
-        solid = _keep_below(solid, nx, ny, nx * ax + ny * ay, t)
+        solid = _keep_below(solid, nx, ny, nx * ax + ny * ay, t, lift)
     return solid
 
 
 def hip(poly: Polygon, angle: float, overhang: float = 0.0) -> Manifold:
     t = _check_angle(angle)
+    lift = _fascia(overhang)
     pieces = []
     for p in overhung(poly, overhang):
         if is_convex(p):
-            pieces.append(_hip_convex(p, t))
+            pieces.append(_hip_convex(p, t, lift))
         else:
-            pieces.extend(_hip_convex(c, t) for c in convex_cover(p))
+            pieces.extend(_hip_convex(c, t, lift) for c in convex_cover(p))
     if len(pieces) == 1:
-        return pieces[0]
-    return Manifold.batch_boolean(pieces, manifold3d.OpType.Add)
+        return _clean(pieces[0])
+    return _clean(Manifold.batch_boolean(pieces, manifold3d.OpType.Add))
 
 
 def gable(poly: Polygon, angle: float, overhang: float = 0.0, ridge: str = "x") -> Manifold:
@@ -95,15 +124,16 @@ def gable(poly: Polygon, angle: float, overhang: float = 0.0, ridge: str = "x") 
     for p in overhung(poly, overhang):
         x0, y0, x1, y1 = bbox(p)
         span = (y1 - y0) if ridge == "x" else (x1 - x0)
-        solid = Manifold.extrude(cross_section(p), t * span / 2 + 1.0)
+        lift = _fascia(overhang)
+        solid = Manifold.extrude(cross_section(p), t * span / 2 + 1.0 + lift)
         if ridge == "x":
-            solid = _keep_below(solid, 0.0, 1.0, y0, t)
-            solid = _keep_below(solid, 0.0, -1.0, -y1, t)
+            solid = _keep_below(solid, 0.0, 1.0, y0, t, lift)
+            solid = _keep_below(solid, 0.0, -1.0, -y1, t, lift)
         else:
-            solid = _keep_below(solid, 1.0, 0.0, x0, t)
-            solid = _keep_below(solid, -1.0, 0.0, -x1, t)
+            solid = _keep_below(solid, 1.0, 0.0, x0, t, lift)
+            solid = _keep_below(solid, -1.0, 0.0, -x1, t, lift)
         parts.append(solid)
-    return parts[0] if len(parts) == 1 else Manifold.batch_boolean(parts, manifold3d.OpType.Add)
+    return _clean(parts[0] if len(parts) == 1 else Manifold.batch_boolean(parts, manifold3d.OpType.Add))
 
 
 def shed(poly: Polygon, angle: float, overhang: float = 0.0, ridge: str = "x") -> Manifold:
@@ -113,10 +143,12 @@ def shed(poly: Polygon, angle: float, overhang: float = 0.0, ridge: str = "x") -
     for p in overhung(poly, overhang):
         x0, y0, x1, y1 = bbox(p)
         span = (y1 - y0) if ridge == "x" else (x1 - x0)
-        solid = Manifold.extrude(cross_section(p), t * span + 1.0)
-        solid = _keep_below(solid, 0.0, 1.0, y0, t) if ridge == "x" else _keep_below(solid, 1.0, 0.0, x0, t)
+        lift = _fascia(overhang)
+        solid = Manifold.extrude(cross_section(p), t * span + 1.0 + lift)
+        solid = (_keep_below(solid, 0.0, 1.0, y0, t, lift) if ridge == "x"
+                 else _keep_below(solid, 1.0, 0.0, x0, t, lift))
         parts.append(solid)
-    return parts[0] if len(parts) == 1 else Manifold.batch_boolean(parts, manifold3d.OpType.Add)
+    return _clean(parts[0] if len(parts) == 1 else Manifold.batch_boolean(parts, manifold3d.OpType.Add))
 
 
 def pyramid(poly: Polygon, angle: float, overhang: float = 0.0) -> Manifold:
@@ -125,12 +157,16 @@ def pyramid(poly: Polygon, angle: float, overhang: float = 0.0) -> Manifold:
     for p in overhung(poly, overhang):
         x0, y0, x1, y1 = bbox(p)
         h = t * min(x1 - x0, y1 - y0) / 2
+        lift = _fascia(overhang)
+        h += lift
         pts = [(x, y, 0.0) for x, y in p] + [((x0 + x1) / 2, (y0 + y1) / 2, h)]
+        if lift:
+            pts += [(x, y, lift) for x, y in p]
         solid = Manifold.hull_points(pts)
         if not is_convex(p):
             solid = solid ^ Manifold.extrude(cross_section(p), h + 1.0)
         parts.append(solid)
-    return parts[0] if len(parts) == 1 else Manifold.batch_boolean(parts, manifold3d.OpType.Add)
+    return _clean(parts[0] if len(parts) == 1 else Manifold.batch_boolean(parts, manifold3d.OpType.Add))
 
 
 def mansard(poly: Polygon, angle: float, height: float, top_angle: float = 15.0,
@@ -141,10 +177,10 @@ def mansard(poly: Polygon, angle: float, height: float, top_angle: float = 15.0,
         raise ValueError(f"mansard break height must be > 0, got {height:g}")
     lower = hip(poly, angle, overhang).trim_by_plane((0.0, 0.0, -1.0), -height)
     if top_angle <= 0:
-        return lower
+        return _clean(lower)
     run = height / t
     parts = [lower]
     for p in overhung(poly, overhang):
         for q in polygons_of(cross_section(p).offset(-run, manifold3d.JoinType.Miter, 2.0), 1e-6):
-            parts.append(hip(q, top_angle).translate((0.0, 0.0, height)))
-    return parts[0] if len(parts) == 1 else Manifold.batch_boolean(parts, manifold3d.OpType.Add)
+            parts.append(hip(q, top_angle).translate((0.0, 0.0, height - MANSARD_OVERLAP)))
+    return _clean(parts[0] if len(parts) == 1 else Manifold.batch_boolean(parts, manifold3d.OpType.Add))

@@ -49,9 +49,12 @@ class Limits:
     # vertices of GLB/STL files cannot hold the 1 mm weld between touching solids, and at 1e300
     # the solids' vertices overflow to inf/NaN
     max_extent: float = 100_000.0
+    # solids fed to the final boolean (added volumes and recess cuts): the union's cost grows
+    # faster than linearly (20,000 boxes take ~15 s), so this bounds the time of one building
+    max_solids: int = 20_000
 
     def __post_init__(self) -> None:
-        for name in ("max_depth", "max_shapes", "max_repeat", "max_triangles"):
+        for name in ("max_depth", "max_shapes", "max_repeat", "max_triangles", "max_solids"):
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, int) or v < 1:
                 raise DerivationError(f"Limits({name}=...) must be a positive integer, got {v!r}",
@@ -215,8 +218,17 @@ class Derivation:
             f"size {tuple(float(f'{v:.4g}') for v in sz)})", s.rule.span, code="limit-extent",
             hint="a size or translation is far too large (or not a number)")
 
+    def check_solids(self, s: Shape) -> None:
+        if len(self.adds) + len(self.post_adds) + len(self.cuts) >= self.limits.max_solids:
+            raise LimitError(
+                f"solid limit exceeded: more than {self.limits.max_solids} solids to unite "
+                f"(while applying rule {s.rule.name!r})", s.rule.span, code="limit-solids",
+                hint="a split probably makes far too many volume parts; raise Limits(max_solids=...) "
+                     "if the building really needs them")
+
     def _add(self, s: Shape, tag: int) -> None:
         self.check_extent(s)
+        self.check_solids(s)
         solid, oid, tris = local_solid(s)
         if solid is not None and s.solid is not None:
             self.check_extent(s, solid.bounding_box())
@@ -226,7 +238,9 @@ class Derivation:
             return
         self.id_tag[oid] = tag
         # solids built inside a recess (a mullion) are added after the cuts, or the cut eats them
-        (self.post_adds if s.cut >= 0 else self.adds).append(solid.transform(welded_frame(s.o, s.ax, s.sz)))
+        n = len(self.adds) + len(self.post_adds)
+        (self.post_adds if s.cut >= 0 else self.adds).append(
+            solid.transform(welded_frame(s.o, s.ax, s.sz, weld_of(n))))
         self.est_tris += tris
 
     def leaf(self, s: Shape, name: str) -> None:
@@ -254,17 +268,23 @@ class Derivation:
     def add_cut(self, s: Shape, depth: float) -> int:
         """Subtract the prism of face `s` from z = -depth to just above its plane."""
         self.check_extent(s)
+        self.check_solids(s)
         if not depth <= self.limits.max_extent:
             self.check_extent(s, (depth,))
         tag = self._tag(s, s.rule.name, "cut-pending")
         h = depth + CUT_OUTSET
+        # grown by WELD sideways, like added solids: cuts of neighbouring panes that share a
+        # side face exactly would otherwise leave a zero-thickness sliver of wall between them,
+        # whose pinched edges break watertightness once a reader welds vertices by position
+        x, y, z = s.ax
         if s.poly is None:
-            solid = Manifold.cube((s.sz[0], s.sz[1], h))
+            solid = Manifold.cube((s.sz[0] + 2 * WELD, s.sz[1] + 2 * WELD, h))
+            d = (-WELD, -WELD, -depth)  # the cube's corner in scope coordinates
         else:
-            solid = Manifold.extrude(cross_section(s.poly), h)
+            solid = Manifold.extrude(cross_section(s.poly).offset(WELD, manifold3d.JoinType.Miter, 2.0), h)
+            d = (0.0, 0.0, -depth)
         self.id_tag[solid.original_id()] = tag
-        z = s.ax[2]
-        o = (s.o[0] - z[0] * depth, s.o[1] - z[1] * depth, s.o[2] - z[2] * depth)
+        o = tuple(s.o[k] + x[k] * d[0] + y[k] * d[1] + z[k] * d[2] for k in range(3))
         self.cuts.append(solid.transform(frame(o, s.ax)))
         self.est_tris += 12
         return tag
@@ -275,7 +295,15 @@ class Derivation:
                              code="limit-triangles")
 
 
-def welded_frame(o: tuple, ax: tuple, sz: tuple) -> list[list[float]]:
+def weld_of(n: int) -> float:
+    """How much the n-th solid is grown: WELD to 1.5 x WELD, a different amount for each solid
+    (golden-ratio sequence, deterministic). With one amount for all, two solids whose faces were
+    coplanar (a ledge as deep as the roof's overhang) stay coplanar after growing and meet along
+    an edge only, which the union keeps as pinched, non-manifold vertices."""
+    return WELD * (1.0 + 0.5 * ((n * 0.6180339887498949) % 1.0))
+
+
+def welded_frame(o: tuple, ax: tuple, sz: tuple, weld: float = WELD) -> list[list[float]]:
     """The scope frame of an added solid, grown by WELD on every side about the scope centre.
 
     Solids that merely touch (a ledge on a wall, a railing on a slab, a tower on its podium)
@@ -283,7 +311,7 @@ def welded_frame(o: tuple, ax: tuple, sz: tuple) -> list[list[float]]:
     shells in the union. Growing every added solid by a millimetre makes touching solids
     overlap, so the union is one connected solid; nobody sees a millimetre on a building.
     """
-    f = [(sz[i] + 2 * WELD) / sz[i] if sz[i] > 1e-9 else 1.0 for i in range(3)]
+    f = [(sz[i] + 2 * weld) / sz[i] if sz[i] > 1e-9 else 1.0 for i in range(3)]
     (a0, a1, a2), (b0, b1, b2), (c0, c1, c2) = ax
     # world = o + R * (c + F * (p - c)),  c = scope centre  ->  o + R*(c - F*c) + (R*F) p
     sh = [sz[i] / 2 * (1 - f[i]) for i in range(3)]

@@ -84,6 +84,7 @@ def compose(ctx: Derivation, where: Any) -> tuple[Any, Any]:
         body = Manifold.batch_boolean([body, *ctx.cuts], manifold3d.OpType.Subtract)
     if post:
         body = Manifold.batch_boolean([body, *post], manifold3d.OpType.Add)
+    body = _drop_slivers(body)
     mesh = body.to_mesh()
     status = body.status()
     if status != manifold3d.Error.NoError:
@@ -94,6 +95,22 @@ def compose(ctx: Derivation, where: Any) -> tuple[Any, Any]:
                               code="empty-model")
     ctx.check_triangles(n, where)
     return body, mesh
+
+
+# A shell of the union whose volume is below this (cubic model units) is a degenerate sliver
+# (two faces of the same zero-thickness wedge, e.g. where a recess cut grazes a roof's knife-edge
+# eave): it has no material, only pinched edges that break watertightness on reading back.
+SLIVER_VOLUME = 1e-9
+
+
+def _drop_slivers(body: Any) -> Any:
+    pieces = body.decompose()
+    if len(pieces) < 2:
+        return body
+    keep = [p for p in pieces if abs(p.volume()) > SLIVER_VOLUME]
+    if len(keep) == len(pieces) or not keep:
+        return body
+    return keep[0] if len(keep) == 1 else Manifold.compose(keep)
 
 
 def _rgba(hex_color: str | None, default: str) -> tuple[int, int, int, int]:

@@ -31,3 +31,17 @@ def test_variants_of_each_example_validate_in_full(path):
         g = shape_graph(asm, tolerance=sampler.contact_tolerance)
         assert {frozenset((shape.ids[a], shape.ids[b])) for a, b in shape.edges} == \
             {frozenset(e) for e in g.edges()}
+
+
+def test_python_api_sample_yields_assemblies_with_provenance():
+    from grammarkit_graph_sampler import sampler
+
+    castle = ROOT / "castle" / "castle.grammar"
+    out = list(sampler.sample(str(castle), n=2, iterations=2, seed=7, workers=1,
+                              attempts_per_shape=256, min_attempts=512))
+    assert len(out) == 2
+    for asm in out:
+        meta = asm.meta["graph_sampler"]
+        assert meta["key"] == asm.name and len(meta["parents"]) == 2
+        assert meta["operation"]["replaced"] and meta["operation"]["inserted"]
+        assert validate(load(castle), asm).ok

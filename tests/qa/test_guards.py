@@ -70,3 +70,13 @@ def test_insert_of_a_non_mesh_file_is_located_at_the_operation(tmp_path):
     span = info.value.span
     assert span is not None and span.line == 1 and span.column == 21, info.value.format()
     assert "notes.txt" in str(info.value) and "'Lot'" in str(info.value)
+
+
+def test_too_many_solids_stop_before_the_boolean():
+    # 150 x 150 boxes: under the shape and repeat limits, but a union that would take minutes
+    text = "Lot --> extrude(10) split(x) { { 0.066: A }* }\nA --> split(y) { { 0.066: B. }* }\n"
+    t0 = time.perf_counter()
+    with pytest.raises(LimitError, match="solid limit") as info:
+        grammarkit.derive(text, limits=Limits(max_solids=2_000))
+    assert time.perf_counter() - t0 < 10
+    assert "'A'" in str(info.value) and info.value.span.line == 2

@@ -162,13 +162,17 @@ def contacts_involving(meshes: Sequence[trimesh.Trimesh], types: Sequence[str], 
     return out
 
 
-def all_contacts(meshes: Sequence[trimesh.Trimesh], types: Sequence[str],
-                 tolerance: float) -> set[tuple[int, int]]:
-    """The full recompute: `shape_graph` of the whole variant."""
-    from grammarkit.tiling import shape_graph
+def full_check(rule_set, meshes: Sequence[trimesh.Trimesh], types: Sequence[str],
+               tolerance: float) -> tuple[set[tuple[int, int]], list[str]]:
+    """The non-incremental path (benchmark baseline): `shape_graph` of the whole variant, then
+    the full `validate` on it (every contact's docking placement checked). -> (edges, problems)"""
+    from grammarkit.tiling import shape_graph, validate
 
-    g = shape_graph(Assembly(_parts(meshes, types, range(len(meshes)))), tolerance=tolerance)
-    return {(min(int(u), int(v)), max(int(u), int(v))) for u, v in g.edges()}
+    assembly = Assembly(_parts(meshes, types, range(len(meshes))), name="variant")
+    g = shape_graph(assembly, tolerance=tolerance)
+    edges = {(min(int(u), int(v)), max(int(u), int(v))) for u, v in g.edges()}
+    report = validate(rule_set, assembly, graph=g, max_violations=1)
+    return edges, [v.format() for v in report.violations]
 
 
 def shape_graph_of(types: Sequence[str], edges, centroids, tolerance: float, lo: np.ndarray,
@@ -182,21 +186,18 @@ def shape_graph_of(types: Sequence[str], edges, centroids, tolerance: float, lo:
 
 
 def violations(rule_set, types: Sequence[str], edges, meshes, centroids, tolerance: float,
-               new: Iterable[int] | None, lo: np.ndarray | None = None,
+               new: Iterable[int], lo: np.ndarray | None = None,
                hi: np.ndarray | None = None) -> list[str]:
     """Rules the variant breaks, by `grammarkit.tiling.validate` on its recomputed graph.
 
     With `new` (the inserted nodes), the docking-placement check runs on the contacts that
     involve an inserted part only: a placement depends on the two parts alone, and the other
     contacts are the recipient's, unchanged. Type pairs, neighbourhoods and global constraints
-    are checked on the whole graph. `new=None` runs the full `validate` (graph recomputed).
+    are checked on the whole graph.
     """
     from grammarkit.tiling import validate
 
     assembly = Assembly(_parts(meshes, types, range(len(meshes))), name="variant")
-    if new is None:
-        report = validate(rule_set, assembly, tolerance=tolerance, max_violations=1)
-        return [v.format() for v in report.violations]
     if lo is None or hi is None:
         lo, hi = bounds_of(meshes)
     g = shape_graph_of(types, edges, centroids, tolerance, lo, hi)

@@ -273,13 +273,14 @@ def run_attempt(ctx: _Context, iteration: int, index: int, known: frozenset) -> 
                                                  lo, hi, ctx.rules)
         except geometry.ForbiddenContact as exc:
             return AttemptResult(iteration, index, "invalid", detail=str(exc))
+        edges_t = tuple(sorted((min(u, v), max(u, v)) for u, v in edges))
+        centroids = np.concatenate([recip.centroids[kept],
+                                    donor.centroids[inserted] @ matrix[:3, :3].T + matrix[:3, 3]])
+        problems = geometry.violations(ctx.rules, types, edges_t, meshes, centroids,
+                                       ctx.contact_tolerance, range(k, n_new), lo, hi)
     else:
-        edges = geometry.all_contacts(meshes, types, ctx.contact_tolerance)
-    edges_t = tuple(sorted((min(u, v), max(u, v)) for u, v in edges))
-    centroids = np.concatenate([recip.centroids[kept],
-                                donor.centroids[inserted] @ matrix[:3, :3].T + matrix[:3, 3]])
-    problems = geometry.violations(ctx.rules, types, edges_t, meshes, centroids, ctx.contact_tolerance,
-                                   range(k, n_new) if opt.incremental else None, lo, hi)
+        edges, problems = geometry.full_check(ctx.rules, meshes, types, ctx.contact_tolerance)
+        edges_t = tuple(sorted(edges))
     if problems:
         return AttemptResult(iteration, index, "invalid", detail=problems[0])
     op = {
