@@ -1,7 +1,7 @@
 """Graph-sampler throughput and growth (Kalojanov 2019, section 4).
 
     /work/venv/bin/python benchmarks/bench_graph_sampler.py [--runs 3] [--n 300] [--iterations 4]
-                                                            [--quick] [--no-growth]
+        [--attempts-per-shape 512] [--growth-attempts 20000] [--quick] [--no-growth]
 
 1. Throughput on the castle example (grammars/tiling/castle): valid *new* variants per minute at
    1 and 2 worker processes, attempts per valid and per new variant, parts per variant. Baseline,
@@ -46,17 +46,18 @@ def one_run(grammar, *, workers: int, seed: int, n: int, iterations: int, **opti
             "attempts": attempts, "parts": parts, "sampler": sampler}
 
 
-def throughput(grammar, runs: int, n: int, iterations: int) -> None:
+def throughput(grammar, runs: int, n: int, iterations: int, per_shape: int) -> None:
     configs = [("incremental", 1, True), ("incremental", 2, True),
                ("full recompute (baseline)", 1, False), ("full recompute (baseline)", 2, False)]
     results = {}
     for label, workers, incremental in configs:
         rows = [one_run(grammar, workers=workers, seed=100 + r, n=n, iterations=iterations,
-                        incremental=incremental) for r in range(runs)]
+                        incremental=incremental, attempts_per_shape=per_shape) for r in range(runs)]
         results[(label, workers)] = rows
-    print(f"\n## Throughput: castle, n <= {n}, iterations <= {iterations}, median of {runs} run(s)\n")
+    print(f"\n## Throughput: castle, n <= {n}, iterations <= {iterations}, attempts_per_shape="
+          f"{per_shape}, median of {runs} run(s) (seeds 100..)\n")
     head = ("| graph update | workers | new variants | attempts | attempts/valid | attempts/new "
-            "| parts (min-mean-max) | seconds | new variants/min | speed-up vs baseline |")
+            "| parts (min-mean-max) | seconds | attempts/s | new variants/min | speed-up vs baseline |")
     print(head)
     print("|---" * (head.count("|") - 1) + "|")
     for (label, workers), rows in results.items():
@@ -69,8 +70,9 @@ def throughput(grammar, runs: int, n: int, iterations: int) -> None:
         base = results[("full recompute (baseline)", workers)]
         base_rate = statistics.median(60.0 * r["new"] / r["seconds"] for r in base)
         pr = f"{min(parts)}-{statistics.mean(parts):.0f}-{max(parts)}" if parts else "-"
+        aps = statistics.median(r["attempts"] / r["seconds"] for r in rows)
         print(f"| {label} | {workers} | {new:.0f} | {att:.0f} | {att / max(val, 1):.1f} | "
-              f"{att / max(new, 1):.1f} | {pr} | {sec:.2f} | {rate:.0f} | {rate / base_rate:.2f}x |")
+              f"{att / max(new, 1):.1f} | {pr} | {sec:.2f} | {aps:.0f} | {rate:.0f} | {rate / base_rate:.2f}x |")
     setup = statistics.median(r["setup"] for rows in results.values() for r in rows)
     print(f"\nsetup (load examples, shape graphs, validate examples): {setup:.2f} s median")
     one = results[("incremental", 1)]
@@ -106,13 +108,15 @@ def main() -> int:
     ap.add_argument("--n", type=int, default=300)
     ap.add_argument("--iterations", type=int, default=4)
     ap.add_argument("--growth-attempts", type=int, default=20000)
+    ap.add_argument("--attempts-per-shape", type=int, default=512,
+                    help="throughput runs: attempts per new shape and iteration")
     ap.add_argument("--quick", action="store_true", help="1 run, n=60, 3 iterations, small growth budget")
     ap.add_argument("--no-growth", action="store_true")
     args = ap.parse_args()
     if args.quick:
         args.runs, args.n, args.iterations, args.growth_attempts = 1, 60, 3, 3000
     castle = ROOT / "grammars" / "tiling" / "castle" / "castle.grammar"
-    throughput(load(castle), args.runs, args.n, args.iterations)
+    throughput(load(castle), args.runs, args.n, args.iterations, args.attempts_per_shape)
     if not args.no_growth:
         growth(sorted((ROOT / "grammars" / "tiling").glob("*/*.grammar")), 4, args.growth_attempts)
     return 0

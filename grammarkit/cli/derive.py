@@ -13,7 +13,7 @@ from typing import Any, Callable
 
 import click
 
-from ..errors import GrammarError, GrammarkitError, ShapeError
+from ..errors import GrammarError, GrammarkitError, PluginError, ShapeError
 
 FORMATS = ("glb", "obj", "stl", "ply")
 # Resource guards of the command line: one run writes at most MAX_MODELS files (the manifest
@@ -276,9 +276,21 @@ def _run_backend(grammar: Any, name: str | None, out: Path, n: int, iterations: 
                               f"(it accepts: {', '.join(sorted(spec.families))})")
     if spec.derive is None:
         raise GrammarkitError(f"back end {spec.name!r} (plugin {spec.plugin!r}) has no derive function")
+    if out.exists() and not out.is_dir():
+        raise click.BadParameter(f"a back end writes into a folder; {str(out)!r} is a file", param_hint="-o")
+    # (the back end makes the folder itself, once its options are known to be good)
     progress, factory = _progress_factory(console)
     request = DeriveRequest(out=out, n=n, iterations=iterations, seed=seed, workers=workers,
                             options=options, progress=factory)
     with progress:
-        summary = spec.derive(grammar, request)
+        try:
+            summary = spec.derive(grammar, request)
+        except GrammarkitError:
+            raise
+        except OSError as exc:  # a file the back end could not write or read
+            where = exc.filename or out
+            raise ShapeError(f"{where}: back end {spec.name!r}: {exc.strerror or exc}") from None
+        except Exception as exc:  # noqa: BLE001 - a plugin crashed: name it, no traceback
+            raise PluginError(f"back end {spec.name!r} (plugin {spec.plugin!r}) failed: "
+                              f"{type(exc).__name__}: {exc}") from None
     click.echo(json.dumps(summary, indent=1, default=str))

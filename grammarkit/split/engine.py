@@ -35,6 +35,9 @@ CUT_OUTSET = 0.25
 
 # Every added solid is grown by this much on each side so touching solids fuse (see welded_frame).
 WELD = 1e-3
+# Recess cuts are grown sideways by this much (see add_cut): less than any solid's growth
+# (WELD .. 1.5 WELD, see weld_of), so a cut's grown side never lies in a grown solid's face.
+CUT_WELD = 0.5 * WELD
 
 
 @dataclass(frozen=True)
@@ -242,6 +245,11 @@ class Derivation:
         (self.post_adds if s.cut >= 0 else self.adds).append(
             solid.transform(welded_frame(s.o, s.ax, s.sz, weld_of(n))))
         self.est_tris += tris
+        if self.est_tris > self.limits.max_triangles:  # stop now, not after building them all
+            raise LimitError(
+                f"triangle limit exceeded: the solids so far have about {self.est_tris} triangles, "
+                f"more than {self.limits.max_triangles} (while applying rule {s.rule.name!r})",
+                s.rule.span, code="limit-triangles")
 
     def leaf(self, s: Shape, name: str) -> None:
         """`s` becomes a terminal named `name`."""
@@ -273,15 +281,16 @@ class Derivation:
             self.check_extent(s, (depth,))
         tag = self._tag(s, s.rule.name, "cut-pending")
         h = depth + CUT_OUTSET
-        # grown by WELD sideways, like added solids: cuts of neighbouring panes that share a
+        # grown by CUT_WELD sideways, like added solids: cuts of neighbouring panes that share a
         # side face exactly would otherwise leave a zero-thickness sliver of wall between them,
         # whose pinched edges break watertightness once a reader welds vertices by position
         x, y, z = s.ax
+        w = CUT_WELD
         if s.poly is None:
-            solid = Manifold.cube((s.sz[0] + 2 * WELD, s.sz[1] + 2 * WELD, h))
-            d = (-WELD, -WELD, -depth)  # the cube's corner in scope coordinates
+            solid = Manifold.cube((s.sz[0] + 2 * w, s.sz[1] + 2 * w, h))
+            d = (-w, -w, -depth)  # the cube's corner in scope coordinates
         else:
-            solid = Manifold.extrude(cross_section(s.poly).offset(WELD, manifold3d.JoinType.Miter, 2.0), h)
+            solid = Manifold.extrude(cross_section(s.poly).offset(w, manifold3d.JoinType.Miter, 2.0), h)
             d = (0.0, 0.0, -depth)
         self.id_tag[solid.original_id()] = tag
         o = tuple(s.o[k] + x[k] * d[0] + y[k] * d[1] + z[k] * d[2] for k in range(3))
@@ -331,7 +340,7 @@ def local_solid(s: Shape) -> tuple[Any, int, int]:
         if oid < 0:
             solid = solid.as_original()
             oid = solid.original_id()
-        return solid, oid, 0
+        return solid, oid, solid.num_tri()  # a roof or an inserted mesh: count what it brings
     if sz <= 1e-9 or sx <= 1e-9 or sy <= 1e-9:
         return None, -1, 0
     if s.poly is None:

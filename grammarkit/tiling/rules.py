@@ -238,9 +238,10 @@ def rules_from_grammar(grammar: "Grammar", *, resolve_constraints: bool = True,
     if not isinstance(grammar, Grammar):
         raise GrammarError(f"expected a tiling Grammar (grammarkit.dsl.load), got {type(grammar).__name__}",
                            None, code="bad-argument")
-    if grammar.family == "split":
+    if grammar.family != "tiling":
         where = grammar.source_path or grammar.name or "the grammar"
-        raise GrammarError(f"{where}: this is a split grammar (rules, snippets); tiling rules come from "
+        what = "a split grammar (rules, snippets)" if grammar.family == "split" else "a grammar without tiling statements"
+        raise GrammarError(f"{where}: this is {what}; tiling rules come from "
                            "`part`, `dock`, `neighbors` and `constraint` statements", None,
                            code="not-tiling")
     env = _env(grammar)

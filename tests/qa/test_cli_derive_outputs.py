@@ -104,3 +104,37 @@ def test_set_errors_point_at_the_attr(cli, small_grammar, tmp_path, value, words
     if not value.startswith("nope"):
         assert "small.grammar:" in out  # file:line:col of the attr's declaration
     assert not (tmp_path / "m.glb").exists()
+
+
+CASTLE = Path(__file__).resolve().parents[2] / "grammars" / "tiling" / "castle" / "castle.grammar"
+
+
+@pytest.mark.skipif(not Path("/proc").is_dir(), reason="needs /proc as an unwritable folder")
+def test_back_end_output_folder_that_cannot_be_made(cli):
+    code, out = cli("derive", CASTLE, "-o", UNWRITABLE / "out", "-n", "1", "--iterations", "1")
+    _no_traceback(code, out)
+    assert str(UNWRITABLE) in out and "graph-sampler" in out
+
+
+def test_back_end_output_that_is_a_file(cli, tmp_path):
+    f = tmp_path / "plain"
+    f.write_text("keep")
+    code, out = cli("derive", CASTLE, "-o", f, "-n", "1", "--iterations", "1")
+    _no_traceback(code, out)
+    assert f.read_text() == "keep"
+
+
+def test_a_crashing_back_end_is_reported_without_traceback(cli, tmp_path, monkeypatch):
+    from grammarkit.plugins import get_plugin_manager
+    from grammarkit.registry import BackendSpec
+
+    def boom(grammar, request):
+        raise RuntimeError("kaput")
+
+    spec = BackendSpec(name="qa-crash", summary="crashes", families=frozenset({"tiling", "split"}), derive=boom)
+    pm = get_plugin_manager()
+    real = pm.backend
+    monkeypatch.setattr(type(pm), "backend", lambda self, name: spec if name == "qa-crash" else real(name))
+    code, out = cli("derive", CASTLE, "-o", tmp_path / "o", "--backend", "qa-crash")
+    _no_traceback(code, out)
+    assert "qa-crash" in out and "kaput" in out

@@ -80,3 +80,16 @@ def test_too_many_solids_stop_before_the_boolean():
         grammarkit.derive(text, limits=Limits(max_solids=2_000))
     assert time.perf_counter() - t0 < 10
     assert "'A'" in str(info.value) and info.value.span.line == 2
+
+
+def test_inserted_meshes_count_towards_the_triangle_limit(tmp_path):
+    import trimesh
+
+    trimesh.creation.icosphere(subdivisions=3).export(tmp_path / "ball.glb")  # 1,280 triangles
+    g = tmp_path / "balls.grammar"
+    g.write_text('Lot --> extrude(10) split(x) { { 0.1: i("ball.glb") B. }* }\n')
+    t0 = time.perf_counter()
+    with pytest.raises(LimitError, match="triangle limit") as info:
+        grammarkit.derive(g, limits=Limits(max_triangles=50_000))
+    assert time.perf_counter() - t0 < 10
+    assert "'Lot'" in str(info.value) and info.value.span.line == 1

@@ -69,6 +69,8 @@ def test_validate_refuses_a_split_grammar():
     g = load("Lot --> extrude(3) X.\n")
     with pytest.raises(GrammarError, match="split grammar"):
         validate(g, _two_boxes())
+    with pytest.raises(GrammarError, match="without tiling statements"):
+        validate(load("attr x = 1\n"), _two_boxes())  # not "OK: no rules broken"
 
 
 @pytest.fixture

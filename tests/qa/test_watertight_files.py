@@ -58,3 +58,24 @@ def test_example_files_read_back_watertight(tmp_path, name, fmt):
     rep = mesh_report(load_mesh(path))
     assert rep.ok, f"{name}.{fmt}: {rep}"
     assert math.isclose(rep.volume, m.manifold.volume(), rel_tol=1e-4)
+
+
+@pytest.mark.parametrize("name", ["paris", "lshape"])
+def test_variations_have_no_pinched_vertices(name):
+    from grammarkit.split import variations
+
+    for var, m in variations(GRAMMARS / f"{name}.grammar", 3, seed=9):
+        assert _coincident(m.mesh.vertices) == 0, f"{name} variation {var.index}: {var.attrs} {var.bindings}"
+        assert len(m.manifold.decompose()) == 1
+
+
+def test_hip_roof_on_a_wall_top_and_ledge_under_an_overhang():
+    # the wall's corner edges run into the hip lines, and the ledge is exactly as deep as the
+    # overhang: both used to leave pinched vertices in the union
+    text = ("Lot --> footprint(rect(8, 6)) extrude(9) comp(f) { top: T | side: F | bottom: NIL }\n"
+            "T --> roofHip(30) R.\n"
+            "F --> split(y) { ~1: W. | 0.5: extrude(0.4) L. }\n")
+    for t in (text, text.replace("roofHip(30)", "roofHip(30, overhang=0.4)")):
+        m = grammarkit.derive(t)
+        assert _coincident(m.mesh.vertices) == 0
+        assert mesh_report(m.mesh).ok and len(m.manifold.decompose()) == 1
