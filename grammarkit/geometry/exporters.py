@@ -26,7 +26,6 @@ import numpy as np
 import trimesh
 
 from ..errors import ShapeError
-from ..hookspecs import hookimpl
 from ..registry import ExporterSpec
 
 __all__ = ["OutputError", "atomic_output", "export", "exporter_for", "known_formats", "scene_from_parts",
@@ -258,23 +257,8 @@ def _write_ply(obj: Any, path: Path) -> None:
         tmp.write_bytes(data)
 
 
-_SPECS = (
-    ExporterSpec("glb", (".glb",), "binary glTF: a node per part (name Type.N, type in extras), "
-                 "face colours kept", _write_glb),
-    ExporterSpec("gltf", (".gltf",), "text glTF with embedded buffers; same content as glb",
-                 _write_gltf),
-    ExporterSpec("obj", (".obj",), "Wavefront OBJ: an o/g group per part, vertex colours",
-                 _write_obj),
-    ExporterSpec("stl", (".stl",), "binary STL: all parts as one mesh, no colours or names",
-                 _write_stl),
-    ExporterSpec("ply", (".ply",), "binary PLY: all parts as one mesh with face colours",
-                 _write_ply),
-)
-
-
-@hookimpl
-def grammarkit_exporters() -> list[ExporterSpec]:
-    return list(_SPECS)
+# The specs (and the hookimpl registering them) live in exporter_plugin.py, which stays light.
+from .exporter_plugin import SPECS as _SPECS, grammarkit_exporters  # noqa: E402
 
 
 def _all_specs() -> list[ExporterSpec]:

@@ -17,15 +17,48 @@ See docs/tiling.md.
 """
 from __future__ import annotations
 
-from .assembly import Assembly, Part
-from .contacts import DEFAULT_RELATIVE_TOLERANCE, default_tolerance
-from .dock import dock
-from .frames import local_frame, relative_placement
-from .graph import shape_graph
-from .io import ShapeWarning, load_examples, part_prototype, read_assembly, type_from_name, write_assembly
-from .learn import learn
-from .rules import DockPlacement, Rules, rules_from_grammar
-from .validate import Report, Violation, validate
+from importlib import import_module
+from typing import TYPE_CHECKING, Any
+
+# Submodules are imported on first use: loading the `core-constraints` plugin (every
+# `grammarkit` command does) must not pull in trimesh and scipy.
+_EXPORTS = {
+    "Assembly": "assembly", "Part": "assembly",
+    "DEFAULT_RELATIVE_TOLERANCE": "contacts", "default_tolerance": "contacts",
+    "dock": "dock",
+    "local_frame": "frames", "relative_placement": "frames",
+    "shape_graph": "graph",
+    "ShapeWarning": "io", "load_examples": "io", "part_prototype": "io", "read_assembly": "io",
+    "type_from_name": "io", "write_assembly": "io",
+    "learn": "learn",
+    "DockPlacement": "rules", "Rules": "rules", "rules_from_grammar": "rules",
+    "Report": "validate", "Violation": "validate", "validate": "validate",
+}
+
+
+def __getattr__(name: str) -> Any:
+    module = _EXPORTS.get(name)
+    if module is None:
+        raise AttributeError(f"module 'grammarkit.tiling' has no attribute {name!r}")
+    value = getattr(import_module(f"{__name__}.{module}"), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_EXPORTS))
+
+
+if TYPE_CHECKING:  # pragma: no cover - for type checkers and IDEs
+    from .assembly import Assembly, Part
+    from .contacts import DEFAULT_RELATIVE_TOLERANCE, default_tolerance
+    from .dock import dock
+    from .frames import local_frame, relative_placement
+    from .graph import shape_graph
+    from .io import ShapeWarning, load_examples, part_prototype, read_assembly, type_from_name, write_assembly
+    from .learn import learn
+    from .rules import DockPlacement, Rules, rules_from_grammar
+    from .validate import Report, Violation, validate
 
 __all__ = [
     "DEFAULT_RELATIVE_TOLERANCE", "Assembly", "DockPlacement", "Part", "Report", "Rules", "ShapeWarning",

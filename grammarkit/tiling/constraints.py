@@ -18,7 +18,10 @@ from __future__ import annotations
 from collections import deque
 from typing import Any
 
-import networkx as nx
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:  # networkx is imported by the checks that need it: plugin loading stays light
+    import networkx as nx
 
 from ..hookspecs import hookimpl
 from ..registry import ConstraintSpec, Param
@@ -35,6 +38,8 @@ def _ids(nodes) -> str:  # noqa: ANN001
 
 
 def check_connected(graph: nx.Graph, args: dict[str, Any], context: dict | None = None) -> list[str]:
+    import networkx as nx
+
     if graph.number_of_nodes() == 0:
         return []
     comps = sorted(nx.connected_components(graph), key=lambda c: (-len(c), min(map(str, c))))
@@ -45,6 +50,8 @@ def check_connected(graph: nx.Graph, args: dict[str, Any], context: dict | None 
 
 
 def check_grounded(graph: nx.Graph, args: dict[str, Any], context: dict | None = None) -> list[str]:
+    import networkx as nx
+
     if graph.number_of_nodes() == 0:
         return []
     tol = float(graph.graph.get("tolerance", 1e-6))
@@ -61,6 +68,8 @@ def check_grounded(graph: nx.Graph, args: dict[str, Any], context: dict | None =
 
 
 def check_path(graph: nx.Graph, args: dict[str, Any], context: dict | None = None) -> list[str]:
+    import networkx as nx
+
     src, dst = str(args["from"]), str(args["to"])
     downhill = bool(args.get("downhill") or False)
     tol = float(graph.graph.get("tolerance", 1e-6))
