@@ -588,6 +588,7 @@ class Checker:
                            code="snippet-start")
         for a in s.attrs:
             self.check_attr(a, _Scope(values, {}, string_values=string_values))
+            self.check_attr_override(s, a)
         for r in s.rules:
             self.check_rule(r, _Scope(values | set(r.params), local_rules, self.top_rules,
                                       string_values=string_values - set(r.params)))
@@ -597,6 +598,24 @@ class Checker:
             if r.name not in reach and r.name in local_rules and local_rules[r.name] is r:
                 self.bag.warning(f"rule '{r.name}' of snippet '{s.name}' is never used "
                                  f"(unreachable from {START})", r.span, code="unreachable")
+
+    def check_attr_override(self, s: Snippet, a: Attr) -> None:
+        """A grammar attr replaces a snippet attr of the same name (that is how a model sets a
+        snippet's parameter). Warn when the replacing value lies outside the snippet attr's
+        range: usually two unrelated attrs that happen to share a name (e.g. a lot `depth`
+        of 20 becoming every window's recess depth)."""
+        top = self._values.get(a.name)
+        if not isinstance(top, Attr) or a.range is None:
+            return
+        lo, hi = (self.const_value(x) for x in a.range)
+        value = self.const_value(top.value)
+        numbers = all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in (lo, hi, value))
+        if numbers and not lo <= value <= hi:
+            self.bag.warning(
+                f"attr '{a.name}' = {_num(value)} of this grammar replaces attr '{a.name}' of "
+                f"snippet '{s.name}', outside that attr's @range({_num(lo)}, {_num(hi)})",
+                top.span, code="attr-override-range",
+                hint=f"rename one of them if they are different things; the snippet's attr is defined{_where(a.span)}")
 
     def check_snippet_bindings(self) -> None:
         for u in self.g.uses:
