@@ -102,6 +102,7 @@ def separate_mesh(vertices: np.ndarray, tris: np.ndarray, groups: list[np.ndarra
     rows = np.nonzero(is_moved[t].any(axis=1))[0]
     tt = t[rows]
     cen = v[tt].mean(axis=1)
+    tiny = _cell(v)
     pull = np.zeros_like(v)
     shortest = np.full(len(v), np.inf)
     for k in range(3):
@@ -110,6 +111,7 @@ def separate_mesh(vertices: np.ndarray, tris: np.ndarray, groups: list[np.ndarra
         np.add.at(pull, vk[hit], cen[hit] - v[vk[hit]])
         for other in ((k + 1) % 3, (k + 2) % 3):
             ln = np.linalg.norm(v[tt[hit, other]] - v[vk[hit]], axis=1)
+            ln[ln <= tiny] = np.inf  # edges to the other copies (zero-area triangles)
             np.minimum.at(shortest, vk[hit], ln)
     d = pull[moved]
     ln = np.linalg.norm(d, axis=1)
