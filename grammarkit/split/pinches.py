@@ -31,56 +31,67 @@ SEPARATION = 1e-4
 
 _K1 = np.int64(-7046029254386353131)  # 0x9E3779B97F4A7C15 as a signed int64 (golden ratio)
 _K2 = np.int64(0x632BE59BD9B4E019)
+_KEY = np.array([_K1, _K2, 1], dtype=np.int64)
 
 
 def _cell(v: np.ndarray) -> float:
-    """Quantum of the position grid: 1 um, or 8 float32 ulps of the largest coordinate (a
-    welding reader rounds positions to ~1e-8; float32 copies that differ by an ulp or two
-    are welded by some readers, so they count as coincident too)."""
-    big = float(np.abs(v).max()) if len(v) else 0.0
-    return max(1e-6, 8.0 * float(np.spacing(np.float32(big))))
+    """Quantum of the position grid: 1 um, or 2e-9 of the model's extent if larger. Readers
+    weld at least exact float32 duplicates; trimesh rounds positions to 1e-8 and
+    `meshio.load_mesh` quantises at 1e-9 of the bounding-box diagonal, so this is a superset
+    of what they merge, yet finer than a float32 ulp at building scale (7.6e-6 at 100 m): two
+    vertices that are apart in the file are not flagged."""
+    if not len(v):
+        return 1e-6
+    extent = 3.0 * float(v.max() - v.min())  # >= the sum of the axis extents (and fast)
+    return max(1e-6, 2e-9 * extent)
 
 
 def coincident_groups(vertices: Any) -> list[np.ndarray]:
-    """Groups (arrays of vertex indices, each of size >= 2) of vertices at the same position,
-    up to the grid quantum (see `_cell`). Empty list when every position is distinct."""
+    """Groups (arrays of vertex indices, each of size >= 2) of vertices in one grid cell
+    (see `_cell`), in either of two grids offset by half a cell. Exact duplicates (what
+    manifold3d's copies of a pinched vertex are) are always found, near ones within a
+    fraction of a cell nearly always. Empty list when every position is distinct."""
     v = np.asarray(vertices)[:, :3].astype(np.float64)
     n = len(v)
     if n < 2:
         return []
     cell = _cell(v)
-    candidates = []
+    found = []  # (vertex indices, their integer cells) of vertices sharing a hash key
     for shift in (0.0, 0.5):
         q = np.floor(v / cell + shift).astype(np.int64)
-        # one int64 key per cell (wrapping multiply-add); collisions are checked below
-        key = q[:, 0] * _K1 + q[:, 1] * _K2 + q[:, 2]
+        # one int64 key per cell (wrapping multiply-add); collisions are sorted out below
+        key = q @ _KEY
+        ks = np.sort(key)
+        if not (ks[1:] == ks[:-1]).any():  # the common case: every vertex in its own cell
+            continue
         order = np.argsort(key, kind="stable")
         ks = key[order]
         same = ks[1:] == ks[:-1]
         if same.any():
-            candidates.append(order[np.concatenate(([False], same)) | np.concatenate((same, [False]))])
-    if not candidates:
+            idx = order[np.concatenate(([False], same)) | np.concatenate((same, [False]))]
+            found.append((idx, q[idx]))
+    if not found:
         return []
-    # exact grouping of the few candidates: union of pairs closer than one cell on every axis
-    idx = np.unique(np.concatenate(candidates))
-    pts = v[idx]
-    parent = list(range(len(idx)))
+    # union of the vertices sharing a cell, over both grids (a few vertices: plain Python)
+    parent: dict[int, int] = {}
 
     def find(i: int) -> int:
-        while parent[i] != i:
-            parent[i] = parent[parent[i]]
-            i = parent[i]
-        return i
+        root = i
+        while parent.setdefault(root, root) != root:
+            root = parent[root]
+        while parent[i] != root:
+            parent[i], i = root, parent[i]
+        return root
 
-    for i in range(len(idx)):
-        close = np.nonzero((np.abs(pts[i + 1:] - pts[i]) <= cell).all(axis=1))[0]
-        for j in close + i + 1:
-            ri, rj = find(i), find(int(j))
+    for idx, cells in found:
+        _, first, inv = np.unique(cells, axis=0, return_index=True, return_inverse=True)
+        for k, j in zip(idx.tolist(), idx[first[inv.reshape(-1)]].tolist()):
+            ri, rj = find(k), find(j)
             if ri != rj:
                 parent[max(ri, rj)] = min(ri, rj)
     groups: dict[int, list[int]] = {}
-    for i in range(len(idx)):
-        groups.setdefault(find(i), []).append(int(idx[i]))
+    for i in sorted(parent):
+        groups.setdefault(find(i), []).append(i)
     return [np.array(g, dtype=np.int64) for g in groups.values() if len(g) > 1]
 
 
@@ -116,6 +127,8 @@ def separate_mesh(vertices: np.ndarray, tris: np.ndarray, groups: list[np.ndarra
     d = pull[moved]
     ln = np.linalg.norm(d, axis=1)
     ok = ln > 0
+    # at least a few float32 ulps of the coordinates, or the file would round the move away
+    distance = max(distance, 16.0 * float(np.spacing(np.float32(np.abs(v[moved]).max()))))
     step = np.minimum(distance, 0.25 * shortest[moved])
     out = v.copy()
     out[moved[ok]] += d[ok] / ln[ok, None] * step[ok, None]
@@ -129,9 +142,12 @@ def separate(body: Any, mesh: Any, groups: list[np.ndarray]) -> tuple[Any, Any]:
     Returns the input unchanged if the moved mesh is not a valid manifold (never expected)."""
     verts = np.asarray(mesh.vert_properties, dtype=np.float32)
     tris = np.asarray(mesh.tri_verts, dtype=np.uint32)
-    moved = separate_mesh(verts, tris, groups).astype(np.float32)
     props = verts.copy()
-    props[:, :3] = moved
+    for _ in range(3):  # a copy held back by a very short edge may need a second, smaller step
+        props[:, :3] = separate_mesh(props, tris, groups).astype(np.float32)
+        groups = coincident_groups(props)
+        if not groups:
+            break
     kw = {"run_index": np.asarray(mesh.run_index, dtype=np.uint32),
           "run_original_id": np.asarray(mesh.run_original_id, dtype=np.uint32)}
     new_mesh = manifold3d.Mesh(vert_properties=np.ascontiguousarray(props),
