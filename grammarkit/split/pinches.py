@@ -101,37 +101,34 @@ def coincident_count(vertices: Any) -> int:
 
 
 def separate_mesh(vertices: np.ndarray, tris: np.ndarray, groups: list[np.ndarray],
-                  distance: float = SEPARATION) -> np.ndarray:
-    """New vertex positions: every vertex of `groups` moved by up to `distance` towards the
-    centroid of its incident triangles (never more than a quarter of its shortest incident
-    edge, so no triangle flips). Other vertices are returned unchanged."""
+                  distance: float = SEPARATION, spread: bool = False) -> np.ndarray:
+    """New vertex positions: every vertex of `groups` moved by `distance` (at least 16 float32
+    ulps of its coordinates, or the file would round the move away) towards the centroid of
+    its incident triangles; with `spread`, the k-th vertex of each group k+1 times as far.
+    Other vertices are returned unchanged.
+
+    No cap by the fan's shortest edge: the copies are often joined by zero-area or sub-micron
+    triangles, and a cap would shrink the move below float32 resolution. A triangle shorter
+    than the move may flip, which changes nothing a reader checks (connectivity) or sees."""
     v = np.asarray(vertices, dtype=np.float64)[:, :3]
     t = np.asarray(tris, dtype=np.int64).reshape(-1, 3)
     moved = np.concatenate(groups)
     is_moved = np.zeros(len(v), dtype=bool)
     is_moved[moved] = True
-    rows = np.nonzero(is_moved[t].any(axis=1))[0]
-    tt = t[rows]
+    tt = t[is_moved[t].any(axis=1)]
     cen = v[tt].mean(axis=1)
-    tiny = _cell(v)
     pull = np.zeros_like(v)
-    shortest = np.full(len(v), np.inf)
     for k in range(3):
         vk = tt[:, k]
         hit = is_moved[vk]
         np.add.at(pull, vk[hit], cen[hit] - v[vk[hit]])
-        for other in ((k + 1) % 3, (k + 2) % 3):
-            ln = np.linalg.norm(v[tt[hit, other]] - v[vk[hit]], axis=1)
-            ln[ln <= tiny] = np.inf  # edges to the other copies (zero-area triangles)
-            np.minimum.at(shortest, vk[hit], ln)
     d = pull[moved]
     ln = np.linalg.norm(d, axis=1)
     ok = ln > 0
-    # at least a few float32 ulps of the coordinates, or the file would round the move away
-    distance = max(distance, 16.0 * float(np.spacing(np.float32(np.abs(v[moved]).max()))))
-    step = np.minimum(distance, 0.25 * shortest[moved])
+    step = max(distance, 16.0 * float(np.spacing(np.float32(np.abs(v[moved]).max()))))
+    scale = np.concatenate([np.arange(1, len(g) + 1) for g in groups]) if spread else np.ones(len(moved))
     out = v.copy()
-    out[moved[ok]] += d[ok] / ln[ok, None] * step[ok, None]
+    out[moved[ok]] += d[ok] / ln[ok, None] * (step * scale[ok, None])
     return out
 
 
@@ -143,8 +140,9 @@ def separate(body: Any, mesh: Any, groups: list[np.ndarray]) -> tuple[Any, Any]:
     verts = np.asarray(mesh.vert_properties, dtype=np.float32)
     tris = np.asarray(mesh.tri_verts, dtype=np.uint32)
     props = verts.copy()
-    for _ in range(3):  # a copy held back by a very short edge may need a second, smaller step
-        props[:, :3] = separate_mesh(props, tris, groups).astype(np.float32)
+    for attempt in range(3):
+        # a second pass (copies whose fans pull the same way) moves the k-th copy k+1 times as far
+        props[:, :3] = separate_mesh(props, tris, groups, spread=attempt > 0).astype(np.float32)
         groups = coincident_groups(props)
         if not groups:
             break

@@ -98,3 +98,20 @@ def test_separation_keeps_one_manifold_and_reads_back_watertight():
     # deterministic: the same input gives bit-identical positions
     again = np.asarray(separate(body, mesh, coincident_groups(before))[1].vert_properties)
     assert np.array_equal(after, again)
+
+
+def test_copies_pulled_the_same_way_end_apart_on_a_second_pass():
+    # two copies at the origin whose fans both lie towards +x: the first pass moves them to
+    # mirror images (still apart here); `spread` moves the k-th copy k+1 times as far, so even
+    # copies with identical pulls separate
+    from grammarkit.split.pinches import separate_mesh
+
+    v = np.array([[0, 0, 0], [0, 0, 0], [1, 0, 0], [1, 1, 0], [1, 1, 0.0]])
+    t = np.array([[0, 2, 3], [1, 4, 2]])
+    groups = coincident_groups(v)
+    assert [g.tolist() for g in groups] == [[0, 1]]
+    same = separate_mesh(v, t, groups)
+    assert coincident_groups(same)  # identical pulls: one pass is not enough
+    spread = separate_mesh(v, t, groups, spread=True)
+    assert coincident_groups(spread) == []
+    assert np.linalg.norm(spread[1] - spread[0]) >= 0.9 * SEPARATION

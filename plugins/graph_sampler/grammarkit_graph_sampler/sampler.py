@@ -39,6 +39,7 @@ from .graph_ops import (
     random_connected_subgraph,
 )
 
+CHUNK = 8  # attempts per message to a worker process (load balancing within a batch)
 OUTCOMES = ("no-cut", "no-match", "too-large", "known", "docking", "invalid", "valid")
 
 
@@ -54,7 +55,7 @@ class SamplerOptions:
     attempts_per_shape: int = 256  # attempts per iteration = this x new shapes of last iteration
     min_attempts: int = 512
     max_attempts: int = 100000  # per iteration (resource guard)
-    batch_size: int = 64  # attempts evaluated against the same state (fixed: determinism)
+    batch_size: int = 128  # attempts evaluated against the same state (fixed: determinism)
     dedupe: str = "histogram"  # or "isomorphism"
     max_parts: int | None = None  # default: 4 x the largest example
     max_match_steps: int = 2000  # assignments tried per boundary search
@@ -370,26 +371,39 @@ class _Executor:
     def run(self, iteration: int, indices: list[int], known: frozenset) -> list[AttemptResult]:
         if not self.conns:
             return [run_attempt(self.ctx, iteration, i, known) for i in indices]
-        # Contiguous chunks, results concatenated in chunk order = attempt order.
-        k = len(self.conns)
-        chunks = [indices[j * len(indices) // k:(j + 1) * len(indices) // k] for j in range(k)]
-        busy = []
-        for conn, chunk, have in zip(self.conns, chunks, self.known_sent):
-            if chunk:
-                added = known - have
-                have |= added
-                conn.send(("run", iteration, chunk, sorted(added)))
-                busy.append(conn)
-        out: list[AttemptResult] = []
-        for conn in busy:
-            try:
-                out.extend(conn.recv())
-            except EOFError:
-                from grammarkit.errors import DerivationError
+        from multiprocessing.connection import wait
 
-                raise DerivationError("graph-sampler: a worker process died (out of memory?); "
-                                      "try fewer --workers") from None
-        return out
+        # Small chunks handed to whichever worker is free (a busy core does not hold up the
+        # batch); results are put back in chunk order = attempt order.
+        size = max(1, min(CHUNK, -(-len(indices) // len(self.conns))))
+        chunks = [indices[j:j + size] for j in range(0, len(indices), size)]
+        results: list[list[AttemptResult] | None] = [None] * len(chunks)
+        pending = list(range(len(chunks)))
+        working: dict = {}  # conn -> chunk index
+
+        def give(w: int) -> None:
+            conn, have = self.conns[w], self.known_sent[w]
+            c = pending.pop(0)
+            added = known - have
+            have |= added
+            conn.send(("run", iteration, chunks[c], sorted(added)))
+            working[conn] = (w, c)
+
+        for w in range(min(len(self.conns), len(chunks))):
+            give(w)
+        while working:
+            for conn in wait(list(working)):
+                w, c = working.pop(conn)
+                try:
+                    results[c] = conn.recv()
+                except EOFError:
+                    from grammarkit.errors import DerivationError
+
+                    raise DerivationError("graph-sampler: a worker process died (out of memory?); "
+                                          "try fewer --workers") from None
+                if pending:
+                    give(w)
+        return [r for part in results for r in part]  # type: ignore[union-attr]
 
     def close(self) -> None:
         for conn in self.conns:
