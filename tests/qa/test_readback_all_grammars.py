@@ -106,7 +106,7 @@ def test_copies_pulled_the_same_way_end_apart_on_a_second_pass():
     # copies with identical pulls separate
     from grammarkit.split.pinches import separate_mesh
 
-    v = np.array([[0, 0, 0], [0, 0, 0], [1, 0, 0], [1, 1, 0], [1, 1, 0.0]])
+    v = np.array([[0, 0, 0], [0, 0, 0], [1, 0, 0], [1, 1, 0], [1, 1, 1e-3]])
     t = np.array([[0, 2, 3], [1, 4, 2]])
     groups = coincident_groups(v)
     assert [g.tolist() for g in groups] == [[0, 1]]

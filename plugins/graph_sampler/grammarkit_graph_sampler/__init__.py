@@ -11,7 +11,18 @@ CLI: ``grammarkit derive castle.grammar --backend graph-sampler -n 200 --iterati
 """
 from __future__ import annotations
 
-from . import sampler
-from .sampler import GraphSampler, SamplerOptions, sample
+from importlib import import_module
+from typing import Any
 
 __all__ = ["GraphSampler", "SamplerOptions", "sample", "sampler"]
+
+
+def __getattr__(name: str) -> Any:
+    # Imported on first use: the plugin manager imports `.plugin` (and so this package) for
+    # every `grammarkit` command, which must not pay for trimesh and manifold3d.
+    if name not in __all__:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    module = import_module(f"{__name__}.sampler")
+    value = module if name == "sampler" else getattr(module, name)
+    globals()[name] = value
+    return value
