@@ -17,6 +17,8 @@ See docs/tiling.md.
 """
 from __future__ import annotations
 
+import sys
+import types
 from importlib import import_module
 from typing import TYPE_CHECKING, Any
 
@@ -47,6 +49,23 @@ def __getattr__(name: str) -> Any:
 
 def __dir__() -> list[str]:
     return sorted(set(globals()) | set(_EXPORTS))
+
+
+class _TilingModule(types.ModuleType):
+    """Keeps `dock`, `learn` and `validate` bound to the functions.
+
+    Importing a submodule makes Python set it as an attribute of its package, so importing
+    `grammarkit.tiling.dock` would replace the function `dock` with the module of that name.
+    The eager `from .dock import dock` used to undo that by running afterwards; with lazy
+    loading, this refuses the overwrite instead (the module stays in sys.modules)."""
+
+    def __setattr__(self, name: str, value: Any) -> None:
+        if isinstance(value, types.ModuleType) and _EXPORTS.get(name) == name:
+            return
+        super().__setattr__(name, value)
+
+
+sys.modules[__name__].__class__ = _TilingModule
 
 
 if TYPE_CHECKING:  # pragma: no cover - for type checkers and IDEs

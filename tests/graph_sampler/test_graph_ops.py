@@ -1,4 +1,6 @@
 """Graph-only steps of the sampler on synthetic graphs (no geometry)."""
+from typing import Sequence
+
 import networkx as nx
 import numpy as np
 import pytest
@@ -130,3 +132,101 @@ def test_dedupe_histogram_versus_isomorphism():
     assert histogram_key("ABA") == (("A", 2), ("B", 1))
     with pytest.raises(ValueError):
         Deduper("nope")
+
+
+# The plain recursive search the bit-set `match_boundary` replaced (kept verbatim as the
+# reference): the fast version must try the same candidates in the same order and count steps
+# the same way, so it returns the same first match (or the same None) for the same rng.
+def _reference_match_boundary(src_types: Sequence[str], src_dist: np.ndarray, boundary: Sequence[int],
+                   dst_by_type: dict[str, np.ndarray], dst_dist: np.ndarray, dst_sizes: np.ndarray,
+                   tolerance: float, rng: np.random.Generator, *, max_steps: int = 2000,
+                   ) -> list[int] | None:
+    """Nodes of the recipient matching `boundary` by type and all pairwise distances, or None.
+
+    The pair (a, b) of boundary nodes matches (a', b') when
+    |d(a, b) - d(a', b')| <= tolerance * max(size(a'), size(b')) (sizes of the recipient's
+    parts). Depth-first search over the boundary nodes in order; candidates of each type are
+    tried in a cyclic order from a random offset (the randomisation), and every assignment
+    filters the candidates of all later nodes at once (forward checking), so a dead end is
+    seen as soon as some later node has no candidate left. Returns the first complete,
+    injective assignment, or None when there is none or after `max_steps` assignments.
+    """
+    m = len(boundary)
+    if m == 0:
+        return None
+    doms: list[np.ndarray] = []
+    for v in boundary:
+        cands = dst_by_type.get(src_types[v])
+        if cands is None or len(cands) == 0:
+            return None
+        off = int(rng.integers(len(cands)))
+        doms.append(np.concatenate([cands[off:], cands[:off]]))
+    # Boundary order as given (BFS order of the sample): consecutive nodes are near each other,
+    # so each assignment prunes the next candidates hard. (Rarest-type-first was tried: it hits
+    # the step limit more often and finds fewer matches on the castle.)
+    order = list(range(m))
+    doms = [doms[j] for j in order]
+    bnd = [boundary[j] for j in order]
+    target = src_dist[np.ix_(bnd, bnd)]
+    steps = 0
+
+    def search(level: int, domains: list[np.ndarray]) -> list[int] | None:
+        nonlocal steps
+        rest = domains[1:]
+        if rest:
+            lens = [len(d) for d in rest]
+            cat = np.concatenate(rest)
+            lab = np.repeat(np.arange(len(rest)), lens)
+            want = target[level + 1 + lab, level]
+            tol_cat = tolerance * dst_sizes[cat]
+        for x in domains[0].tolist():
+            steps += 1
+            if steps > max_steps:
+                return None
+            if not rest:
+                return [x]
+            ok = np.abs(dst_dist[cat, x] - want) <= np.maximum(tol_cat, tolerance * dst_sizes[x])
+            ok &= cat != x
+            counts = np.bincount(lab[ok], minlength=len(rest))
+            if counts.min() == 0:
+                continue  # some later boundary node would have no candidate
+            kept = cat[ok]
+            ends = np.cumsum(counts).tolist()
+            found = search(level + 1, [kept[a:b] for a, b in zip([0] + ends[:-1], ends)])
+            if found is not None:
+                return [x] + found
+            if steps > max_steps:
+                return None
+        return None
+
+    found = search(0, doms)
+    if found is None:
+        return None
+    result = [0] * m
+    for j, x in zip(order, found):
+        result[j] = x
+    return result
+
+
+@pytest.mark.parametrize("case", range(60))
+def test_match_boundary_equals_the_reference_search(case):
+    rng = np.random.default_rng(case)
+    n = int(rng.integers(8, 40))
+    types = [str(t) for t in rng.integers(0, 3, n)]
+    pts = rng.integers(0, 4, (n, 3)).astype(float)  # a lattice: many equal distances
+    dist = distance_matrix(pts)
+    sizes = rng.uniform(0.5, 1.5, n)
+    dom = by_type(types)
+    src_types = [str(t) for t in rng.integers(0, 3, 12)]
+    src = rng.integers(0, 4, (12, 3)).astype(float)
+    boundary = [int(v) for v in rng.permutation(12)[:int(rng.integers(1, 9))]]
+    tol = float(rng.choice([0.01, 0.2, 0.6]))
+    steps = int(rng.choice([5, 50, 2000]))
+    for s_types, s_dist in ((src_types, distance_matrix(src)), (types, dist)):
+        b = boundary if s_types is src_types else [int(v) for v in rng.permutation(n)[:len(boundary)]]
+        seed = int(rng.integers(1 << 30))
+        fast = match_boundary(s_types, s_dist, b, dom, dist, sizes, tol,
+                              np.random.default_rng(seed), max_steps=steps)
+        slow = _reference_match_boundary(s_types, s_dist, b, dom, dist, sizes, tol,
+                                         np.random.default_rng(seed), max_steps=steps)
+        assert fast == slow

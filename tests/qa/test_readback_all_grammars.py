@@ -101,9 +101,8 @@ def test_separation_keeps_one_manifold_and_reads_back_watertight():
 
 
 def test_copies_pulled_the_same_way_end_apart_on_a_second_pass():
-    # two copies at the origin whose fans both lie towards +x: the first pass moves them to
-    # mirror images (still apart here); `spread` moves the k-th copy k+1 times as far, so even
-    # copies with identical pulls separate
+    # two copies at the origin whose fans pull (almost) the same way: one plain pass moves them
+    # together; `spread` moves the k-th copy k+1 times as far, so they separate
     from grammarkit.split.pinches import separate_mesh
 
     v = np.array([[0, 0, 0], [0, 0, 0], [1, 0, 0], [1, 1, 0], [1, 1, 1e-3]])

@@ -18,7 +18,9 @@ import trimesh
 
 from grammarkit.errors import GrammarError
 from grammarkit.tiling.assembly import Assembly, Part
+from grammarkit.tiling.contacts import PartGeometry as _PartGeometry
 from grammarkit.tiling.contacts import contacts as _contacts_of
+from grammarkit.tiling.contacts import prepare as _prepare
 from grammarkit.tiling.contacts import default_tolerance as _default_tolerance
 from grammarkit.tiling.dock import dock as _dock
 
@@ -115,14 +117,58 @@ def bounds_of(meshes: Sequence[trimesh.Trimesh]) -> tuple[np.ndarray, np.ndarray
     return lo, hi
 
 
+class PartCache:
+    """Per-part contact data (bounds, centroid, box flag, manifold3d solid) keyed by the part's
+    geometry: (proto index, placement matrix bytes). Every part of every shape is a proto moved
+    rigidly, and a variant copies its parents' matrices, so the same placed part recurs across
+    attempts; `grammarkit.tiling.contacts` would rebuild its data (and its solid, the costly
+    part) on every call. Values are those `contacts.prepare` and its lazy solid builder give for
+    that mesh alone (per-part results do not depend on the other parts), so contacts are
+    unchanged. Bounded: cleared when it holds `limit` parts.
+    """
+
+    def __init__(self, limit: int = 4000):
+        self.limit = limit
+        self.rows: dict = {}  # key -> (lo, hi, centroid, boxy)
+        self.solids: dict = {}  # key -> manifold3d.Manifold or None (not a closed manifold)
+
+    def geometry(self, parts: Sequence[Part], keys: Sequence) -> "_PartGeometry":
+        missing = [k for k, key in enumerate(keys) if key not in self.rows]
+        if missing:
+            if len(self.rows) + len(missing) > self.limit:
+                self.rows.clear()
+                self.solids.clear()
+                missing = [k for k, key in enumerate(keys) if key not in self.rows]
+            g = _prepare([parts[k] for k in missing])
+            for j, k in enumerate(missing):
+                self.rows[keys[k]] = (g.lo[j], g.hi[j], g.centroid[j], bool(g.boxy[j]))
+        rows = [self.rows[key] for key in keys]
+        geom = _PartGeometry(np.array([r[0] for r in rows]), np.array([r[1] for r in rows]),
+                             np.array([r[2] for r in rows]), np.array([r[3] for r in rows], dtype=bool))
+        # contacts() builds solids lazily into this dict by local index: pre-fill the known ones
+        geom._manifolds.update({k: self.solids[key] for k, key in enumerate(keys) if key in self.solids})
+        return geom
+
+    def harvest(self, geom: "_PartGeometry", keys: Sequence) -> None:
+        for k, solid in geom._manifolds.items():
+            self.solids.setdefault(keys[k], solid)
+
+
+def part_key(proto: int, matrix: np.ndarray) -> tuple:
+    return (int(proto), np.ascontiguousarray(matrix, dtype=np.float64).tobytes())
+
+
 class ForbiddenContact(Exception):
     """An inserted part touches a part whose type it may not touch: the variant is invalid."""
 
 
 def contacts_involving(meshes: Sequence[trimesh.Trimesh], types: Sequence[str], new: Iterable[int],
                        tolerance: float, lo: np.ndarray, hi: np.ndarray,
-                       rule_set=None) -> set[tuple[int, int]]:
+                       rule_set=None, keys: Sequence | None = None,
+                       cache: PartCache | None = None) -> set[tuple[int, int]]:
     """Contacts (i, j), i < j, with at least one endpoint in `new`; `lo`/`hi`: bounds_of(meshes).
+
+    With `cache` and `keys` (`part_key` of each mesh), per-part data comes from the cache.
 
     With `rule_set`, candidate pairs of types no dock allows are measured first, and the first
     such contact raises `ForbiddenContact` (validation would report exactly that pair, so the
@@ -152,7 +198,14 @@ def contacts_involving(meshes: Sequence[trimesh.Trimesh], types: Sequence[str], 
         subset = np.unique(group)
         local = {int(x): k for k, x in enumerate(subset)}
         lp = np.array([[local[x], local[y]] for x, y in group.tolist()], dtype=np.int64)
-        found = _contacts_of(_parts(meshes, types, subset), tolerance, pairs=lp)
+        parts = _parts(meshes, types, subset)
+        if cache is not None and keys is not None:
+            sub_keys = [keys[int(x)] for x in subset]
+            geom = cache.geometry(parts, sub_keys)
+            found = _contacts_of(parts, tolerance, geom=geom, pairs=lp)
+            cache.harvest(geom, sub_keys)
+        else:
+            found = _contacts_of(parts, tolerance, pairs=lp)
         if found and len(groups) == 2 and g == 0:
             c = found[0]
             x, y = int(subset[c.a]), int(subset[c.b])

@@ -127,48 +127,73 @@ def match_boundary(src_types: Sequence[str], src_dist: np.ndarray, boundary: Seq
     # Boundary order as given (BFS order of the sample): consecutive nodes are near each other,
     # so each assignment prunes the next candidates hard. (Rarest-type-first was tried: it hits
     # the step limit more often and finds fewer matches on the castle.)
-    order = list(range(m))
-    doms = [doms[j] for j in order]
-    bnd = [boundary[j] for j in order]
+    #
+    # Representation (speed; the search is the sampler's hottest loop): all domains are laid
+    # out one after another (level l owns positions starts[l]..starts[l+1]); the live
+    # candidates are one Python int used as a bit set over those positions. The pairwise test
+    # of a position against all later positions is one numpy pass, made the first time that
+    # candidate is tried and packed into an int, so forward checking is a single `&` plus one
+    # test per later level. Candidate order, step counting and the test itself are those of
+    # the plain recursive search (a test compares both), so the first match is the same.
+    bnd = list(boundary)
     target = src_dist[np.ix_(bnd, bnd)]
+    lens = [len(d) for d in doms]
+    starts = [0]
+    for n_ in lens:
+        starts.append(starts[-1] + n_)
+    cat = np.concatenate(doms)
+    cat_list = cat.tolist()
+    lab = np.repeat(np.arange(m), lens)
+    tol_cat = tolerance * dst_sizes[cat]
+    seg_masks = [((1 << lens[j]) - 1) << starts[j] for j in range(m)]
+    want = target[lab]  # want[q, l] = d(boundary[level of q], boundary[l])
+    rows: dict[int, int] = {}
+
+    def row(p: int, level: int) -> int:
+        """Bit set of the later positions q still possible once position p is assigned."""
+        r = rows.get(p)
+        if r is None:
+            q0 = starts[level + 1]
+            x, c = cat_list[p], cat[q0:]
+            ok = (np.abs(dst_dist[c, x] - want[q0:, level])
+                  <= np.maximum(tol_cat[q0:], tol_cat[p]))
+            ok &= c != x
+            r = rows[p] = int.from_bytes(np.packbits(ok, bitorder="little").tobytes(), "little") << q0
+        return r
+
     steps = 0
 
-    def search(level: int, domains: list[np.ndarray]) -> list[int] | None:
+    def search(level: int, alive: int) -> list[int] | None:
         nonlocal steps
-        rest = domains[1:]
-        if rest:
-            lens = [len(d) for d in rest]
-            cat = np.concatenate(rest)
-            lab = np.repeat(np.arange(len(rest)), lens)
-            want = target[level + 1 + lab, level]
-            tol_cat = tolerance * dst_sizes[cat]
-        for x in domains[0].tolist():
+        s0 = starts[level]
+        cands = (alive & seg_masks[level]) >> s0
+        last = level == m - 1
+        later = seg_masks[level + 1:]
+        while cands:
+            low = cands & -cands
+            i = low.bit_length() - 1
+            cands ^= low
             steps += 1
             if steps > max_steps:
                 return None
-            if not rest:
-                return [x]
-            ok = np.abs(dst_dist[cat, x] - want) <= np.maximum(tol_cat, tolerance * dst_sizes[x])
-            ok &= cat != x
-            counts = np.bincount(lab[ok], minlength=len(rest))
-            if counts.min() == 0:
-                continue  # some later boundary node would have no candidate
-            kept = cat[ok]
-            ends = np.cumsum(counts).tolist()
-            found = search(level + 1, [kept[a:b] for a, b in zip([0] + ends[:-1], ends)])
+            if last:
+                return [cat_list[s0 + i]]
+            new = alive & row(s0 + i, level)
+            dead = False
+            for mask in later:
+                if not new & mask:
+                    dead = True  # some later boundary node would have no candidate
+                    break
+            if dead:
+                continue
+            found = search(level + 1, new)
             if found is not None:
-                return [x] + found
+                return [cat_list[s0 + i]] + found
             if steps > max_steps:
                 return None
         return None
 
-    found = search(0, doms)
-    if found is None:
-        return None
-    result = [0] * m
-    for j, x in zip(order, found):
-        result[j] = x
-    return result
+    return search(0, (1 << starts[-1]) - 1)
 
 
 def kept_region(adj: Adjacency, outer: Sequence[int], inner: Sequence[int]) -> list[int]:

@@ -185,6 +185,7 @@ class _Context:
     max_parts: int
     mesh_cache: dict = field(default_factory=dict)
     bounds_cache: dict = field(default_factory=dict)
+    part_cache: geometry.PartCache = field(default_factory=geometry.PartCache)
 
     def bounds(self, shape_index: int) -> tuple[np.ndarray, np.ndarray]:
         b = self.bounds_cache.get(shape_index)
@@ -270,8 +271,9 @@ def run_attempt(ctx: _Context, iteration: int, index: int, known: frozenset) -> 
         remap = {old: new for new, old in enumerate(kept)}
         edges = {(remap[u], remap[v]) for u, v in recip.edges if u in remap and v in remap}
         try:
+            keys = [geometry.part_key(p, t) for p, t in zip(protos, transforms)]
             edges |= geometry.contacts_involving(meshes, types, range(k, n_new), ctx.contact_tolerance,
-                                                 lo, hi, ctx.rules)
+                                                 lo, hi, ctx.rules, keys=keys, cache=ctx.part_cache)
         except geometry.ForbiddenContact as exc:
             return AttemptResult(iteration, index, "invalid", detail=str(exc))
         edges_t = tuple(sorted((min(u, v), max(u, v)) for u, v in edges))
@@ -311,15 +313,23 @@ def _strip(shape: "Shape") -> "Shape":
                  shape.parents, shape.operation, shape.ids)
 
 
-def _worker_main(conn, init) -> None:  # pragma: no cover - runs in the child process
-    protos, options, seed, rules, tolerance, max_parts = init
-    ctx = _Context(protos, [], [], options, seed, rules, tolerance, max_parts)
+def _worker_main(conn) -> None:  # pragma: no cover - runs in the child process
+    # A persistent worker: it serves one sampler run after another (each starts with "init"),
+    # so a run does not pay for starting a Python and importing numpy/trimesh/manifold3d.
+    ctx: _Context | None = None
     known: set = set()
     while True:
-        msg = conn.recv()
-        if msg[0] == "pool":
+        try:
+            msg = conn.recv()
+        except (EOFError, OSError):
+            return  # the parent went away
+        if msg[0] == "init":
+            protos, options, seed, rules, tolerance, max_parts = msg[1]
+            ctx = _Context(protos, [], [], options, seed, rules, tolerance, max_parts)
+            known = set()
+        elif msg[0] == "pool":
             _, added, fresh = msg
-            ctx.pool.extend(sh.prepare(protos) for sh in added)
+            ctx.pool.extend(sh.prepare(ctx.protos) for sh in added)
             ctx.fresh = list(fresh)
         elif msg[0] == "run":
             _, iteration, indices, known_added = msg
@@ -336,6 +346,59 @@ def _worker_main(conn, init) -> None:  # pragma: no cover - runs in the child pr
             return
 
 
+# Worker processes outlive a run (module-level, daemonic: they end with this process). A run
+# takes the first `workers` of them and sends "init"; a run interrupted while a batch is out
+# drops the workers it used (their pipes may still hold stale results).
+_POOL: list[tuple[Any, Any]] = []  # (process, connection to it)
+
+
+def _pool_workers(count: int) -> list[tuple[Any, Any]]:
+    global _POOL
+    _POOL = [(proc, conn) for proc, conn in _POOL if proc.is_alive() and not conn.closed]
+    if len(_POOL) < count:
+        mpc = mp.get_context("spawn")
+        for _ in range(count - len(_POOL)):
+            parent, child = mpc.Pipe()
+            proc = mpc.Process(target=_worker_main, args=(child,), daemon=True)
+            proc.start()
+            child.close()
+            _POOL.append((proc, parent))
+    return _POOL[:count]
+
+
+def _pool_drop(conns: list) -> None:
+    global _POOL
+    keep = []
+    for proc, conn in _POOL:
+        if conn in conns:
+            try:
+                conn.close()
+            except OSError:
+                pass
+            proc.terminate()
+            proc.join(timeout=5)
+        else:
+            keep.append((proc, conn))
+    _POOL = keep
+
+
+def shutdown_workers() -> None:
+    """Stop the persistent worker processes (they also end with this process)."""
+    global _POOL
+    for proc, conn in _POOL:
+        try:
+            conn.send(("stop",))
+            conn.close()
+        except (OSError, BrokenPipeError):
+            pass
+    for proc, _ in _POOL:
+        proc.join(timeout=5)
+        if proc.is_alive():
+            proc.terminate()
+            proc.join()
+    _POOL = []
+
+
 class _Executor:
     """Runs a batch of attempts in this process or spread over worker processes, in order."""
 
@@ -346,15 +409,12 @@ class _Executor:
         self.procs: list = []
         self.sent = 0  # pool shapes the workers already have
         self.known_sent: list[set] = []  # per worker: histogram keys it already has
+        self.busy = False  # a batch is out (an exception now leaves results in the pipes)
         if workers > 1:
-            mpc = mp.get_context("spawn")
             init = (ctx.protos, ctx.options, ctx.seed, ctx.rules, ctx.contact_tolerance, ctx.max_parts)
-            for _ in range(workers):
-                parent, child = mpc.Pipe()
-                proc = mpc.Process(target=_worker_main, args=(child, init), daemon=True)
-                proc.start()
-                child.close()
-                self.conns.append(parent)
+            for proc, conn in _pool_workers(workers):
+                conn.send(("init", init))
+                self.conns.append(conn)
                 self.procs.append(proc)
                 self.known_sent.append(set())
 
@@ -389,6 +449,7 @@ class _Executor:
             conn.send(("run", iteration, chunks[c], sorted(added)))
             working[conn] = (w, c)
 
+        self.busy = True
         for w in range(min(len(self.conns), len(chunks))):
             give(w)
         while working:
@@ -403,21 +464,14 @@ class _Executor:
                                           "try fewer --workers") from None
                 if pending:
                     give(w)
+        self.busy = False
         return [r for part in results for r in part]  # type: ignore[union-attr]
 
     def close(self) -> None:
-        for conn in self.conns:
-            try:
-                conn.send(("stop",))
-                conn.close()
-            except (OSError, BrokenPipeError):
-                pass
-        for proc in self.procs:
-            proc.join(timeout=5)
-            if proc.is_alive():
-                proc.terminate()
-                proc.join()
-        self.conns, self.procs = [], []
+        """Release the workers: back to the pool, or stopped if a batch was interrupted."""
+        if self.busy:
+            _pool_drop(self.conns)
+        self.conns, self.procs, self.busy = [], [], False
 
 
 def default_workers() -> int:
