@@ -81,6 +81,42 @@ def test_results_do_not_depend_on_the_number_of_workers(sampled):
     assert fingerprint(two) == fingerprint(one)
 
 
+def test_persistent_workers_serve_runs_one_after_another(sampled):
+    # Workers outlive a run; the next run re-initialises them (other seed, options, pool), so a
+    # later run must not see anything of an earlier one.
+    from grammarkit_graph_sampler import sampler as mod
+
+    _, one = sampled
+    s1, first = run(workers=2, seed=8)
+    procs = [p.pid for p, _ in mod._POOL[:2]]
+    s2, again = run(workers=2)
+    assert [p.pid for p, _ in mod._POOL[:2]] == procs  # the same processes, reused
+    assert fingerprint(again) == fingerprint(one)
+    assert [st.row()["outcomes"] for st in s2.stats] == [st.row()["outcomes"] for st in sampled[0].stats]
+    assert fingerprint(first) != fingerprint(one)
+
+
+def test_a_run_interrupted_mid_batch_drops_its_workers(sampled, monkeypatch):
+    import multiprocessing.connection
+
+    from grammarkit_graph_sampler import sampler as mod
+
+    s = GraphSampler(rules=castle_rules(), examples=examples(), seed=7, workers=2, options=OPTS)
+    used = [p for p, _ in mod._POOL[:2]]
+
+    def interrupted(*args, **kw):  # while a batch is out: the workers' replies stay unread
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(multiprocessing.connection, "wait", interrupted)
+    with pytest.raises(KeyboardInterrupt):
+        list(s.run(5, 1))
+    monkeypatch.undo()
+    assert not any(p.is_alive() for p in used)
+    assert not {p.pid for p in used} & {p.pid for p, _ in mod._POOL}
+    _, two = run(workers=2)  # fresh workers, no stale replies: the usual result
+    assert fingerprint(two) == fingerprint(sampled[1])
+
+
 def test_seed_changes_the_output(sampled):
     _, shapes = sampled
     _, other = run(seed=8)

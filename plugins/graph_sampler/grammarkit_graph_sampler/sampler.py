@@ -307,6 +307,8 @@ def run_attempt(ctx: _Context, iteration: int, index: int, known: frozenset) -> 
 # non-box parts) runs a TBB thread pool, and a child forked from a process whose pool is
 # running deadlocks on its first manifold call. Each worker keeps its own copy of the pool of
 # shapes; the parent sends each iteration's new shapes once, then batches of attempt indices.
+# Starting a spawned worker (a fresh Python importing numpy/trimesh/manifold3d/grammarkit)
+# takes seconds on a loaded 2-core machine, so workers persist across runs (`_POOL`).
 def _strip(shape: "Shape") -> "Shape":
     """A copy without the derived arrays (rebuilt on arrival; keeps pickles small)."""
     return Shape(shape.key, shape.protos, shape.transforms, shape.edges, shape.iteration,
@@ -516,6 +518,8 @@ class GraphSampler:
         self.seed = int(seed)
         self.workers = default_workers() if workers is None else max(1, int(workers))
         self.options = (options or SamplerOptions()).checked()
+        if self.workers > 1:
+            _pool_workers(self.workers)  # they start up (imports) while the examples load
         self.rules = rules if rules is not None else geometry.rules(grammar)
         assemblies = list(examples) if examples is not None else geometry.load_examples(grammar)
         if not assemblies:
