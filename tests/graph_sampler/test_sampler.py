@@ -104,8 +104,14 @@ def test_a_run_interrupted_mid_batch_drops_its_workers(sampled, monkeypatch):
     s = GraphSampler(rules=castle_rules(), examples=examples(), seed=7, workers=2, options=OPTS)
     used = [p for p, _ in mod._POOL[:2]]
 
+    real_wait = multiprocessing.connection.wait
+    calls = []
+
     def interrupted(*args, **kw):  # while a batch is out: the workers' replies stay unread
-        raise KeyboardInterrupt
+        calls.append(1)
+        if len(calls) == 1:
+            raise KeyboardInterrupt
+        return real_wait(*args, **kw)  # (Process.join waits with it too)
 
     monkeypatch.setattr(multiprocessing.connection, "wait", interrupted)
     with pytest.raises(KeyboardInterrupt):
