@@ -235,13 +235,15 @@ def _all_syntax_errors(source: str, filename: str | None, first: Diagnostic) -> 
             group = chunks[g:g + _GROUP]
             if len(group) > 1 and _parses(group):
                 continue
-            for start_line, chunk in group:
+            for k, (start_line, chunk) in enumerate(group):
                 if len(found) >= MAX_SYNTAX_ERRORS:
                     break
                 try:
                     get_parser().parse(chunk)
                 except (LarkError, _NestingTooDeep) as exc:
-                    d = _diagnostic_for(exc, chunk, filename)
+                    ends_file = g + k == len(chunks) - 1
+                    d = _diagnostic_for(exc, chunk, filename, line_offset=start_line - 1,
+                                        end_word="end of file" if ends_file else "end of statement")
                     if d.span is not None and d.span.line:
                         shift = start_line - 1  # chunks start at the beginning of a line
                         d = replace(d, span=d.span.model_copy(update={
@@ -381,7 +383,46 @@ def _line_end_col(source: str, line: int) -> int:
     return 1
 
 
-def _diagnostic_for(exc: Exception, source: str, filename: str | None) -> Diagnostic:
+def unclosed_brackets(source: str) -> list[tuple[str, int, int]]:
+    """Brackets opened in `source` and never closed: (bracket, line, column), outermost first.
+
+    Skips strings and comments like `split_statements`; used to say which bracket an
+    "unexpected end" error is waiting for."""
+    stack: list[tuple[str, int, int]] = []
+    line, line_start, i, n = 1, 0, 0, len(source)
+    while i < n:
+        c = source[i]
+        if c == '"':
+            j = i + 1
+            while j < n and source[j] not in '"\n':
+                j += 2 if source[j] == "\\" else 1
+            i = j + 1 if j < n and source[j] == '"' else j
+            continue
+        if c == "#":
+            j = source.find("\n", i)
+            i = n if j < 0 else j
+            continue
+        if c in "([{":
+            stack.append((c, line, i - line_start + 1))
+        elif c in ")]}" and stack and _OPEN.get(stack[-1][0]) == c:
+            stack.pop()
+        elif c == "\n":
+            line += 1
+            line_start = i + 1
+        i += 1
+    return stack
+
+
+def _unclosed_hint(source: str, line_offset: int) -> str | None:
+    stack = unclosed_brackets(source)
+    if not stack:
+        return None
+    bracket, line, col = stack[-1]
+    return f"the '{bracket}' opened at line {line + line_offset}, column {col} is never closed"
+
+
+def _diagnostic_for(exc: Exception, source: str, filename: str | None, *, line_offset: int = 0,
+                    end_word: str = "end of file") -> Diagnostic:
     if isinstance(exc, _NestingTooDeep):
         t = exc.token
         return Diagnostic("error", f"brackets nested too deeply (the limit is {MAX_NESTING} levels)",
@@ -394,15 +435,19 @@ def _diagnostic_for(exc: Exception, source: str, filename: str | None) -> Diagno
             line = tok.line if tok.line is not None and tok.line > 0 else source.count("\n") + 1
             col = tok.column if tok.column and tok.type != "$END" else _line_end_col(source, line)
             what = ("unexpected end of line" if tok.type == "_NL" and tok.value
-                    else "unexpected end of file")
+                    else f"unexpected {end_word}")
         else:
             line, col = tok.line, tok.column
             what = f"unexpected {_describe_token(tok)}"
         width = max(1, len(tok.value)) if tok.type not in ("_NL", "$END") else 1
+        hint = _expected_words(exc.expected) or None
+        if tok.type in ("_NL", "$END"):
+            unclosed = _unclosed_hint(source, line_offset)
+            hint = f"{hint}; {unclosed}" if hint and unclosed else (hint or unclosed)
         return Diagnostic("error", f"syntax error: {what}",
                           Span(file=filename, line=line, column=col, end_line=line,
                                end_column=col + width),
-                          hint=_expected_words(exc.expected) or None, code="syntax")
+                          hint=hint, code="syntax")
     if isinstance(exc, UnexpectedCharacters):
         ch = source[exc.pos_in_stream] if 0 <= exc.pos_in_stream < len(source) else "?"
         if ch == '"':
@@ -418,9 +463,12 @@ def _diagnostic_for(exc: Exception, source: str, filename: str | None) -> Diagno
                           hint=_expected_words(allowed) or None, code="syntax")
     if isinstance(exc, UnexpectedEOF):
         line = source.count("\n") + 1
-        return Diagnostic("error", "syntax error: unexpected end of file",
+        hint = _expected_words(exc.expected) or None
+        unclosed = _unclosed_hint(source, line_offset)
+        hint = f"{hint}; {unclosed}" if hint and unclosed else (hint or unclosed)
+        return Diagnostic("error", f"syntax error: unexpected {end_word}",
                           Span(file=filename, line=line, column=_line_end_col(source, line)),
-                          hint=_expected_words(exc.expected) or None, code="syntax")
+                          hint=hint, code="syntax")
     if isinstance(exc, UnexpectedInput):
         line = getattr(exc, "line", 1) or 1
         col = getattr(exc, "column", 1) or 1
