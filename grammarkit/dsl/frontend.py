@@ -44,7 +44,13 @@ class Parsed:
 
 def load_text(source: str | Path, filename: str | None = None, *,
               max_bytes: int = DEFAULT_MAX_BYTES) -> tuple[str, str | None]:
-    """(text, filename) from a path or a string; raises GrammarError for unreadable files."""
+    """(text, filename) from a path or a string; raises GrammarError for unreadable files.
+
+    A string is grammar text, except a one-line string ending in `.grammar`, which is a path
+    (`grammarkit.parse("grammars/paris.grammar")`); no grammar text can look like that, since a
+    statement never ends in `.grammar` outside a string literal."""
+    if isinstance(source, str) and "\n" not in source and source.strip().endswith(".grammar"):
+        source = Path(source.strip())
     if isinstance(source, Path):
         return read_source(source, max_bytes=max_bytes), filename or str(source)
     if isinstance(source, bytes):

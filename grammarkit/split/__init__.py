@@ -29,18 +29,31 @@ _lock = threading.RLock()
 _cache: dict[tuple, tuple[Grammar, CompiledGrammar]] = {}
 _CACHE_SIZE = 32
 _files: dict[tuple[str, int], Grammar] = {}
+_resolved: dict[int, tuple[Grammar, Grammar]] = {}  # id -> (parsed, imports inlined); keeps both alive
 
 DEFAULT_LOT = ((0.0, 0.0), (10.0, 0.0), (10.0, 10.0), (0.0, 10.0))
 
 
 def load_grammar(source: Any) -> Grammar:
     """A Grammar from an IR object, a path, or grammar text (imports resolved by grammarkit.dsl)."""
-    if isinstance(source, Grammar):
-        return source
     try:
         from ..dsl import load
     except ImportError as exc:  # pragma: no cover - the DSL is part of the package
         raise GrammarError(f"the grammar parser is not available: {exc}") from None
+    if isinstance(source, Grammar):
+        if not source.imports:
+            return source
+        # From `grammarkit.parse` (imports kept as written): inline them once per object.
+        with _lock:
+            hit = _resolved.get(id(source))
+        if hit is not None and hit[0] is source:
+            return hit[1]
+        resolved = load(source)
+        with _lock:
+            if len(_resolved) >= _CACHE_SIZE:
+                _resolved.pop(next(iter(_resolved)))
+            _resolved[id(source)] = (source, resolved)
+        return resolved
     if isinstance(source, str) and "\n" not in source and source.endswith(".grammar"):
         source = Path(source)
     if isinstance(source, Path):
