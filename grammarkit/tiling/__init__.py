@@ -12,6 +12,9 @@ Public API (signatures are stable; the graph sampler builds on them):
     learn(assemblies, name="learned", *, example_paths=None, bandwidth=0.1, docks=True) -> Grammar
     dock(a_points, b_points) -> (4x4 rigid transform, rms residual)  # Kabsch, det +1
     local_frame(part) -> 4x4                                        # Kalojanov's diagonal frame
+    contacts(assembly_or_parts, tolerance=None, *, geom=None, pairs=None) -> list[Contact]
+    prepare(parts) -> PartGeometry       # per-part bounds/centroids, reusable across contacts()
+    surface_centroid(vertices, faces) -> (3,) area-weighted centroid
 
 See docs/tiling.md.
 """
@@ -27,6 +30,8 @@ from typing import TYPE_CHECKING, Any
 _EXPORTS = {
     "Assembly": "assembly", "Part": "assembly",
     "DEFAULT_RELATIVE_TOLERANCE": "contacts", "default_tolerance": "contacts",
+    "Contact": "contacts", "PartGeometry": "contacts", "contacts": "contacts", "prepare": "contacts",
+    "surface_centroid": "frames",
     "dock": "dock",
     "local_frame": "frames", "relative_placement": "frames",
     "shape_graph": "graph",
@@ -70,9 +75,11 @@ sys.modules[__name__].__class__ = _TilingModule
 
 if TYPE_CHECKING:  # pragma: no cover - for type checkers and IDEs
     from .assembly import Assembly, Part
-    from .contacts import DEFAULT_RELATIVE_TOLERANCE, default_tolerance
+    from .contacts import (
+        DEFAULT_RELATIVE_TOLERANCE, Contact, PartGeometry, contacts, default_tolerance, prepare,
+    )
     from .dock import dock
-    from .frames import local_frame, relative_placement
+    from .frames import local_frame, relative_placement, surface_centroid
     from .graph import shape_graph
     from .io import ShapeWarning, load_examples, part_prototype, read_assembly, type_from_name, write_assembly
     from .learn import learn
@@ -80,6 +87,7 @@ if TYPE_CHECKING:  # pragma: no cover - for type checkers and IDEs
     from .validate import Report, Violation, validate
 
 __all__ = [
+    "Contact", "PartGeometry", "contacts", "prepare", "surface_centroid",
     "DEFAULT_RELATIVE_TOLERANCE", "Assembly", "DockPlacement", "Part", "Report", "Rules", "ShapeWarning",
     "Violation", "default_tolerance", "dock", "learn", "load_examples", "local_frame", "part_prototype",
     "read_assembly", "relative_placement", "rules_from_grammar", "shape_graph", "type_from_name",

@@ -17,12 +17,12 @@ import numpy as np
 import trimesh
 
 from grammarkit.errors import GrammarError
-from grammarkit.tiling.assembly import Assembly, Part
-from grammarkit.tiling.contacts import PartGeometry as _PartGeometry
-from grammarkit.tiling.contacts import contacts as _contacts_of
-from grammarkit.tiling.contacts import prepare as _prepare
-from grammarkit.tiling.contacts import default_tolerance as _default_tolerance
-from grammarkit.tiling.dock import dock as _dock
+from grammarkit.tiling import Assembly, Part
+from grammarkit.tiling import PartGeometry as _PartGeometry
+from grammarkit.tiling import contacts as _contacts_of
+from grammarkit.tiling import default_tolerance as _default_tolerance
+from grammarkit.tiling import dock as _dock
+from grammarkit.tiling import prepare as _prepare
 
 
 def as_grammar(grammar):
@@ -58,11 +58,8 @@ def check_example(rule_set, assembly: Assembly, tolerance: float, grammar=None) 
 
 
 def load_examples(grammar) -> list[Assembly]:
-    from grammarkit import tiling
+    from grammarkit.tiling import load_examples as loader
 
-    loader = getattr(tiling, "load_examples", None)
-    if loader is None:
-        from grammarkit.tiling.io import load_examples as loader
     return list(loader(grammar))
 
 
@@ -95,7 +92,7 @@ def moved_mesh(mesh: trimesh.Trimesh, matrix: np.ndarray) -> trimesh.Trimesh:
 
 
 def surface_centroid(mesh: trimesh.Trimesh) -> np.ndarray:
-    from grammarkit.tiling.frames import surface_centroid as _sc
+    from grammarkit.tiling import surface_centroid as _sc
 
     return _sc(np.asarray(mesh.vertices, dtype=np.float64), np.asarray(mesh.faces))
 
