@@ -107,7 +107,9 @@ class Checker:
             self.check_snippet(s, top_values, string_values)
         self.check_snippet_bindings()
         self.check_reachability()
+        self._unknown_part_uses: dict[str, list[Span | None]] = {}
         self.check_tiling()
+        self._report_unknown_parts()
         return self.bag.items
 
     # -- definitions -----------------------------------------------------------------------
@@ -765,9 +767,23 @@ class Checker:
     # -- tiling ----------------------------------------------------------------------------
     def _part_ref(self, name: str, span: Span | None, what: str) -> None:
         if name not in self.parts:
-            self.bag.error(f"unknown part type '{name}' in {what}", span,
+            self._unknown_part_uses.setdefault(name, []).append((span, what))
+
+    def _report_unknown_parts(self) -> None:
+        """One error per unknown part type, at its first use in the file: a missing `part` line
+        would otherwise repeat in every neighbour set, dock and example."""
+        def position(use):
+            span = use[0]
+            return (span.line, span.column) if span is not None else (1 << 30, 0)
+
+        for name, uses in self._unknown_part_uses.items():
+            span, what = min(uses, key=position)
+            more = len(uses) - 1
+            also = f" (and {more} more use{'s' if more > 1 else ''})" if more else ""
+            self.bag.error(f"unknown part type '{name}' in {what}{also}", span,
                            hint=_known_hint("part types", name, self.parts) if self.parts
-                           else "declare it with `part NAME = ...`", code="unknown-part")
+                           else f"declare it with `part {name} = box(w, d, h)` or "
+                                f"`part {name} = mesh(\"file.glb\")`", code="unknown-part")
 
     def check_tiling(self) -> None:
         g = self.g
