@@ -10,9 +10,9 @@ transform and residual), and the dedupe mode used. It is rewritten atomically (t
 from __future__ import annotations
 
 import json
-import os
-import tempfile
 from pathlib import Path
+
+MODEL_SUFFIXES = frozenset({".glb", ".gltf", ".obj", ".stl", ".ply"})
 
 
 class VariantWriter:
@@ -21,6 +21,12 @@ class VariantWriter:
         if self.out.exists() and not self.out.is_dir():
             raise FileExistsError(f"{self.out}: exists and is not a folder (the graph sampler writes "
                                   "a folder of .glb files and manifest.jsonl)")
+        if not self.out.exists() and self.out.suffix.lower() in MODEL_SUFFIXES:
+            # `-o castle.glb` almost certainly means one file, but the output is many variants:
+            # refuse rather than create a folder that looks like a mesh file.
+            raise FileExistsError(f"{self.out}: the graph sampler writes a folder of variants "
+                                  f"(.glb files and manifest.jsonl); give a folder name, e.g. "
+                                  f"-o {self.out.with_suffix('')}/")
         self.out.mkdir(parents=True, exist_ok=True)
         self.dedupe = dedupe
         self.seed = seed
@@ -51,13 +57,9 @@ class VariantWriter:
         return path
 
     def flush(self) -> Path:
+        from grammarkit.geometry.exporters import atomic_output
+
         path = self.out / "manifest.jsonl"
-        fd, tmp = tempfile.mkstemp(prefix=".manifest.", suffix=".tmp", dir=self.out)
-        try:
-            with os.fdopen(fd, "w", encoding="utf-8") as fh:
-                fh.write("".join(line + "\n" for line in self.lines))
-            os.replace(tmp, path)
-        except BaseException:
-            Path(tmp).unlink(missing_ok=True)
-            raise
+        with atomic_output(path) as tmp:  # temp + rename, usual permissions, errors name the path
+            tmp.write_text("".join(line + "\n" for line in self.lines), encoding="utf-8")
         return path
