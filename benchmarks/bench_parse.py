@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import argparse
 import re
-import statistics
 import sys
 import time
 from pathlib import Path
@@ -21,15 +20,9 @@ sys.path.insert(0, str(ROOT))
 from grammarkit.dsl import check, parse  # noqa: E402
 from grammarkit.dsl.parser import get_parser  # noqa: E402
 from grammarkit.printer import print_grammar  # noqa: E402
+from _timing import median_time  # noqa: E402 - benchmarks/ is on sys.path
 
 
-def median_time(fn, runs: int) -> float:
-    times = []
-    for _ in range(runs):
-        t = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t)
-    return statistics.median(times)
 
 
 def generated_grammar(size_bytes: int) -> str:

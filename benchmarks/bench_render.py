@@ -17,9 +17,7 @@ from __future__ import annotations
 
 import argparse
 import os
-import statistics
 import sys
-import time
 
 import manifold3d as mf
 import numpy as np
@@ -28,6 +26,7 @@ import trimesh
 from grammarkit.geometry.camera import Camera
 from grammarkit.geometry.convert import to_trimesh
 from grammarkit.geometry.render import prepare, render
+from _timing import median_time  # noqa: E402 - benchmarks/ is on sys.path
 
 
 def make_building(nx: int = 20, ny: int = 12, floors: int = 20) -> trimesh.Trimesh:
@@ -106,13 +105,6 @@ def ray_depth(mesh: trimesh.Trimesh, camera: Camera, size: tuple[int, int]) -> n
     return depth.reshape(H, W)
 
 
-def median_time(fn, runs: int) -> float:
-    times = []
-    for _ in range(runs):
-        t = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t)
-    return statistics.median(times)
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -18,9 +18,7 @@ Target: 1,000 parts in under 1 s.
 from __future__ import annotations
 
 import argparse
-import statistics
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
@@ -30,6 +28,7 @@ from _tiling_helpers import lattice  # noqa: E402
 
 from grammarkit.tiling import learn, shape_graph, validate  # noqa: E402
 from grammarkit.tiling.contacts import candidate_pairs_bruteforce, contacts, default_tolerance, prepare  # noqa: E402
+from _timing import median_time  # noqa: E402 - benchmarks/ is on sys.path
 
 
 def lattice_of_about(n: int):
@@ -44,13 +43,6 @@ def lattice_of_about(n: int):
     return lattice(*best[1])
 
 
-def median_time(fn, runs: int) -> float:
-    times = []
-    for _ in range(runs):
-        t = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t)
-    return statistics.median(times)
 
 
 def general_graph(model):

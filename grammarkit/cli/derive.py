@@ -52,7 +52,7 @@ def _progress_factory(console: Any) -> tuple[Any, Callable[..., Callable[..., No
 
 
 def _write_text(path: Path, text: str) -> None:
-    from ..geometry.exporters import atomic_output
+    from ..fileio import atomic_output
 
     with atomic_output(path) as tmp:
         tmp.write_text(text, encoding="utf-8")

@@ -278,6 +278,26 @@ _STATEMENT_START = re.compile(
     r"constraint|example)\b|[A-Za-z_][A-Za-z0-9_]*[ \t]*(?:\([^()\n]*\))?[ \t]*-->")
 
 
+def _code_chars(source: str) -> Iterator[tuple[int, str]]:
+    """(index, character) of every character outside strings and comments (newlines included),
+    for the scanners below that work without the lexer (after a syntax error)."""
+    i, n = 0, len(source)
+    while i < n:
+        c = source[i]
+        if c == '"':  # strings end at their quote or at the end of the line
+            j = i + 1
+            while j < n and source[j] not in '"\n':
+                j += 2 if source[j] == "\\" else 1
+            i = j + 1 if j < n and source[j] == '"' else j
+            continue
+        if c == "#":
+            j = source.find("\n", i)
+            i = n if j < 0 else j
+            continue
+        yield i, c
+        i += 1
+
+
 def split_statements(source: str) -> Iterator[tuple[int, str]]:
     """Cut text into top-level statements (newline at bracket depth 0), tracking strings/comments.
 
@@ -288,20 +308,7 @@ def split_statements(source: str) -> Iterator[tuple[int, str]]:
     start = 0
     start_line = 1
     line = 1
-    i = 0
-    n = len(source)
-    while i < n:
-        c = source[i]
-        if c == '"':
-            j = i + 1
-            while j < n and source[j] not in '"\n':
-                j += 2 if source[j] == "\\" else 1
-            i = j + 1 if j < n and source[j] == '"' else j
-            continue
-        if c == "#":
-            j = source.find("\n", i)
-            i = n if j < 0 else j
-            continue
+    for i, c in _code_chars(source):
         if c in "([{":
             depth += 1
         elif c in ")]}":
@@ -315,7 +322,6 @@ def split_statements(source: str) -> Iterator[tuple[int, str]]:
                     yield start_line, source[start:i]
                 start = i + 1
                 start_line = line
-        i += 1
     if source[start:].strip():
         yield start_line, source[start:]
 
@@ -386,22 +392,10 @@ def _line_end_col(source: str, line: int) -> int:
 def unclosed_brackets(source: str) -> list[tuple[str, int, int]]:
     """Brackets opened in `source` and never closed: (bracket, line, column), outermost first.
 
-    Skips strings and comments like `split_statements`; used to say which bracket an
-    "unexpected end" error is waiting for."""
+    Used to say which bracket an "unexpected end" error is waiting for."""
     stack: list[tuple[str, int, int]] = []
-    line, line_start, i, n = 1, 0, 0, len(source)
-    while i < n:
-        c = source[i]
-        if c == '"':
-            j = i + 1
-            while j < n and source[j] not in '"\n':
-                j += 2 if source[j] == "\\" else 1
-            i = j + 1 if j < n and source[j] == '"' else j
-            continue
-        if c == "#":
-            j = source.find("\n", i)
-            i = n if j < 0 else j
-            continue
+    line, line_start = 1, 0
+    for i, c in _code_chars(source):
         if c in "([{":
             stack.append((c, line, i - line_start + 1))
         elif c in ")]}" and stack and _OPEN.get(stack[-1][0]) == c:
@@ -409,7 +403,6 @@ def unclosed_brackets(source: str) -> list[tuple[str, int, int]]:
         elif c == "\n":
             line += 1
             line_start = i + 1
-        i += 1
     return stack
 
 

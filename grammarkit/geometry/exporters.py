@@ -15,10 +15,7 @@ Every writer goes through `atomic_output`: the file appears complete or not at a
 """
 from __future__ import annotations
 
-import contextlib
 import json
-import os
-import tempfile
 from pathlib import Path
 from typing import Any, Callable, Iterable, Iterator, Mapping
 
@@ -26,77 +23,20 @@ import numpy as np
 import trimesh
 
 from ..errors import ShapeError
+from ..jsonable import to_jsonable
 from ..registry import ExporterSpec
 
 __all__ = ["OutputError", "atomic_output", "export", "exporter_for", "known_formats", "scene_from_parts",
            "to_scene", "grammarkit_exporters"]
 
 
-class OutputError(ShapeError, OSError):
-    """A file could not be written (missing or unwritable folder, full disk, a folder in the
-    way). A ShapeError naming the path, so the CLI prints it, and an OSError, so callers that
-    handle file-system failures keep working."""
-
-
-def _umask() -> int:
-    mask = os.umask(0)
-    os.umask(mask)
-    return mask
-
-
-_UMASK = _umask()  # read once: os.umask can only be read by setting it, which is not thread-safe
-
-
-@contextlib.contextmanager
-def atomic_output(path: str | Path) -> Iterator[Path]:
-    """Yield a temporary path next to `path`; on success rename it over `path`, on failure
-    delete it, so readers never see a half-written file and an existing `path` is untouched.
-
-    Every file-system failure (a missing or unwritable folder, `path` being a folder, a full
-    disk) becomes a ShapeError naming `path`, so the CLI reports it instead of a traceback.
-    """
-    path = Path(path)
-    folder = path.parent if str(path.parent) else Path(".")
-    if path.is_dir():
-        raise OutputError(f"{path}: cannot write: it is a folder, not a file")
-    if not folder.is_dir():
-        raise OutputError(f"{path}: cannot write: folder {folder} does not exist")
-    try:
-        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=folder)
-        os.close(fd)
-    except OSError as exc:
-        raise OutputError(f"{path}: cannot write: {exc.strerror or exc}") from None
-    tmp_path = Path(tmp)
-    try:
-        yield tmp_path
-        # mkstemp creates the file 0600; give the output the permissions a plain open() would
-        os.chmod(tmp_path, 0o666 & ~_UMASK)
-        os.replace(tmp_path, path)
-    except BaseException as exc:
-        with contextlib.suppress(OSError):
-            tmp_path.unlink()
-        if isinstance(exc, OSError) and not isinstance(exc, ShapeError):
-            raise OutputError(f"{path}: cannot write: {exc.strerror or exc}") from exc
-        raise
+# The atomic writer is shared by every command that writes files (fileio.py has no heavy imports).
+from ..fileio import OutputError, atomic_output  # noqa: E402
 
 
 # ------------------------------------------------------------------------------------------
 # Building scenes with the part convention
 # ------------------------------------------------------------------------------------------
-def _jsonable(value: Any) -> Any:
-    if isinstance(value, Mapping):
-        return {str(k): _jsonable(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [_jsonable(v) for v in value]
-    if isinstance(value, np.ndarray):
-        return value.tolist()
-    if isinstance(value, np.generic):
-        return value.item()
-    if value is None or isinstance(value, (str, int, float, bool)):
-        return value
-    return str(value)
-
-
 def scene_from_parts(parts: Iterable[Any]) -> trimesh.Scene:
     """A Scene with one node per part, named by the part id with its type in the node extras.
 
@@ -112,7 +52,7 @@ def scene_from_parts(parts: Iterable[Any]) -> trimesh.Scene:
             pid, ptype, mesh = part.id, part.type, part.mesh
             meta = getattr(part, "meta", {}) or {}
         extras = {"type": str(ptype), "id": str(pid)}
-        extras.update({k: v for k, v in _jsonable(dict(meta)).items() if k not in extras})
+        extras.update({k: v for k, v in to_jsonable(dict(meta)).items() if k not in extras})
         scene.add_geometry(mesh, node_name=str(pid), geom_name=str(pid), metadata=extras)
     return scene
 
@@ -176,7 +116,7 @@ def _prepared_scene(scene: trimesh.Scene) -> trimesh.Scene:
     out = trimesh.Scene()
     for name, mesh, matrix, extras in _nodes(scene):
         out.add_geometry(_split_color_seams(mesh), node_name=name, geom_name=name,
-                         transform=matrix, metadata=_jsonable(extras) or None)
+                         transform=matrix, metadata=to_jsonable(extras) or None)
     return out
 
 
@@ -230,7 +170,7 @@ def _write_obj(obj: Any, path: Path) -> None:
         lines.append(f"o {name}")
         lines.append(f"g {name}")
         if extras:
-            lines.append("# extras " + json.dumps(_jsonable(extras), sort_keys=True))
+            lines.append("# extras " + json.dumps(to_jsonable(extras), sort_keys=True))
         if mesh.visual.kind == "vertex":
             c = np.asarray(mesh.visual.vertex_colors, dtype=np.float64)[:, :3] / 255.0
             lines.extend(f"v {a:.9g} {b:.9g} {d:.9g} {r:.4g} {g:.4g} {bl:.4g}"

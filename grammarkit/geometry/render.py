@@ -641,7 +641,7 @@ def render(obj: Any, camera: Camera | View | None = None, style: str = "shaded",
 
 def save_image(img: Image.Image, path: str | Path, format: str | None = None) -> Path:
     """Write `img` atomically (temporary file in the same folder, then rename)."""
-    from .exporters import atomic_output
+    from ..fileio import atomic_output
 
     path = Path(path)
     fmt = format or Image.registered_extensions().get(path.suffix.lower())

@@ -126,38 +126,34 @@ def hip(poly: Polygon, angle: float, overhang: float = 0.0) -> Manifold:
 
 def gable(poly: Polygon, angle: float, overhang: float = 0.0, ridge: str = "x") -> Manifold:
     """Two planes meeting in a ridge parallel to local `ridge` over the bounding-box middle."""
-    t = _check_angle(angle)
-    parts = []
-    for p in overhung(poly, overhang):
-        x0, y0, x1, y1 = bbox(p)
-        span = (y1 - y0) if ridge == "x" else (x1 - x0)
-        lift = _fascia(overhang)
-        solid = Manifold.extrude(cross_section(p), t * span / 2 + 1.0 + lift)
-        if ridge == "x":
-            solid = _keep_below(solid, 0.0, 1.0, y0, t, lift)
-            solid = _keep_below(solid, 0.0, -1.0, -y1, t, lift)
-        else:
-            solid = _keep_below(solid, 1.0, 0.0, x0, t, lift)
-            solid = _keep_below(solid, -1.0, 0.0, -x1, t, lift)
-        parts.append(solid)
-    return _clean(parts[0] if len(parts) == 1 else Manifold.batch_boolean(parts, manifold3d.OpType.Add),
-                  _fascia(overhang))
+    return _pitched(poly, angle, overhang, ridge, both_sides=True)
 
 
 def shed(poly: Polygon, angle: float, overhang: float = 0.0, ridge: str = "x") -> Manifold:
     """One plane rising from the low side (min y for ridge x, min x for ridge y)."""
+    return _pitched(poly, angle, overhang, ridge, both_sides=False)
+
+
+def _pitched(poly: Polygon, angle: float, overhang: float, ridge: str, *, both_sides: bool) -> Manifold:
+    """Planes rising at `angle` from the low edge(s) across `ridge`: the footprint extruded above
+    the highest point, then trimmed under each plane (one plane: shed; two: gable)."""
     t = _check_angle(angle)
+    lift = _fascia(overhang)
     parts = []
     for p in overhung(poly, overhang):
         x0, y0, x1, y1 = bbox(p)
         span = (y1 - y0) if ridge == "x" else (x1 - x0)
-        lift = _fascia(overhang)
-        solid = Manifold.extrude(cross_section(p), t * span + 1.0 + lift)
-        solid = (_keep_below(solid, 0.0, 1.0, y0, t, lift) if ridge == "x"
-                 else _keep_below(solid, 1.0, 0.0, x0, t, lift))
+        solid = Manifold.extrude(cross_section(p), t * span * (0.5 if both_sides else 1.0) + 1.0 + lift)
+        if ridge == "x":
+            solid = _keep_below(solid, 0.0, 1.0, y0, t, lift)
+            if both_sides:
+                solid = _keep_below(solid, 0.0, -1.0, -y1, t, lift)
+        else:
+            solid = _keep_below(solid, 1.0, 0.0, x0, t, lift)
+            if both_sides:
+                solid = _keep_below(solid, -1.0, 0.0, -x1, t, lift)
         parts.append(solid)
-    return _clean(parts[0] if len(parts) == 1 else Manifold.batch_boolean(parts, manifold3d.OpType.Add),
-                  _fascia(overhang))
+    return _clean(parts[0] if len(parts) == 1 else Manifold.batch_boolean(parts, manifold3d.OpType.Add), lift)
 
 
 def pyramid(poly: Polygon, angle: float, overhang: float = 0.0) -> Manifold:

@@ -364,9 +364,9 @@ def _obj_text(assembly: Assembly) -> str:
 
 
 def _atomic_write(path: Path, data: bytes) -> None:
-    """Write `data` to `path` atomically (grammarkit.geometry.exporters.atomic_output: temp +
+    """Write `data` to `path` atomically (grammarkit.fileio.atomic_output: temp +
     rename, file-system failures as ShapeError naming the path)."""
-    from ..geometry.exporters import atomic_output
+    from ..fileio import atomic_output
 
     try:
         path.parent.mkdir(parents=True, exist_ok=True)

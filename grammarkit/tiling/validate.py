@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING, Any
 import networkx as nx
 import numpy as np
 
+from ..jsonable import to_jsonable
 from .assembly import Assembly
 from .frames import local_frames, symmetry_classes
 from .graph import shape_graph
@@ -63,22 +64,10 @@ class Report:
 
     def to_json(self) -> dict:
         return {"assembly": self.assembly, "ok": self.ok, "parts": self.parts, "contacts": self.contacts,
-                "tolerance": self.tolerance, "violations": [_jsonable(asdict(v)) for v in self.violations]}
+                "tolerance": self.tolerance, "violations": [to_jsonable(asdict(v)) for v in self.violations]}
 
     def to_json_text(self) -> str:
         return json.dumps(self.to_json(), indent=2)
-
-
-def _jsonable(x: Any) -> Any:
-    if isinstance(x, dict):
-        return {k: _jsonable(v) for k, v in x.items()}
-    if isinstance(x, (list, tuple)):
-        return [_jsonable(v) for v in x]
-    if isinstance(x, np.ndarray):
-        return x.tolist()
-    if isinstance(x, np.generic):
-        return x.item()
-    return x
 
 
 def validate(grammar_or_rules: "Grammar | Rules", assembly: Assembly, *, tolerance: float | None = None,

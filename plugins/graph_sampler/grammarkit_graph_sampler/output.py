@@ -57,7 +57,7 @@ class VariantWriter:
         return path
 
     def flush(self) -> Path:
-        from grammarkit.geometry.exporters import atomic_output
+        from grammarkit.fileio import atomic_output
 
         path = self.out / "manifest.jsonl"
         with atomic_output(path) as tmp:  # temp + rename, usual permissions, errors name the path
