@@ -1,0 +1,291 @@
+"""Running a back end: options validated, results written by the one writer, shortfalls said.
+
+    from grammarkit.run import run_backend, iter_results
+
+    summary = run_backend("castle.grammar", backend="graph-sampler", n=50, seed=7, out="variants/")
+    print(summary.written, summary.shortfall)
+
+    for result in iter_results("grammars/paris.grammar", n=3):     # in memory, nothing written
+        result.model.mesh  # a split Model
+
+`run_backend` is what `grammarkit derive` calls; every back end goes through it.
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Callable, Iterator, Mapping
+
+from ..errors import GrammarkitError, PluginError
+from .backend import BackendSpec, Request, Result
+
+__all__ = ["RunSummary", "iter_results", "resolve_backend", "run_backend", "FORMAT_VERSION"]
+
+FORMAT_VERSION = 1  # of run.json / manifest.jsonl
+
+
+@dataclass
+class RunSummary:
+    backend: str
+    requested: int
+    written: int  # results written by this run
+    resumed: int  # results already in the folder from an earlier, interrupted run
+    out: Path | None
+    manifest: Path | None
+    shortfall: str | None  # why fewer results than requested exist (None: all of them)
+    stats: dict = field(default_factory=dict)  # the back end's own summary
+    seconds: float = 0.0
+
+    @property
+    def total(self) -> int:
+        return self.written + self.resumed
+
+    def to_dict(self) -> dict:
+        from ..jsonable import to_jsonable
+
+        return to_jsonable({"backend": self.backend, "requested": self.requested,
+                            "written": self.written, "resumed": self.resumed,
+                            "out": str(self.out) if self.out else None,
+                            "manifest": str(self.manifest) if self.manifest else None,
+                            "shortfall": self.shortfall, "seconds": round(self.seconds, 3),
+                            **({"stats": self.stats} if self.stats else {})})
+
+
+def _registries(registries: Any) -> Any:
+    if registries is not None:
+        return registries
+    from ..plugins import get_plugin_manager  # the API edge: the only read of the global manager
+
+    return get_plugin_manager().registries()
+
+
+def _grammar(grammar: Any) -> Any:
+    from ..ir.grammar import Grammar
+
+    if isinstance(grammar, Grammar) and not grammar.imports:
+        return grammar
+    from ..dsl import load
+
+    if isinstance(grammar, str) and "\n" not in grammar and grammar.endswith(".grammar"):
+        grammar = Path(grammar)
+    return load(grammar)
+
+
+def resolve_backend(grammar: Any, name: str | None, registries: Any) -> BackendSpec:
+    """The back end `name`, or the default one for the grammar's family; checks the family."""
+    backends = registries.backends
+    family = grammar.family
+    if name is not None:
+        spec = backends.get(name)
+        if spec is None:
+            known = ", ".join(sorted(backends)) or "none installed"
+            raise PluginError(f"unknown back end {name!r}; known back ends: {known}")
+    else:
+        spec = next((s for s in backends.values() if family in s.default_for), None)
+        if spec is None:
+            known = ", ".join(sorted(backends)) or "none installed"
+            raise GrammarkitError(f"no default back end for {family} grammars; pass --backend NAME "
+                                  f"(known: {known})")
+    if family not in spec.families:
+        raise GrammarkitError(f"back end {spec.name!r} does not derive {family} grammars "
+                              f"(it accepts: {', '.join(sorted(spec.families))})")
+    if spec.run is None:
+        raise PluginError(f"back end {spec.name!r} (plugin {spec.plugin!r}) has no run function")
+    return spec
+
+
+def _plugin_failure(spec: BackendSpec, exc: BaseException) -> PluginError:
+    return PluginError(f"back end {spec.name!r} (plugin {spec.plugin or 'unknown'!r}) failed: "
+                       f"{type(exc).__name__}: {exc}")
+
+
+def _drive(spec: BackendSpec, request: Request) -> Iterator[Result]:
+    """Iterate a back end's generator, turning its crashes into errors that name it; the
+    generator's return value (its summary) is stored on `request`'s holder by the caller."""
+    gen = spec.run(request)  # type: ignore[misc]
+    try:
+        while True:
+            try:
+                result = next(gen)
+            except StopIteration as stop:
+                return stop.value if isinstance(stop.value, dict) else {}
+            except (GrammarkitError, KeyboardInterrupt, MemoryError):
+                raise
+            except OSError as exc:
+                from ..errors import ShapeError
+
+                where = exc.filename or "a file"
+                raise ShapeError(f"{where}: back end {spec.name!r}: {exc.strerror or exc}") from None
+            except (Exception, SystemExit) as exc:  # noqa: BLE001 - a plugin bug: name it
+                raise _plugin_failure(spec, exc) from None
+            if not isinstance(result, Result):
+                raise PluginError(f"back end {spec.name!r} (plugin {spec.plugin or 'unknown'!r}) "
+                                  f"yielded a {type(result).__name__}, not a grammarkit.run.Result")
+            yield result
+    finally:
+        gen.close()
+
+
+def _request(grammar: Any, spec: BackendSpec, registries: Any, *, n: int, seed: int, start: int,
+             iterations: int, attrs: Mapping[str, Any] | None, options: Any, executor: Any,
+             workers: int | None, progress: Callable | None, timeout: float | None,
+             format: str | None, preview: bool) -> Request:
+    from .executor import make_executor
+    from .options import parse_options
+
+    for what, value, lo in (("n", n, 0), ("iterations", iterations, 0), ("start", start, 0)):
+        if isinstance(value, bool) or not isinstance(value, int) or value < lo:
+            raise GrammarkitError(f"{what} must be a whole number >= {lo}, got {value!r}")
+    if isinstance(seed, bool) or not isinstance(seed, int):
+        raise GrammarkitError(f"seed must be an integer, got {seed!r}")
+    if timeout is not None and not (isinstance(timeout, (int, float)) and timeout > 0):
+        raise GrammarkitError(f"timeout must be a positive number of seconds, got {timeout!r}")
+    opts = parse_options(spec.options, options, backend=spec.name)
+    if executor is None:
+        executor = make_executor(None, workers)
+    kwargs: dict[str, Any] = {}
+    if progress is not None:
+        kwargs["progress"] = progress
+    return Request(grammar=grammar, n=n, seed=seed, start=start, iterations=iterations,
+                   attrs=dict(attrs or {}), options=opts, executor=executor, registries=registries,
+                   deadline=None if timeout is None else time.monotonic() + float(timeout),
+                   format=format, preview=preview, **kwargs)
+
+
+def iter_results(grammar: Any, *, backend: str | None = None, n: int = 1, seed: int = 0,
+                 iterations: int = 1, attrs: Mapping[str, Any] | None = None, options: Any = None,
+                 executor: Any = None, workers: int | None = 1, progress: Callable | None = None,
+                 timeout: float | None = None, registries: Any = None) -> Iterator[Result]:
+    """Results of a back end, in memory (models as objects; nothing is written)."""
+    registries = _registries(registries)
+    g = _grammar(grammar)
+    spec = resolve_backend(g, backend if backend is not None else
+                           ("split" if g.family == "split" else None), registries)
+    request = _request(g, spec, registries, n=n, seed=seed, start=0, iterations=iterations,
+                       attrs=attrs, options=options, executor=executor, workers=workers,
+                       progress=progress, timeout=timeout, format=None, preview=False)
+    count = 0
+    for result in _drive(spec, request):
+        if count >= n:
+            break
+        count += 1
+        yield result
+
+
+def encode_result(result: Result, fmt: str, registries: Any) -> bytes:
+    """The model file's bytes: as the back end encoded it, or through the exporter registry."""
+    if isinstance(result.model, (bytes, bytearray)):
+        return bytes(result.model)
+    from ..geometry.exporters import encode_with
+
+    spec = registries.exporters.get(fmt)
+    if spec is None:
+        known = ", ".join(sorted(registries.exporters)) or "none"
+        raise GrammarkitError(f"unknown output format {fmt!r}; known formats: {known}")
+    return encode_with(spec, result.model)
+
+
+def preview_png(model: Any, size: tuple[int, int] = (640, 640)) -> bytes:
+    """A shaded picture of a split Model, an Assembly or a mesh, as PNG bytes."""
+    import io
+
+    from ..geometry.render import render, save_image
+
+    mesh = getattr(model, "mesh", None)
+    if mesh is None:
+        from ..geometry.exporters import to_scene
+
+        mesh = to_scene(model).dump(concatenate=True)
+    buf = io.BytesIO()
+    save_image(render(mesh, style="shaded+lines", size=size), buf, format="PNG")
+    return buf.getvalue()
+
+
+def run_backend(grammar: Any, *, out: str | Path, backend: str | None = None, n: int = 1,
+                seed: int = 0, iterations: int = 1, attrs: Mapping[str, Any] | None = None,
+                options: Any = None, executor: Any = None, workers: int | None = None,
+                format: str | None = None, preview: bool = False, progress: Callable | None = None,
+                timeout: float | None = None, overwrite: bool = False,
+                inputs: tuple[Path, ...] = (), registries: Any = None,
+                on_result: Callable[[dict], None] | None = None) -> RunSummary:
+    """Run a back end into the folder `out` (see grammarkit.run.writer for its layout).
+
+    Re-running the same call into the same folder continues after the last complete result;
+    a different call is refused unless `overwrite=True`. `inputs` are files no output may
+    replace. Returns a RunSummary; `shortfall` says why fewer than `n` results exist.
+    """
+    from ..jsonable import to_jsonable
+    from .writer import OutputFolder, grammar_hash
+
+    t0 = time.perf_counter()
+    registries = _registries(registries)
+    g = _grammar(grammar)
+    spec = resolve_backend(g, backend, registries)
+    fmt = (format or spec.model_format).lower().lstrip(".")
+    if fmt not in registries.exporters:
+        known = ", ".join(sorted(registries.exporters)) or "none"
+        raise GrammarkitError(f"unknown output format {fmt!r}; known formats: {known}")
+    request = _request(g, spec, registries, n=n, seed=seed, start=0, iterations=iterations,
+                       attrs=attrs, options=options, executor=executor, workers=workers,
+                       progress=progress, timeout=timeout, format=fmt, preview=preview)
+    run = {"version": FORMAT_VERSION, "backend": spec.name, "grammar": g.name,
+           "grammar_hash": grammar_hash(g), "seed": seed, "iterations": iterations,
+           "attrs": to_jsonable(dict(attrs or {})), "format": fmt, "preview": bool(preview),
+           "options": request.options.model_dump(mode="json") if request.options is not None else {},
+           "n": n}
+    extra_inputs = [Path(g.source_path)] if getattr(g, "source_path", None) else []
+    folder = OutputFolder(Path(out), run, protected=tuple(Path(p) for p in (*inputs, *extra_inputs)),
+                          overwrite=overwrite)
+    summary = RunSummary(spec.name, n, 0, folder.resumed, folder.path, folder.manifest, None)
+    if folder.done >= n:
+        summary.shortfall = None
+        summary.seconds = time.perf_counter() - t0
+        summary.stats = {"note": f"the folder already holds {folder.done} results of this run"}
+        return summary
+    request = Request(**{**request.__dict__, "start": folder.done})
+    gen = _drive(spec, request)
+    stats: dict = {}
+    try:
+        while folder.done < n:
+            try:
+                result = next(gen)
+            except StopIteration as stop:
+                stats = stop.value or {}
+                break
+            request.check_deadline()
+            if result.index < folder.done:
+                # recomputed by a back end that cannot start in the middle: already on disk
+                listed = folder.entries[result.index].get("id")
+                if listed != result.id:
+                    raise GrammarkitError(f"{folder.path}: the back end made {result.id!r} where the "
+                                          f"manifest lists {listed!r}; the run is not reproducible "
+                                          "(use another folder or --overwrite)")
+                continue
+            files: dict[str, bytes | str] = {f"{result.id}.{fmt}": encode_result(result, fmt, registries)}
+            attachments = dict(result.attachments)
+            if preview and "png" not in attachments and result.model is not None \
+                    and not isinstance(result.model, (bytes, bytearray)):
+                attachments["png"] = preview_png(result.model)
+            for suffix, data in attachments.items():
+                files[f"{result.id}.{suffix}"] = data
+            entry = {"id": result.id, "index": result.index, "seed": result.seed,
+                     "parents": list(result.parents), "metrics": to_jsonable(result.metrics),
+                     "file": f"{result.id}.{fmt}",
+                     "attachments": {s: f"{result.id}.{s}" for s in attachments}}
+            for key, value in result.extra.items():
+                if key in entry:
+                    raise PluginError(f"back end {spec.name!r}: manifest field {key!r} is reserved")
+                entry[key] = to_jsonable(value)
+            folder.add(entry, files)
+            summary.written += 1
+            if on_result is not None:
+                on_result(entry)
+    finally:
+        gen.close()
+    summary.stats = stats
+    if folder.done < n:
+        reason = stats.get("shortfall") if isinstance(stats, dict) else None
+        summary.shortfall = reason or "the back end produced no more results"
+    summary.seconds = time.perf_counter() - t0
+    return summary

@@ -1,0 +1,418 @@
+"""The one executor for parallel work: split variations, sampler attempts, batch derives.
+
+Work is expressed as a *session*: a state built once by `init(*args)` (a compiled grammar, a
+sampler's pool of shapes), changed only by `update(fn, *args)` calls that every copy of the
+state replays in the same order, and `map(fn, items)` calls that compute `fn(state, item)` for
+each item and yield the results **in item order**. Because `fn` sees only the state and its
+item, the results never depend on the number of workers or on which worker ran what.
+
+    from grammarkit.run.executor import LocalExecutor
+
+    with LocalExecutor(workers=2) as ex:
+        with ex.session(load_state, "grammars/paris.grammar") as s:
+            for result in s.map(derive_one, range(100)):
+                ...
+
+Functions passed to `session`, `update` and `map` must be picklable (module-level functions).
+
+`LocalExecutor` runs everything in this process until the work is worth parallelising: it
+times the items it runs itself and starts worker processes only when the remaining work is
+larger than what starting them costs (spawning a Python that imports numpy and manifold3d
+takes about a second per worker here). Workers persist for the life of the process, so a
+second run pays nothing; they die with the parent (PR_SET_PDEATHSIG on Linux, and EOF on
+their pipe elsewhere), ignore Ctrl-C (the parent handles it), and a session interrupted
+while work is out drops the workers it used.
+
+A distributed engine plugs in by implementing the same three calls (`Executor` below);
+back ends never see which one runs them.
+"""
+from __future__ import annotations
+
+import itertools
+import multiprocessing as mp
+import os
+import pickle
+import signal
+import sys
+import threading
+import time
+import traceback
+from collections import deque
+from typing import Any, Callable, Iterable, Iterator, Protocol, Sequence
+
+__all__ = ["Executor", "LocalExecutor", "Session", "WorkerError", "default_workers", "make_executor"]
+
+# Starting a spawned worker costs roughly this much wall time (import of numpy, trimesh,
+# manifold3d and grammarkit on this 2-core machine); parallel work must save more than it.
+SPAWN_SECONDS = 1.5
+# Aim for chunks of about this much work: small enough that Ctrl-C and load balancing react
+# quickly, large enough that pipe traffic stays negligible.
+CHUNK_SECONDS = 0.15
+
+
+class WorkerError(RuntimeError):
+    """A worker process died or its function raised something that could not be sent back."""
+
+
+def default_workers() -> int:
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:  # pragma: no cover - non-Linux
+        return max(1, os.cpu_count() or 1)
+
+
+class Session(Protocol):
+    def update(self, fn: Callable[..., None], *args: Any) -> None: ...
+    def map(self, fn: Callable[[Any, Any], Any], items: Iterable[Any]) -> Iterator[Any]: ...
+    def close(self) -> None: ...
+
+
+class Executor(Protocol):
+    """What back ends use for parallel work (see the module docstring)."""
+
+    workers: int
+
+    def session(self, init: Callable[..., Any], *args: Any) -> Session: ...
+    def close(self) -> None: ...
+
+
+# ---------------------------------------------------------------------------------------------
+# worker processes
+# ---------------------------------------------------------------------------------------------
+def _die_with_parent() -> None:
+    """Ask Linux to SIGKILL this process when its parent dies (even mid-computation)."""
+    if not sys.platform.startswith("linux"):
+        return
+    try:
+        import ctypes
+
+        libc = ctypes.CDLL("libc.so.6", use_errno=True)
+        libc.prctl(1, signal.SIGKILL)  # PR_SET_PDEATHSIG
+    except Exception:  # noqa: BLE001 - best effort; EOF on the pipe still ends the worker
+        pass
+
+
+def _portable_error(exc: BaseException) -> BaseException:
+    """`exc` if it survives pickling, else a WorkerError carrying its text."""
+    try:
+        pickle.loads(pickle.dumps(exc))
+        return exc
+    except Exception:  # noqa: BLE001
+        text = "".join(traceback.format_exception_only(type(exc), exc)).strip()
+        return WorkerError(text)
+
+
+def _worker_main(conn: Any) -> None:  # pragma: no cover - runs in the child process
+    _die_with_parent()
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's to handle
+    states: dict[int, Any] = {}
+    conn.send(("ready",))
+    while True:
+        try:
+            msg = conn.recv()
+        except (EOFError, OSError):
+            return
+        kind = msg[0]
+        try:
+            if kind == "init":
+                _, sid, init, args, log = msg
+                state = init(*args)
+                for fn, fargs in log:
+                    fn(state, *fargs)
+                states[sid] = state
+            elif kind == "update":
+                _, sid, fn, args = msg
+                fn(states[sid], *args)
+            elif kind == "map":
+                _, sid, chunk, fn, items = msg
+                state = states[sid]
+                out = []
+                for item in items:
+                    try:
+                        out.append((True, fn(state, item)))
+                    except Exception as exc:  # noqa: BLE001 - returned to the parent, in order
+                        out.append((False, _portable_error(exc)))
+                        break
+                conn.send(("done", chunk, out))
+            elif kind == "drop":
+                states.pop(msg[1], None)
+            elif kind == "stop":
+                return
+        except Exception as exc:  # noqa: BLE001 - an init/update failure ends this worker's use
+            try:
+                conn.send(("failed", _portable_error(exc)))
+            except (OSError, pickle.PicklingError):
+                return
+
+
+class _Worker:
+    def __init__(self) -> None:
+        ctx = mp.get_context("spawn")  # fork deadlocks in manifold3d's TBB thread pool
+        self.conn, child = ctx.Pipe()
+        self.proc = ctx.Process(target=_worker_main, args=(child,), daemon=True)
+        self.proc.start()
+        child.close()
+        self.ready = False
+        self.sessions: set[int] = set()
+
+    def alive(self) -> bool:
+        return self.proc.is_alive() and not self.conn.closed
+
+    def kill(self) -> None:
+        try:
+            self.conn.close()
+        except OSError:
+            pass
+        if self.proc.is_alive():
+            self.proc.kill()
+        self.proc.join(timeout=5)
+
+
+_POOL: list[_Worker] = []  # persistent workers of this process
+_POOL_LOCK = threading.Lock()
+_SESSION_IDS = itertools.count(1)
+
+
+def _take_workers(count: int) -> list[_Worker]:
+    """`count` workers for a session: live idle ones first, new ones started for the rest."""
+    with _POOL_LOCK:
+        _POOL[:] = [w for w in _POOL if w.alive()]
+        free = [w for w in _POOL if not getattr(w, "busy", False)]
+        taken = free[:count]
+        while len(taken) < count:
+            w = _Worker()
+            _POOL.append(w)
+            taken.append(w)
+        for w in taken:
+            w.busy = True  # type: ignore[attr-defined]
+        return taken
+
+
+def _release(workers: Sequence[_Worker], *, broken: bool) -> None:
+    with _POOL_LOCK:
+        for w in workers:
+            w.busy = False  # type: ignore[attr-defined]
+            if broken or not w.alive():
+                w.kill()
+                if w in _POOL:
+                    _POOL.remove(w)
+
+
+def shutdown_workers() -> None:
+    """Stop every persistent worker of this process (they also end with it)."""
+    with _POOL_LOCK:
+        for w in _POOL:
+            try:
+                w.conn.send(("stop",))
+            except (OSError, BrokenPipeError):
+                pass
+        for w in _POOL:
+            w.proc.join(timeout=5)
+            if w.proc.is_alive():
+                w.kill()
+        _POOL.clear()
+
+
+def idle_workers() -> int:
+    """Live workers not used by a session (a second run starts with these for free)."""
+    with _POOL_LOCK:
+        return sum(1 for w in _POOL if w.alive() and not getattr(w, "busy", False))
+
+
+# ---------------------------------------------------------------------------------------------
+# the local executor
+# ---------------------------------------------------------------------------------------------
+class _LocalSession:
+    def __init__(self, executor: "LocalExecutor", init: Callable[..., Any], args: tuple):
+        self.executor = executor
+        self.sid = next(_SESSION_IDS)
+        self.init, self.args = init, args
+        self.state = init(*args)  # the parent's own copy: items it runs itself use it
+        self.log: list[tuple[Callable, tuple]] = []
+        self.workers: list[_Worker] = []
+        self.closed = False
+
+    # -- state ------------------------------------------------------------------------------
+    def update(self, fn: Callable[..., None], *args: Any) -> None:
+        fn(self.state, *args)
+        self.log.append((fn, args))
+        for w in self.workers:
+            if w.ready:
+                w.conn.send(("update", self.sid, fn, args))
+
+    # -- work -------------------------------------------------------------------------------
+    def map(self, fn: Callable[[Any, Any], Any], items: Iterable[Any]) -> Iterator[Any]:
+        pending = deque(enumerate(items))
+        if not pending:
+            return
+        want = self.executor.workers
+        spent, done_here = 0.0, 0
+        while pending:
+            if want > 1 and not self.workers and done_here and self._worth_it(spent / done_here,
+                                                                              len(pending)):
+                self._start_workers(want)
+            if self.workers:
+                yield from self._parallel(fn, pending, spent / max(done_here, 1))
+                return
+            _, item = pending.popleft()
+            t0 = time.perf_counter()
+            result = fn(self.state, item)
+            spent += time.perf_counter() - t0
+            done_here += 1
+            yield result
+
+    def _worth_it(self, per_item: float, remaining: int) -> bool:
+        work = per_item * remaining
+        workers = self.executor.workers
+        startup = max(0, workers - idle_workers()) * SPAWN_SECONDS / max(1, min(workers, 2))
+        return work * (1.0 - 1.0 / workers) > startup + self.executor.min_parallel_seconds
+
+    def _start_workers(self, count: int) -> None:
+        self.workers = _take_workers(count)
+        for w in self.workers:
+            if w.ready:
+                w.conn.send(("init", self.sid, self.init, self.args, list(self.log)))
+                w.sessions.add(self.sid)
+
+    def _parallel(self, fn: Callable, pending: deque, per_item: float) -> Iterator[Any]:
+        """Hand chunks to workers as they become free, run items here while none is ready,
+        and yield every result in item order."""
+        from multiprocessing.connection import wait
+
+        size = max(1, min(64, int(CHUNK_SECONDS / max(per_item, 1e-6))))
+        results: dict[int, tuple[bool, Any]] = {}  # item position -> (ok, value)
+        order = deque(pos for pos, _ in pending)
+        chunk_ids = itertools.count()
+        out: dict[Any, tuple[int, list[int]]] = {}  # worker conn -> (chunk id, positions)
+        busy = False
+        try:
+            while order:
+                # give work to every ready, idle worker
+                for w in self.workers:
+                    if not pending:
+                        break
+                    if w.ready and w.conn not in out:
+                        batch = [pending.popleft() for _ in range(min(size, len(pending)))]
+                        cid = next(chunk_ids)
+                        w.conn.send(("map", self.sid, cid, fn, [item for _, item in batch]))
+                        out[w.conn] = (cid, [pos for pos, _ in batch])
+                        busy = True
+                # yield what is complete, in order
+                while order and order[0] in results:
+                    ok, value = results.pop(order.popleft())
+                    if not ok:
+                        raise value
+                    yield value
+                if not order:
+                    break
+                if not out and pending and not any(w.ready for w in self.workers):
+                    # workers still starting: do the next item here meanwhile
+                    pos, item = pending.popleft()
+                    try:
+                        results[pos] = (True, fn(self.state, item))
+                    except Exception as exc:  # noqa: BLE001 - raised in order below
+                        results[pos] = (False, exc)
+                    self._poll_ready(timeout=0)
+                    continue
+                conns = list(out) + [w.conn for w in self.workers if not w.ready]
+                for conn in wait(conns, timeout=1.0):
+                    w = next(x for x in self.workers if x.conn is conn)
+                    try:
+                        msg = conn.recv()
+                    except (EOFError, OSError):
+                        raise WorkerError("a worker process died (out of memory?); "
+                                          "try fewer workers") from None
+                    self._handle(w, msg, out, results)
+                if not out and not pending and order and order[0] not in results:
+                    raise WorkerError("internal error: a result went missing")  # pragma: no cover
+                busy = bool(out)
+        except BaseException:
+            # results of chunks still out would arrive later on the pipes: drop those workers
+            if busy or out:
+                _release(self.workers, broken=True)
+                self.workers = []
+            raise
+
+    def _poll_ready(self, timeout: float) -> None:
+        from multiprocessing.connection import wait
+
+        starting = [w.conn for w in self.workers if not w.ready]
+        for conn in wait(starting, timeout=timeout) if starting else ():
+            w = next(x for x in self.workers if x.conn is conn)
+            try:
+                msg = conn.recv()
+            except (EOFError, OSError):
+                raise WorkerError("a worker process died while starting") from None
+            self._handle(w, msg, {}, {})
+
+    def _handle(self, w: _Worker, msg: tuple, out: dict, results: dict) -> None:
+        if msg[0] == "ready":
+            w.ready = True
+            w.conn.send(("init", self.sid, self.init, self.args, list(self.log)))
+            w.sessions.add(self.sid)
+        elif msg[0] == "done":
+            _, cid, values = msg
+            _, positions = out.pop(w.conn)
+            for pos, value in zip(positions, values):
+                results[pos] = value
+            if len(values) < len(positions):  # the chunk stopped at a failing item
+                failed = positions[len(values) - 1]
+                for pos in positions[len(values):]:
+                    results.setdefault(pos, results[failed])
+        elif msg[0] == "failed":
+            raise msg[1]
+
+    def close(self) -> None:
+        if self.closed:
+            return
+        self.closed = True
+        for w in self.workers:
+            if w.ready and w.alive():
+                try:
+                    w.conn.send(("drop", self.sid))
+                except (OSError, BrokenPipeError):
+                    pass
+        _release(self.workers, broken=False)
+        self.workers = []
+
+    def __enter__(self) -> "_LocalSession":
+        return self
+
+    def __exit__(self, *exc: Any) -> None:
+        self.close()
+
+
+class LocalExecutor:
+    """This process plus, when it pays, persistent worker processes on this machine.
+
+    workers: the most processes to use (default: the CPUs this process may run on; 1 runs
+             everything in this process).
+    min_parallel_seconds: parallel work must be expected to save at least this much.
+    """
+
+    name = "local"
+
+    def __init__(self, workers: int | None = None, *, min_parallel_seconds: float = 0.5):
+        self.workers = default_workers() if workers is None else max(1, int(workers))
+        self.min_parallel_seconds = float(min_parallel_seconds)
+
+    def session(self, init: Callable[..., Any], *args: Any) -> _LocalSession:
+        return _LocalSession(self, init, args)
+
+    def close(self) -> None:
+        """Nothing to release: workers persist for the next run (see shutdown_workers)."""
+
+    def __enter__(self) -> "LocalExecutor":
+        return self
+
+    def __exit__(self, *exc: Any) -> None:
+        self.close()
+
+
+def make_executor(spec: str | None = None, workers: int | None = None) -> Executor:
+    """An executor from a `--executor` value: None or "local" (the default)."""
+    if spec in (None, "", "local"):
+        return LocalExecutor(workers)
+    from ..errors import GrammarkitError
+
+    raise GrammarkitError(f"unknown executor {spec!r}; known executors: local")

@@ -1,0 +1,279 @@
+"""The one writer: results become files, atomically, listed in one manifest format.
+
+Two shapes of output:
+
+- `write_files({path: bytes | str})`: one transaction of several files (a model, its preview
+  and its tree). Every file is written to a temporary name first; the renames happen only
+  when all were written, so a failure leaves every existing file untouched.
+- `OutputFolder`: a folder of results, as every back end produces. Each result's model and
+  attachments are written as one transaction, then its line is appended to `manifest.jsonl`
+  (and flushed to disk). The folder also holds `run.json`: what was asked (back end, grammar
+  and its hash, seed, options, attrs, format). Re-running the same request into the folder
+  continues after the last complete entry; a different request is refused, so runs never mix.
+
+Manifest lines have the same core fields for every back end:
+
+    {"id": "paris_0003", "index": 3, "seed": 1234, "parents": [], "metrics": {...},
+     "file": "paris_0003.glb", "attachments": {"png": "paris_0003.png"}, ...back-end fields}
+
+Crash safety: before a result's files are renamed into place, their names are recorded in
+`.pending.json`; the record is removed once the manifest line is on disk. A run killed in
+between (SIGKILL, power loss) leaves the record, and the next run into the folder deletes
+those unlisted files first, so the folder never holds model files the manifest does not list.
+Stale temporary files (`.name.xxxx.tmp`) are removed the same way.
+"""
+from __future__ import annotations
+
+import contextlib
+import hashlib
+import json
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Iterable, Mapping
+
+from ..errors import GrammarkitError
+from ..fileio import OutputError, atomic_output
+from ..jsonable import to_jsonable
+
+__all__ = ["OutputFolder", "RunMismatch", "check_outputs", "grammar_hash", "write_files"]
+
+MANIFEST = "manifest.jsonl"
+RUN_FILE = "run.json"
+PENDING = ".pending.json"
+CORE_FIELDS = ("id", "index", "seed", "parents", "metrics", "file", "attachments")
+MODEL_SUFFIXES = frozenset({".glb", ".gltf", ".obj", ".stl", ".ply"})
+
+
+class RunMismatch(GrammarkitError):
+    """The output folder holds a different run."""
+
+
+def grammar_hash(grammar: Any) -> str:
+    """A stable hash of a grammar's meaning (its canonical text), for run.json and models."""
+    from ..printer import format_grammar
+
+    text = format_grammar(grammar)
+    return hashlib.sha256(text.encode("utf-8")).hexdigest()[:16]
+
+
+def _same_file(a: Path, b: Path) -> bool:
+    try:
+        return os.path.samefile(a, b)
+    except OSError:
+        return os.path.realpath(a) == os.path.realpath(b)
+
+
+def check_outputs(outputs: Mapping[str, Path | None], inputs: Iterable[Path] = ()) -> None:
+    """Refuse, before any work, an output that is an input or that another output also uses.
+
+    `outputs` maps an option name (for the message) to its path."""
+    seen: dict[str, str] = {}
+    inputs = [Path(p) for p in inputs]
+    for option, path in outputs.items():
+        if path is None:
+            continue
+        path = Path(path)
+        for src in inputs:
+            if _same_file(path, src):
+                raise OutputError(f"{path}: {option} would overwrite the input {src}; "
+                                  "choose another output path")
+        key = os.path.realpath(path)
+        if key in seen:
+            raise OutputError(f"{path}: {option} and {seen[key]} name the same file; "
+                              "each output needs its own path")
+        seen[key] = option
+
+
+def write_files(files: Mapping[Path, bytes | str]) -> None:
+    """Write every file or none: temporary names first, renames only when all were written."""
+    for path in files:
+        _make_parent(Path(path))
+    with contextlib.ExitStack() as stack:
+        for path, data in files.items():
+            tmp = stack.enter_context(atomic_output(Path(path)))
+            if isinstance(data, str):
+                tmp.write_text(data, encoding="utf-8")
+            else:
+                tmp.write_bytes(data)
+
+
+def _make_parent(path: Path) -> None:
+    folder = path.parent
+    if folder.exists() and not folder.is_dir():
+        raise OutputError(f"{path}: cannot write: {folder} is a file, not a folder")
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise OutputError(f"{path}: cannot create folder {folder}: {exc.strerror or exc}") from None
+
+
+def _fsync_dir(folder: Path) -> None:
+    with contextlib.suppress(OSError):
+        fd = os.open(folder, os.O_RDONLY)
+        try:
+            os.fsync(fd)
+        finally:
+            os.close(fd)
+
+
+@dataclass
+class OutputFolder:
+    """A folder of results with `run.json` and `manifest.jsonl` (see the module docstring).
+
+    path:      the folder (created if missing; refused if it is a file or named like a model).
+    run:       what is being asked; must equal the folder's `run.json` to continue a run.
+    protected: input files that no output may replace.
+    overwrite: start over: delete the files an earlier run listed, then write afresh.
+    """
+
+    path: Path
+    run: dict[str, Any]
+    protected: tuple[Path, ...] = ()
+    overwrite: bool = False
+    entries: list[dict] = field(default_factory=list)
+    resumed: int = 0
+
+    def __post_init__(self) -> None:
+        self.path = Path(self.path)
+        self.run = to_jsonable(self.run)
+        p = self.path
+        if p.exists() and not p.is_dir():
+            raise OutputError(f"{p}: is a file; this command writes a folder of results "
+                              "(model files and manifest.jsonl)")
+        if not p.exists() and p.suffix.lower() in MODEL_SUFFIXES:
+            raise OutputError(f"{p}: this command writes a folder of results, and the name looks "
+                              f"like one model file; give a folder name, e.g. -o {p.with_suffix('')}/")
+        try:
+            p.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise OutputError(f"{p}: cannot create folder: {exc.strerror or exc}") from None
+        self._recover()
+        self._open_run()
+
+    # -- opening ----------------------------------------------------------------------------
+    def _recover(self) -> None:
+        """Undo what a killed run left: files renamed in but never listed, temporary files."""
+        pending = self.path / PENDING
+        if pending.exists():
+            try:
+                names = json.loads(pending.read_text(encoding="utf-8"))
+            except (OSError, ValueError):
+                names = []
+            listed = {e.get("file") for e in self._read_manifest()}
+            for e in self._read_manifest():
+                listed.update((e.get("attachments") or {}).values())
+            for name in names if isinstance(names, list) else []:
+                if isinstance(name, str) and name not in listed and "/" not in name:
+                    with contextlib.suppress(OSError):
+                        (self.path / name).unlink()
+            with contextlib.suppress(OSError):
+                pending.unlink()
+        for tmp in self.path.glob(".*.tmp"):
+            with contextlib.suppress(OSError):
+                tmp.unlink()
+
+    def _read_manifest(self) -> list[dict]:
+        path = self.path / MANIFEST
+        if not path.exists():
+            return []
+        entries = []
+        try:
+            text = path.read_text(encoding="utf-8")
+        except (OSError, UnicodeDecodeError) as exc:
+            raise OutputError(f"{path}: cannot read the manifest: {exc}") from None
+        for line in text.splitlines():
+            try:
+                entry = json.loads(line)
+            except ValueError:
+                break  # a line cut short by a crash: everything after it is incomplete
+            if not isinstance(entry, dict) or "id" not in entry:
+                break
+            entries.append(entry)
+        return entries
+
+    def _open_run(self) -> None:
+        run_path = self.path / RUN_FILE
+        old_run = None
+        if run_path.exists():
+            try:
+                old_run = json.loads(run_path.read_text(encoding="utf-8"))
+            except (OSError, ValueError):
+                old_run = None
+        entries = self._read_manifest()
+        if self.overwrite:
+            for e in entries:
+                for name in [e.get("file"), *(e.get("attachments") or {}).values()]:
+                    if isinstance(name, str) and "/" not in name:
+                        with contextlib.suppress(OSError):
+                            (self.path / name).unlink()
+            entries, old_run = [], None
+            with contextlib.suppress(OSError):
+                (self.path / MANIFEST).unlink()
+        elif (entries or (self.path / MANIFEST).exists()) and old_run is None:
+            raise RunMismatch(f"{self.path}: holds a manifest.jsonl without run.json (written by an "
+                              "older grammarkit or by hand); use another folder or --overwrite")
+        if old_run is not None and not self.overwrite:
+            differ = sorted(k for k in set(old_run) | set(self.run)
+                            if k != "n" and old_run.get(k) != self.run.get(k))
+            if differ:
+                what = ", ".join(f"{k}={old_run.get(k)!r}" for k in differ[:4])
+                raise RunMismatch(f"{self.path}: holds results of another run ({what}); "
+                                  "re-run that command to continue it, or use another folder or "
+                                  "--overwrite to start over")
+        # an entry whose file vanished ends the list: later results are made again
+        for i, e in enumerate(entries):
+            names = [e.get("file"), *(e.get("attachments") or {}).values()]
+            if any(isinstance(nm, str) and not (self.path / nm).exists() for nm in names if nm):
+                entries = entries[:i]
+                break
+        self.entries = entries
+        self.resumed = len(entries)
+        # rewrite manifest (drops a torn last line) and run.json before new results arrive
+        write_files({run_path: json.dumps(self.run, indent=1, sort_keys=True) + "\n",
+                     self.path / MANIFEST: "".join(json.dumps(e, sort_keys=True) + "\n"
+                                                   for e in entries)})
+
+    # -- writing ----------------------------------------------------------------------------
+    @property
+    def done(self) -> int:
+        return len(self.entries)
+
+    def add(self, entry: dict, files: Mapping[str, bytes | str]) -> dict:
+        """Write one result's `files` ({file name: data}) and append its manifest `entry`."""
+        for name in files:
+            target = self.path / name
+            if "/" in name or name.startswith(".") or name in (MANIFEST, RUN_FILE):
+                raise OutputError(f"{target}: refusing to write a result file with this name")
+            for src in self.protected:
+                if _same_file(target, src):
+                    raise OutputError(f"{target}: writing this result would overwrite the input "
+                                      f"{src}; choose another output folder")
+        pending = self.path / PENDING
+        pending.write_text(json.dumps(sorted(files)), encoding="utf-8")
+        listed = False
+        try:
+            write_files({self.path / name: data for name, data in files.items()})
+            line = json.dumps(to_jsonable(entry), sort_keys=True) + "\n"
+            with open(self.path / MANIFEST, "a", encoding="utf-8") as fh:
+                fh.write(line)
+                fh.flush()
+                listed = True
+                os.fsync(fh.fileno())
+        except BaseException:
+            # the files must not outlive a missing manifest line (full disk, Ctrl-C)
+            if not listed:
+                for name in files:
+                    with contextlib.suppress(OSError):
+                        (self.path / name).unlink()
+            raise
+        finally:
+            with contextlib.suppress(OSError):
+                pending.unlink()
+        _fsync_dir(self.path)
+        self.entries.append(entry)
+        return entry
+
+    @property
+    def manifest(self) -> Path:
+        return self.path / MANIFEST
