@@ -56,7 +56,12 @@ def grammarkit_constraints() -> Iterable["ConstraintSpec"]:
 
 @hookspec
 def grammarkit_backends() -> Iterable["BackendSpec"]:
-    """Back ends for `grammarkit derive --backend NAME` and the Python API."""
+    """Back ends for `grammarkit derive --backend NAME` and `grammarkit.run.run_backend`.
+
+    Return `grammarkit.run.BackendSpec`s. A back end's `run(request)` is a generator that
+    yields `grammarkit.run.Result`s and never writes files; its `options` is a pydantic model
+    of its `--option key=value` settings. See grammarkit/run/backend.py and docs/plugins.md.
+    """
 
 
 @hookspec
@@ -67,3 +72,9 @@ def grammarkit_exporters() -> Iterable["ExporterSpec"]:
 @hookspec
 def grammarkit_cli_commands() -> Iterable["click.Command"]:
     """Extra `grammarkit` subcommands (click commands). Names must not clash with built-ins."""
+
+
+@hookspec
+def grammarkit_train_commands() -> Iterable["click.Command"]:
+    """Subcommands of `grammarkit train` (click commands), one per trainable model kind, e.g.
+    `grammarkit train string-vae DATASET -o model.vae`. Names must be unique across plugins."""

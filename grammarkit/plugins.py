@@ -14,7 +14,7 @@ import pluggy
 
 from . import hookspecs
 from .errors import PluginError
-from .registry import BackendSpec, ConstraintSpec, ExporterSpec, FunctionSpec, OperationSpec
+from .registry import BackendSpec, ConstraintSpec, ExporterSpec, FunctionSpec, OperationSpec, Registries
 
 ENTRY_POINT_GROUP = "grammarkit"
 
@@ -135,6 +135,17 @@ class PluginManager:
     def cli_commands(self) -> dict[str, Any]:
         return self._collect("grammarkit_cli_commands", lambda c: c.name, "command")
 
+    def train_commands(self) -> dict[str, Any]:
+        return self._collect("grammarkit_train_commands", lambda c: c.name, "train command")
+
+    def registries(self) -> "Registries":
+        """What the plugins provide, as the core receives it; each kind loads on first use."""
+        from .registry import Registries
+
+        return Registries({"operations": self.operations, "functions": self.functions,
+                           "constraints": self.constraints, "exporters": self.exporters,
+                           "backends": self.backends})
+
     def backend(self, name: str) -> BackendSpec:
         backends = self.backends()
         if name not in backends:
@@ -151,7 +162,7 @@ class PluginManager:
     def plugins(self) -> list[PluginInfo]:
         """Every plugin with what it provides and any error, collecting all kinds first."""
         for method in (self.operations, self.functions, self.constraints, self.backends,
-                       self.exporters, self.cli_commands):
+                       self.exporters, self.cli_commands, self.train_commands):
             method()
         return sorted(self._infos.values(), key=lambda i: i.name)
 

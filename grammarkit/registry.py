@@ -70,48 +70,68 @@ class ConstraintSpec:
 
 @dataclass(frozen=True)
 class ExporterSpec:
-    """A mesh/model writer for a file format (`glb`, `obj`, `stl`, `ply`, ...).
+    """A model writer for a file format (`glb`, `obj`, `stl`, `ply`, ...).
 
-    `write(model, path)` writes atomically (temporary file, then rename).
+    `encode(model) -> bytes` turns a split `Model`, a tiling `Assembly`, a trimesh Scene or
+    Trimesh into the file's bytes; it never touches the file system (the run layer's writer
+    writes atomically and checks the bytes first). `check(data) -> str | None` optionally
+    says what is wrong with bytes that cannot be a valid file of this format.
     """
 
     format: str
     suffixes: tuple[str, ...]
     doc: str = ""
-    write: Callable[..., None] | None = field(default=None, compare=False, repr=False)
+    encode: Callable[[Any], bytes] | None = field(default=None, compare=False, repr=False)
+    check: Callable[[bytes], "str | None"] | None = field(default=None, compare=False, repr=False)
     plugin: str = ""
 
 
-@dataclass
-class DeriveRequest:
-    """What `grammarkit derive` asks of a back end.
+# The back-end contract lives with the run layer; re-exported here with the other specs.
+from .run.backend import BackendSpec  # noqa: E402
 
-    `progress(description, total)` returns a callable `advance(n=1, **fields)`; back ends
-    call it to drive the CLI's progress bar (a no-op in the Python API).
+
+class Registries:
+    """What plugins provide, by kind, as the core receives it (never the global manager).
+
+    Each kind is a name -> spec mapping computed on first access (so a command that needs no
+    exporters never runs exporter hooks). Build one from explicit mappings for tests, or get
+    the plugin manager's with `grammarkit.plugins.get_plugin_manager().registries()`.
     """
 
-    out: Any  # pathlib.Path: a file or a folder, as the back end documents
-    n: int = 1
-    iterations: int = 1
-    seed: int = 0
-    workers: int | None = None
-    options: dict[str, str] = field(default_factory=dict)
-    progress: Callable[..., Callable[..., None]] | None = None
+    KINDS = ("operations", "functions", "constraints", "exporters", "backends")
 
+    def __init__(self, loaders: dict[str, Callable[[], dict]] | None = None, **mappings: dict):
+        self._loaders = dict(loaders or {})
+        self._values: dict[str, dict] = {}
+        for kind, mapping in mappings.items():
+            if kind not in self.KINDS:
+                raise TypeError(f"Registries: unknown kind {kind!r}")
+            self._values[kind] = dict(mapping)
 
-@dataclass(frozen=True)
-class BackendSpec:
-    """A back end: turns a grammar (and its examples) into models.
+    def _get(self, kind: str) -> dict:
+        value = self._values.get(kind)
+        if value is None:
+            loader = self._loaders.get(kind)
+            value = dict(loader()) if loader is not None else {}
+            self._values[kind] = value
+        return value
 
-    `derive(grammar, request) -> dict` writes its outputs under `request.out` and returns a
-    JSON-able summary (counts, timings) that the CLI prints. `families` says which grammar
-    families it accepts ("split", "tiling"); `default_for` marks it as the back end
-    `grammarkit derive` picks when `--backend` is not given.
-    """
+    @property
+    def operations(self) -> dict[str, OperationSpec]:
+        return self._get("operations")
 
-    name: str
-    summary: str
-    families: frozenset[str]
-    derive: Callable[..., dict] | None = field(default=None, compare=False, repr=False)
-    default_for: frozenset[str] = frozenset()
-    plugin: str = ""
+    @property
+    def functions(self) -> dict[str, FunctionSpec]:
+        return self._get("functions")
+
+    @property
+    def constraints(self) -> dict[str, ConstraintSpec]:
+        return self._get("constraints")
+
+    @property
+    def exporters(self) -> dict[str, ExporterSpec]:
+        return self._get("exporters")
+
+    @property
+    def backends(self) -> dict[str, BackendSpec]:
+        return self._get("backends")

@@ -21,6 +21,7 @@ BUILTIN_COMMANDS = [
     ("grammarkit.cli.tiling", "learn"),
     ("grammarkit.cli.tiling", "validate"),
     ("grammarkit.cli.render", "render"),
+    ("grammarkit.cli.train", "train"),
 ]
 
 

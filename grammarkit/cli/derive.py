@@ -1,9 +1,10 @@
-"""`grammarkit derive`: grammar file -> model file(s).
+"""`grammarkit derive`: grammar file -> model file, or a folder of results from a back end.
 
-Split grammars are derived by the split engine (`grammarkit.split`); tiling grammars (or any
-grammar with `--backend NAME`) are handed to a back end plugin with a DeriveRequest. Every
-output is computed in memory first and written atomically (temporary file + rename), so a
-failure never leaves a half-written file behind.
+Everything goes through the run layer (`grammarkit.run`): the split engine is the built-in
+`split` back end, tiling grammars go to the graph sampler (or `--backend NAME`). One model
+(`-o paris.glb`) is written with its preview and tree as one transaction; several results
+(`--variations N`, `-n N`, any tiling back end) go into a resumable folder with `run.json`
+and `manifest.jsonl`. Outputs are checked against the inputs and each other before any work.
 """
 from __future__ import annotations
 
@@ -13,11 +14,10 @@ from typing import Any, Callable
 
 import click
 
-from ..errors import GrammarError, GrammarkitError, PluginError, ShapeError
+from ..errors import GrammarkitError
 
-FORMATS = ("glb", "obj", "stl", "ply")
-# Resource guards of the command line: one run writes at most MAX_MODELS files (the manifest
-# of all of them is held in memory) and starts at most MAX_WORKERS processes.
+# Resource guards of the command line: one run writes at most MAX_MODELS files and starts at
+# most MAX_WORKERS processes.
 MAX_MODELS = 100_000
 MAX_WORKERS = 64
 
@@ -33,13 +33,13 @@ def _pairs(values: tuple[str, ...], option: str) -> dict[str, str]:
     return out
 
 
-def _progress_factory(console: Any) -> tuple[Any, Callable[..., Callable[..., None]]]:
+def progress_factory(console: Any) -> tuple[Any, Callable[..., Callable[..., None]]]:
     """A rich Progress and a `progress(description, total)` factory for back ends."""
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
     progress = Progress(TextColumn("[bold]{task.description}"), BarColumn(), MofNCompleteColumn(),
                         TimeElapsedColumn(), TextColumn("{task.fields[info]}"), console=console,
-                        transient=False)
+                        transient=False, disable=not console.is_terminal)
 
     def factory(description: str, total: int | None = None) -> Callable[..., None]:
         task = progress.add_task(description, total=total, info="")
@@ -51,127 +51,144 @@ def _progress_factory(console: Any) -> tuple[Any, Callable[..., Callable[..., No
     return progress, factory
 
 
-def _write_text(path: Path, text: str) -> None:
-    from ..fileio import atomic_output
-
-    with atomic_output(path) as tmp:
-        tmp.write_text(text, encoding="utf-8")
-
-
-def _check_format(out: Path, fmt: str | None) -> str:
+def _format_of(out: Path, fmt: str | None, formats: list[str]) -> str:
     if fmt:
+        fmt = fmt.lower().lstrip(".")
+        if fmt not in formats:
+            raise click.BadParameter(f"unknown format {fmt!r}; known formats: {', '.join(formats)}",
+                                     param_hint="--format")
         return fmt
     suffix = out.suffix.lower().lstrip(".")
-    if suffix in FORMATS or suffix == "gltf":
+    if suffix in formats:
         return suffix
     raise click.BadParameter(f"cannot tell the format of {out.name!r} from its suffix; "
-                             f"use --format ({'|'.join(FORMATS)})", param_hint="-o/--format")
-
-
-@click.command("derive")
-@click.argument("file", type=click.Path(exists=True, dir_okay=False, path_type=Path))
-@click.option("-o", "--out", required=True, type=click.Path(path_type=Path),
-              help="model file (split grammar), or folder (--variations, back ends)")
-@click.option("--preview", type=click.Path(path_type=Path), default=None,
-              help="also render a PNG preview (a folder with --variations)")
-@click.option("--seed", type=int, default=0, show_default=True, help="run seed")
-@click.option("--set", "sets", multiple=True, metavar="KEY=VALUE",
-              help="set an attr (checked against its range/enum); repeatable")
-@click.option("--format", "fmt", type=click.Choice(FORMATS), default=None,
-              help="output format (default: from the file suffix)")
-@click.option("--tree", type=click.Path(path_type=Path), default=None,
-              help="write the derivation tree as JSON")
-@click.option("--variations", type=click.IntRange(min=1, max=MAX_MODELS), default=None,
-              help=f"derive N variations into the -o folder (at most {MAX_MODELS})")
-@click.option("--backend", default=None, help="back end for tiling grammars (see `grammarkit plugins`)")
-@click.option("-n", "count", type=click.IntRange(min=1, max=MAX_MODELS), default=1, show_default=True,
-              help="number of models a back end should make")
-@click.option("--iterations", type=click.IntRange(min=1), default=1, show_default=True,
-              help="back end iterations (sampler steps)")
-@click.option("--workers", type=click.IntRange(min=1, max=MAX_WORKERS), default=None,
-              help="worker processes (back ends, and --variations)")
-@click.option("--option", "options", multiple=True, metavar="KEY=VALUE", help="back end option; repeatable")
-def derive(file: Path, out: Path, preview: Path | None, seed: int, sets: tuple[str, ...],
-           fmt: str | None, tree: Path | None, variations: int | None, backend: str | None,
-           count: int, iterations: int, workers: int | None, options: tuple[str, ...]) -> None:
-    """Derive a model from the grammar FILE.
-
-    \b
-    grammarkit derive grammars/paris.grammar -o paris.glb --preview paris.png
-    grammarkit derive grammars/paris.grammar -o out/ --variations 20
-    grammarkit derive castle.grammar -o out/ -n 10 --backend graph-sampler
-    """
-    from rich.console import Console
-
-    from ..dsl import load
-
-    console = Console(stderr=True)
-    grammar = load(file)
-    if backend is not None or grammar.family == "tiling":
-        _run_backend(grammar, backend, out, count, iterations, seed, workers, _pairs(options, "--option"),
-                     console)
-        return
-    if grammar.family != "split":
-        raise GrammarError(f"{file}: the grammar has no rules to derive", None)
-    attrs = _pairs(sets, "--set")
-    if variations is not None:
-        _run_variations(grammar, out, variations, seed, attrs, fmt or "glb", preview, tree, console,
-                        file, workers)
-        return
-    _run_single(grammar, out, seed, attrs, _check_format(out, fmt), preview, tree, console)
-
-
-def _check_out_file(path: Path, option: str) -> None:
-    """Refuse an output path that can never be written, before any work is done."""
-    if path.is_dir():
-        raise click.BadParameter(f"{str(path)!r} is a folder; give a file name", param_hint=option)
+                             f"use --format ({'|'.join(formats)})", param_hint="-o/--format")
 
 
 def _check_image(path: Path, option: str) -> None:
     from PIL import Image
 
-    _check_out_file(path, option)
+    if path.is_dir():
+        raise click.BadParameter(f"{str(path)!r} is a folder; give a file name", param_hint=option)
     if Image.registered_extensions().get(path.suffix.lower()) is None:
         raise click.BadParameter(f"cannot tell the image format of {path.name!r} from its suffix; "
                                  "use .png (or .jpg, .webp, ...)", param_hint=option)
 
 
-def _make_folder(folder: Path) -> None:
-    try:
-        folder.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise ShapeError(f"{folder}: cannot create folder: {exc.strerror or exc}") from None
+@click.command("derive")
+@click.argument("file", type=click.Path(exists=True, dir_okay=False, path_type=Path))
+@click.option("-o", "--out", required=True, type=click.Path(path_type=Path),
+              help="model file (one split model), or folder (-n, --variations, tiling back ends)")
+@click.option("--preview", type=click.Path(path_type=Path), default=None, is_flag=False,
+              flag_value=Path("."), help="a PNG preview: a file for one model; for a folder of "
+              "results, give the flag alone and each result gets <id>.png")
+@click.option("--seed", type=int, default=0, show_default=True, help="run seed")
+@click.option("--set", "sets", multiple=True, metavar="KEY=VALUE",
+              help="set an attr of a split grammar (checked against its range/enum); repeatable")
+@click.option("--format", "fmt", default=None, help="output format (default: from the -o suffix, "
+              "or glb for folders); see `grammarkit plugins` for the exporters")
+@click.option("--tree", type=click.Path(path_type=Path), default=None, is_flag=False,
+              flag_value=Path("."), help="the derivation tree as JSON: a file for one model; for "
+              "a folder, give the flag alone and each result gets <id>.tree.json")
+@click.option("--variations", type=click.IntRange(min=1, max=MAX_MODELS), default=None,
+              help=f"split grammar: N variations (attrs resampled, choices re-rolled) into the -o folder")
+@click.option("--backend", default=None, help="back end (default: split for split grammars, "
+              "graph-sampler for tiling grammars; see `grammarkit plugins`)")
+@click.option("-n", "count", type=click.IntRange(min=1, max=MAX_MODELS), default=None,
+              help="number of results (a folder); split grammars use seeds SEED..SEED+N-1")
+@click.option("--iterations", type=click.IntRange(min=1), default=1, show_default=True,
+              help="back-end iterations (sampler steps)")
+@click.option("--workers", type=click.IntRange(min=1, max=MAX_WORKERS), default=None,
+              help="worker processes at most (default: one per CPU; started only when they pay)")
+@click.option("--option", "options", multiple=True, metavar="KEY=VALUE",
+              help="back-end option (see `grammarkit plugins`); repeatable")
+@click.option("--timeout", type=click.FloatRange(min=0, min_open=True), default=None,
+              help="stop with an error after this many seconds")
+@click.option("--overwrite", is_flag=True, help="folder output: discard an earlier run's results "
+              "instead of continuing it")
+def derive(file: Path, out: Path, preview: Path | None, seed: int, sets: tuple[str, ...],
+           fmt: str | None, tree: Path | None, variations: int | None, backend: str | None,
+           count: int | None, iterations: int, workers: int | None, options: tuple[str, ...],
+           timeout: float | None, overwrite: bool) -> None:
+    """Derive a model from the grammar FILE.
+
+    \b
+    grammarkit derive grammars/paris.grammar -o paris.glb --preview paris.png
+    grammarkit derive grammars/paris.grammar -o out/ --variations 20 --preview
+    grammarkit derive castle.grammar -o out/ -n 10 --backend graph-sampler
+    """
+    from rich.console import Console
+
+    from ..dsl import load
+    from ..plugins import get_plugin_manager
+    from ..run.api import resolve_backend
+
+    console = Console(stderr=True)
+    grammar = load(file)
+    registries = get_plugin_manager().registries()
+    spec = resolve_backend(grammar, backend, registries)
+    option_values: dict[str, Any] = _pairs(options, "--option")
+    attrs = _pairs(sets, "--set")
+    if grammar.family != "split":
+        for given, name in ((sets, "--set"), (variations, "--variations")):
+            if given:
+                raise click.UsageError(f"{name} applies to split grammars; {file} is a "
+                                       f"{grammar.family} grammar")
+    if variations is not None:
+        if count is not None:
+            raise click.UsageError("give either --variations N or -n N, not both")
+        if spec.name != "split":
+            raise click.UsageError(f"--variations applies to the split back end, not {spec.name!r}")
+        option_values["variations"] = "true"
+        count = variations
+    formats = sorted(registries.exporters)
+    if count is None and spec.name == "split":
+        _run_single(grammar, file, out, seed, attrs, _format_of(out, fmt, formats), preview, tree,
+                    option_values, timeout, registries, console)
+        return
+    if tree is not None:
+        if tree != Path(".") and tree.resolve() != out.resolve():
+            raise click.UsageError("for a folder of results, give --tree alone: each result gets "
+                                   "<id>.tree.json in the -o folder")
+        if spec.name != "split":
+            raise click.UsageError(f"--tree applies to split grammars; back end {spec.name!r} "
+                                   "has no derivation tree")
+        option_values["tree"] = "true"
+    if preview is not None and preview != Path(".") and preview.resolve() != out.resolve():
+        raise click.UsageError("for a folder of results, give --preview alone: each result gets "
+                               "<id>.png in the -o folder")
+    _run_folder(grammar, file, spec.name, out, count or 1, iterations, seed, attrs, option_values,
+                fmt, preview is not None, workers, timeout, overwrite, registries, console)
 
 
-def _run_single(grammar: Any, out: Path, seed: int, attrs: dict[str, str], fmt: str,
-                preview: Path | None, tree: Path | None, console: Any) -> None:
-    from contextlib import ExitStack
+def _run_single(grammar: Any, file: Path, out: Path, seed: int, attrs: dict[str, str], fmt: str,
+                preview: Path | None, tree: Path | None, options: dict[str, Any],
+                timeout: float | None, registries: Any, console: Any) -> None:
+    from ..run.api import encode_result, iter_results, preview_png
+    from ..run.writer import check_outputs, write_files
 
-    from ..geometry.exporters import atomic_output, export
-    from ..split import derive as derive_model
-
-    _check_out_file(out, "-o")
+    if out.is_dir():
+        raise click.BadParameter(f"{str(out)!r} is a folder; give a file name (or -n N for a folder "
+                                 "of results)", param_hint="-o")
     if preview is not None:
+        if preview == Path("."):
+            raise click.UsageError("--preview needs a file name for one model, e.g. --preview out.png")
         _check_image(preview, "--preview")
     if tree is not None:
-        _check_out_file(tree, "--tree")
-    model = derive_model(grammar, seed=seed, attrs=attrs)
-    image = _preview(model) if preview is not None else None
-    tree_text = model.tree_json(indent=1) if tree is not None else None
-    for p in [out, preview, tree]:  # only now that everything is computed
-        if p is not None:
-            _make_folder(p.parent)
-    # one transaction: every file is written to its temporary name first and the renames
-    # happen only when all of them were written, so a failing preview or tree (a full disk,
-    # an unwritable folder) leaves an existing model file untouched, and vice versa
-    with ExitStack() as stack:
-        export(model.to_scene(), stack.enter_context(atomic_output(out)), fmt)
-        if image is not None:
-            from ..geometry.render import save_image
-            save_image(image, stack.enter_context(atomic_output(preview)),
-                       format=_image_format(preview))
-        if tree_text is not None:
-            stack.enter_context(atomic_output(tree)).write_text(tree_text, encoding="utf-8")
+        if tree == Path("."):
+            raise click.UsageError("--tree needs a file name for one model, e.g. --tree tree.json")
+        if tree.is_dir():
+            raise click.BadParameter(f"{str(tree)!r} is a folder; give a file name", param_hint="--tree")
+    check_outputs({"-o": out, "--preview": preview, "--tree": tree}, inputs=[file])
+    (result,) = iter_results(grammar, backend="split", n=1, seed=seed, attrs=attrs, options=options,
+                             timeout=timeout, registries=registries)
+    model = result.model
+    files: dict[Path, bytes | str] = {out: encode_result(result, fmt, registries)}
+    if preview is not None:
+        files[preview] = _image_bytes(preview_png(model), preview)
+    if tree is not None:
+        files[tree] = model.tree_json(indent=1)
+    write_files(files)  # one transaction: all of them, or none replaced
     for w in model.warnings:
         console.print(f"[yellow]warning:[/] {w}", highlight=False)
     click.echo(f"wrote {out} ({fmt}): {model.triangle_count} triangles, {len(model.parts)} terminals, "
@@ -179,118 +196,49 @@ def _run_single(grammar: Any, out: Path, seed: int, attrs: dict[str, str], fmt: 
                + (f"; tree {tree}" if tree else ""))
 
 
-def _image_format(path: Path) -> str:
+def _image_bytes(png: bytes, path: Path) -> bytes:
+    """PNG bytes converted to the format `path`'s suffix names."""
+    if path.suffix.lower() == ".png":
+        return png
+    import io
+
     from PIL import Image
 
-    return Image.registered_extensions()[path.suffix.lower()]
+    fmt = Image.registered_extensions()[path.suffix.lower()]
+    image = Image.open(io.BytesIO(png))
+    if fmt in ("JPEG", "BMP") and image.mode == "RGBA":
+        image = image.convert("RGB")
+    buf = io.BytesIO()
+    image.save(buf, format=fmt)
+    return buf.getvalue()
 
 
-def _preview(model: Any) -> Any:
-    from ..geometry.render import render
+def _run_folder(grammar: Any, file: Path, backend: str, out: Path, n: int, iterations: int,
+                seed: int, attrs: dict[str, str], options: dict[str, Any], fmt: str | None,
+                preview: bool, workers: int | None, timeout: float | None, overwrite: bool,
+                registries: Any, console: Any) -> None:
+    from ..run.api import run_backend
 
-    return render(model.mesh, style="shaded+lines", size=(640, 640))
-
-
-def _variation_job(job: tuple) -> dict:
-    """Derive and write variation `index` (in a worker process or in the main one)."""
-    grammar, index, seed, attrs, fmt, out, preview, tree = job
-    from ..geometry.exporters import export
-    from ..split import load_grammar, variations as split_variations
-
-    g = load_grammar(grammar)
-    name = g.name or "model"
-    (var, model), = split_variations(g, 1, seed=seed, attrs=attrs, start=index)
-    stem = f"{name}_{var.index:04d}"
-    path = Path(out) / f"{stem}.{fmt}"
-    export(model.to_scene(), path, fmt)
-    entry = {"file": path.name, **var.to_dict(), "triangles": model.triangle_count,
-             "terminals": len(model.parts)}
-    if preview is not None:
-        from ..geometry.render import save_image
-        save_image(_preview(model), Path(preview) / f"{stem}.png")
-        entry["preview"] = str(Path(preview) / f"{stem}.png")
-    if tree:
-        _write_text(Path(out) / f"{stem}.tree.json", model.tree_json())
-    return entry
-
-
-def _run_variations(grammar: Any, out: Path, n: int, seed: int, attrs: dict[str, str], fmt: str,
-                    preview: Path | None, tree: Path | None, console: Any, file: Path,
-                    workers: int | None) -> None:
-    from ..split import check_attrs
-
-    if out.suffix and out.suffix.lower().lstrip(".") in FORMATS + ("gltf",):
-        raise click.BadParameter("with --variations, -o is a folder", param_hint="-o")
-    if out.exists() and not out.is_dir():
-        raise click.BadParameter(f"with --variations, -o is a folder; {str(out)!r} is a file",
-                                 param_hint="-o")
-    if preview is not None and preview.exists() and not preview.is_dir():
-        raise click.BadParameter(f"with --variations, --preview is a folder; {str(preview)!r} is a file",
-                                 param_hint="--preview")
-    check_attrs(grammar, attrs)  # a bad --set fails before any folder is made
-    _make_folder(out)
-    if preview is not None:
-        _make_folder(preview)
-    workers = min(workers, n) if workers else None
-    progress, factory = _progress_factory(console)
-    name = grammar.name or "model"
-    # workers re-load the grammar from its file (a Grammar object does not cross processes
-    # cheaply); the main process passes its own object
-    jobs = [(grammar if not workers or workers < 2 else str(file), i, seed, attrs, fmt, str(out),
-             str(preview) if preview is not None else None, tree is not None) for i in range(n)]
-    manifest: list[dict] = []
-    with progress:
-        advance = factory(f"deriving {n} variations of {name}", n)
-        if workers and workers > 1:
-            import multiprocessing as mp
-            from concurrent.futures import ProcessPoolExecutor
-
-            with ProcessPoolExecutor(workers, mp_context=mp.get_context("spawn")) as pool:
-                for entry in pool.map(_variation_job, jobs, chunksize=max(1, n // (8 * workers))):
-                    manifest.append(entry)
-                    advance(1, file=entry["file"])
-        else:
-            for job in jobs:
-                entry = _variation_job(job)
-                manifest.append(entry)
-                advance(1, file=entry["file"])
-    _write_text(out / "variations.json", json.dumps({"grammar": name, "seed": seed, "variations": manifest},
-                                                    indent=1, default=str))
-    click.echo(f"wrote {n} variations to {out}/ (manifest: {out / 'variations.json'})")
+    progress, factory = progress_factory(console)
+    written: list[str] = []
+    try:
+        with progress:
+            summary = run_backend(grammar, out=out, backend=backend, n=n, seed=seed,
+                                  iterations=iterations, attrs=attrs, options=options,
+                                  workers=workers, format=fmt, preview=preview, progress=factory,
+                                  timeout=timeout, overwrite=overwrite, inputs=(file,),
+                                  registries=registries, on_result=lambda e: written.append(e["id"]))
+    except KeyboardInterrupt:
+        click.echo(f"interrupted: {len(written)} new results written to {out}/ (manifest.jsonl lists "
+                   "every complete one); run the same command again to continue", err=True)
+        raise SystemExit(130) from None
+    if summary.resumed:
+        console.print(f"continued an earlier run: {summary.resumed} results were already in {out}/",
+                      highlight=False)
+    if summary.shortfall:
+        console.print(f"[yellow]warning:[/] made {summary.total} of {n} requested results: "
+                      f"{summary.shortfall}", highlight=False)
+    click.echo(json.dumps(summary.to_dict(), indent=1, default=str))
 
 
-def _run_backend(grammar: Any, name: str | None, out: Path, n: int, iterations: int, seed: int,
-                 workers: int | None, options: dict[str, str], console: Any) -> None:
-    from ..plugins import get_plugin_manager
-    from ..registry import DeriveRequest
-
-    pm = get_plugin_manager()
-    family = grammar.family
-    spec = pm.backend(name) if name is not None else pm.default_backend(family)
-    if spec is None:
-        known = ", ".join(sorted(pm.backends())) or "none installed"
-        raise GrammarkitError(f"no default back end for {family} grammars; pass --backend NAME "
-                              f"(known: {known})")
-    if family not in spec.families:
-        raise GrammarkitError(f"back end {spec.name!r} does not derive {family} grammars "
-                              f"(it accepts: {', '.join(sorted(spec.families))})")
-    if spec.derive is None:
-        raise GrammarkitError(f"back end {spec.name!r} (plugin {spec.plugin!r}) has no derive function")
-    if out.exists() and not out.is_dir():
-        raise click.BadParameter(f"a back end writes into a folder; {str(out)!r} is a file", param_hint="-o")
-    # (the back end makes the folder itself, once its options are known to be good)
-    progress, factory = _progress_factory(console)
-    request = DeriveRequest(out=out, n=n, iterations=iterations, seed=seed, workers=workers,
-                            options=options, progress=factory)
-    with progress:
-        try:
-            summary = spec.derive(grammar, request)
-        except GrammarkitError:
-            raise
-        except OSError as exc:  # a file the back end could not write or read
-            where = exc.filename or out
-            raise ShapeError(f"{where}: back end {spec.name!r}: {exc.strerror or exc}") from None
-        except Exception as exc:  # noqa: BLE001 - a plugin crashed: name it, no traceback
-            raise PluginError(f"back end {spec.name!r} (plugin {spec.plugin!r}) failed: "
-                              f"{type(exc).__name__}: {exc}") from None
-    click.echo(json.dumps(summary, indent=1, default=str))
+__all__ = ["derive", "progress_factory", "GrammarkitError"]

@@ -144,25 +144,22 @@ def _world_mesh(scene: trimesh.Scene) -> trimesh.Trimesh:
 # ------------------------------------------------------------------------------------------
 # Writers
 # ------------------------------------------------------------------------------------------
-def _write_glb(obj: Any, path: Path) -> None:
-    data = _prepared_scene(to_scene(obj)).export(file_type="glb")
-    with atomic_output(path) as tmp:
-        tmp.write_bytes(data)
+def encode_glb(obj: Any) -> bytes:
+    return _prepared_scene(to_scene(obj)).export(file_type="glb")
 
 
-def _write_gltf(obj: Any, path: Path) -> None:
+def encode_gltf(obj: Any) -> bytes:
     from trimesh.exchange.gltf import export_gltf
 
     files = export_gltf(_prepared_scene(to_scene(obj)), embed_buffers=True)
     text = files.get("model.gltf") or next(iter(files.values()))
-    with atomic_output(path) as tmp:
-        tmp.write_bytes(text if isinstance(text, bytes) else str(text).encode("utf-8"))
+    return text if isinstance(text, bytes) else str(text).encode("utf-8")
 
 
-def _write_obj(obj: Any, path: Path) -> None:
+def encode_obj(obj: Any) -> bytes:
     """OBJ with one `o`/`g` group per part (vertex colours as `v x y z r g b`) and the part's
     extras as a `# extras {...}` comment line that `load_mesh` reads back."""
-    lines = [f"# written by grammarkit", ""]
+    lines = ["# written by grammarkit", ""]
     offset = 1
     for name, mesh, matrix, extras in _nodes(to_scene(obj)):
         mesh = _split_color_seams(mesh)
@@ -181,20 +178,15 @@ def _write_obj(obj: Any, path: Path) -> None:
         lines.extend(f"f {a} {b} {d}" for a, b, d in f.tolist())
         offset += len(v)
         lines.append("")
-    with atomic_output(path) as tmp:
-        tmp.write_text("\n".join(lines), encoding="utf-8")
+    return "\n".join(lines).encode("utf-8")
 
 
-def _write_stl(obj: Any, path: Path) -> None:
-    data = _world_mesh(to_scene(obj)).export(file_type="stl")
-    with atomic_output(path) as tmp:
-        tmp.write_bytes(data)
+def encode_stl(obj: Any) -> bytes:
+    return _world_mesh(to_scene(obj)).export(file_type="stl")
 
 
-def _write_ply(obj: Any, path: Path) -> None:
-    data = _world_mesh(to_scene(obj)).export(file_type="ply", encoding="binary")
-    with atomic_output(path) as tmp:
-        tmp.write_bytes(data)
+def encode_ply(obj: Any) -> bytes:
+    return _world_mesh(to_scene(obj)).export(file_type="ply", encoding="binary")
 
 
 # The specs (and the hookimpl registering them) live in exporter_plugin.py, which stays light.
@@ -239,12 +231,34 @@ def exporter_for(path: str | Path, format: str | None = None) -> ExporterSpec:
                      "or pass format=")
 
 
+def encode(obj: Any, format: str) -> bytes:
+    """The bytes of `obj` in `format`, checked (never empty, structurally a file of that kind)."""
+    spec = exporter_for("", format)
+    return encode_with(spec, obj)
+
+
+def encode_with(spec: ExporterSpec, obj: Any) -> bytes:
+    """Run an exporter and check what it produced before anyone writes it anywhere."""
+    if spec.encode is None:
+        raise ShapeError(f"exporter {spec.format!r} (plugin {spec.plugin!r}) has no encode function")
+    data = spec.encode(obj)
+    if isinstance(data, str):
+        data = data.encode("utf-8")
+    if not isinstance(data, (bytes, bytearray)) or not data:
+        raise ShapeError(f"exporter {spec.format!r} (plugin {spec.plugin or 'unknown'!r}) produced "
+                         f"{'no data' if not data else type(data).__name__}; nothing was written")
+    problem = spec.check(bytes(data)) if spec.check is not None else None
+    if problem:
+        raise ShapeError(f"exporter {spec.format!r} (plugin {spec.plugin or 'unknown'!r}) produced an "
+                         f"invalid file ({problem}); nothing was written")
+    return bytes(data)
+
+
 def export(obj: Any, path: str | Path, format: str | None = None) -> Path:
     """Write a Scene / Trimesh / model / assembly to `path` atomically; returns the path."""
+    from ..run.writer import write_files
+
     path = Path(path)
     spec = exporter_for(path, format)
-    writer: Callable[..., None] | None = spec.write
-    if writer is None:
-        raise ShapeError(f"exporter {spec.format!r} has no writer")
-    writer(obj, path)
+    write_files({path: encode_with(spec, obj)})
     return path

@@ -190,15 +190,10 @@ def preview_png(model: Any, size: tuple[int, int] = (640, 640)) -> bytes:
     """A shaded picture of a split Model, an Assembly or a mesh, as PNG bytes."""
     import io
 
-    from ..geometry.render import render, save_image
+    from ..geometry.render import render
 
-    mesh = getattr(model, "mesh", None)
-    if mesh is None:
-        from ..geometry.exporters import to_scene
-
-        mesh = to_scene(model).dump(concatenate=True)
     buf = io.BytesIO()
-    save_image(render(mesh, style="shaded+lines", size=size), buf, format="PNG")
+    render(model, style="shaded+lines", size=size).save(buf, format="PNG")
     return buf.getvalue()
 
 
@@ -281,6 +276,12 @@ def run_backend(grammar: Any, *, out: str | Path, backend: str | None = None, n:
             summary.written += 1
             if on_result is not None:
                 on_result(entry)
+        else:
+            # the back end was asked for n: let it finish so that its summary comes back
+            try:
+                next(gen)
+            except StopIteration as stop:
+                stats = stop.value or {}
     finally:
         gen.close()
     summary.stats = stats

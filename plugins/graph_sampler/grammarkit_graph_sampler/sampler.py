@@ -24,8 +24,6 @@ order, so the output does not depend on the number of worker processes.
 """
 from __future__ import annotations
 
-import multiprocessing as mp
-import os
 import time
 from dataclasses import dataclass, field
 from typing import Any, Callable, Iterator, Sequence
@@ -33,73 +31,14 @@ from typing import Any, Callable, Iterator, Sequence
 import numpy as np
 
 from . import geometry
-from .dedupe import MODES, Deduper
+from .dedupe import Deduper
+from .options import SamplerOptions
 from .graph_ops import (
     adjacency_from_edges, cut_layers, distance_matrix, histogram_key, kept_region, match_boundary,
     random_connected_subgraph,
 )
 
-CHUNK = 8  # attempts per message to a worker process (load balancing within a batch)
 OUTCOMES = ("no-cut", "no-match", "too-large", "known", "docking", "invalid", "valid")
-
-
-@dataclass(frozen=True)
-class SamplerOptions:
-    """Parameters of the method (defaults follow the paper and the authors' code)."""
-
-    tolerance: float = 0.1  # pairwise centroid distances: |d1 - d2| <= tolerance * part size
-    dock_tolerance: float = 0.01  # boundary misalignment after Kabsch / boundary bbox diagonal
-    min_subgraph: int = 4  # sampled subgraph sizes: min_subgraph .. 3/4 of the donor's parts
-    max_subgraph_fraction: float = 0.75
-    keep_prob: float = 0.5  # randomised BFS: chance a seen neighbour joins in a round
-    attempts_per_shape: int = 256  # attempts per iteration = this x new shapes of last iteration
-    min_attempts: int = 512
-    max_attempts: int = 100000  # per iteration (resource guard)
-    batch_size: int = 128  # attempts evaluated against the same state (fixed: determinism)
-    dedupe: str = "histogram"  # or "isomorphism"
-    max_parts: int | None = None  # default: 4 x the largest example
-    max_match_steps: int = 2000  # assignments tried per boundary search
-    contact_tolerance: float | None = None  # absolute; default from the examples' scale
-    incremental: bool = True  # False: recompute the whole shape graph (benchmark baseline)
-
-    @classmethod
-    def from_strings(cls, options: dict[str, str]) -> "SamplerOptions":
-        """Build from CLI `--option key=value` strings; unknown keys and bad values are errors."""
-        kwargs: dict[str, Any] = {}
-        fields_ = cls.__dataclass_fields__
-        for key, raw in options.items():
-            name = key.replace("-", "_")
-            if name not in fields_:
-                known = ", ".join(sorted(k.replace("_", "-") for k in fields_))
-                raise ValueError(f"unknown graph-sampler option {key!r}; known options: {known}")
-            ftype = str(fields_[name].type)
-            value: Any = raw
-            try:
-                if isinstance(raw, str):
-                    if "bool" in ftype:
-                        if raw.lower() not in ("1", "0", "true", "false", "yes", "no"):
-                            raise ValueError(raw)
-                        value = raw.lower() in ("1", "true", "yes")
-                    elif "float" in ftype:
-                        value = None if raw.lower() == "none" else float(raw)
-                    elif "int" in ftype:
-                        value = None if raw.lower() == "none" else int(raw)
-            except ValueError:
-                raise ValueError(f"graph-sampler option {key}={raw!r}: expected {ftype}") from None
-            kwargs[name] = value
-        return cls(**kwargs).checked()
-
-    def checked(self) -> "SamplerOptions":
-        if self.dedupe not in MODES:
-            raise ValueError(f"graph-sampler option dedupe={self.dedupe!r}: use one of {', '.join(MODES)}")
-        for name in ("tolerance", "dock_tolerance"):
-            if not getattr(self, name) > 0:
-                raise ValueError(f"graph-sampler option {name} must be > 0")
-        if not 0 < self.keep_prob <= 1:
-            raise ValueError("graph-sampler option keep_prob must be in (0, 1]")
-        if self.batch_size < 1 or self.min_subgraph < 3 or self.max_attempts < 1:
-            raise ValueError("graph-sampler options batch_size >= 1, min_subgraph >= 3, max_attempts >= 1")
-        return self
 
 
 @dataclass
@@ -302,185 +241,46 @@ def run_attempt(ctx: _Context, iteration: int, index: int, known: frozenset) -> 
     return AttemptResult(iteration, index, "valid", shape=shape)
 
 
-# -- worker processes ------------------------------------------------------------------------
-# Workers are started with "spawn", not "fork": manifold3d (the contact narrow phase for
-# non-box parts) runs a TBB thread pool, and a child forked from a process whose pool is
-# running deadlocks on its first manifold call. Each worker keeps its own copy of the pool of
-# shapes; the parent sends each iteration's new shapes once, then batches of attempt indices.
-# Starting a spawned worker (a fresh Python importing numpy/trimesh/manifold3d/grammarkit)
-# takes seconds on a loaded 2-core machine, so workers persist across runs (`_POOL`).
+# -- parallel attempts -------------------------------------------------------------------------
+# Attempts run through grammarkit's one executor (grammarkit.run.executor): a session whose
+# state is an attempt `_Context`, updated with each iteration's new shapes and each batch's
+# newly known histograms, and mapped over attempt indices. The executor decides whether
+# worker processes pay for themselves and keeps results in attempt order, so the output does
+# not depend on the number of workers.
 def _strip(shape: "Shape") -> "Shape":
     """A copy without the derived arrays (rebuilt on arrival; keeps pickles small)."""
     return Shape(shape.key, shape.protos, shape.transforms, shape.edges, shape.iteration,
                  shape.parents, shape.operation, shape.ids)
 
 
-def _worker_main(conn) -> None:  # pragma: no cover - runs in the child process
-    # A persistent worker: it serves one sampler run after another (each starts with "init"),
-    # so a run does not pay for starting a Python and importing numpy/trimesh/manifold3d.
-    ctx: _Context | None = None
-    known: set = set()
-    while True:
-        try:
-            msg = conn.recv()
-        except (EOFError, OSError):
-            return  # the parent went away
-        if msg[0] == "init":
-            protos, options, seed, rules, tolerance, max_parts = msg[1]
-            ctx = _Context(protos, [], [], options, seed, rules, tolerance, max_parts)
-            known = set()
-        elif msg[0] == "pool":
-            _, added, fresh = msg
-            ctx.pool.extend(sh.prepare(ctx.protos) for sh in added)
-            ctx.fresh = list(fresh)
-        elif msg[0] == "run":
-            _, iteration, indices, known_added = msg
-            known.update(known_added)  # the parent sends each known histogram once
-            out = []
-            for i in indices:
-                res = run_attempt(ctx, iteration, i, known)
-                if res.shape is not None:
-                    res.shape = _strip(res.shape)
-                out.append(res)
-            conn.send(out)
-        else:
-            conn.close()
-            return
+def _session_init(protos, options, seed, rules, tolerance, max_parts) -> _Context:
+    ctx = _Context(protos, [], [], options, seed, rules, tolerance, max_parts)
+    ctx.known = set()  # type: ignore[attr-defined]
+    return ctx
 
 
-# Worker processes outlive a run (module-level, daemonic: they end with this process). A run
-# takes the first `workers` of them and sends "init"; a run interrupted while a batch is out
-# drops the workers it used (their pipes may still hold stale results).
-_POOL: list[tuple[Any, Any]] = []  # (process, connection to it)
+def _session_pool(ctx: _Context, added: list, fresh: list) -> None:
+    """The pool as of the start of an iteration (attempts see no later shapes)."""
+    ctx.pool.extend(sh if sh.adj is not None else sh.prepare(ctx.protos) for sh in added)
+    ctx.fresh = list(fresh)
 
 
-def _pool_workers(count: int) -> list[tuple[Any, Any]]:
-    global _POOL
-    _POOL = [(proc, conn) for proc, conn in _POOL if proc.is_alive() and not conn.closed]
-    if len(_POOL) < count:
-        mpc = mp.get_context("spawn")
-        for _ in range(count - len(_POOL)):
-            parent, child = mpc.Pipe()
-            proc = mpc.Process(target=_worker_main, args=(child,), daemon=True)
-            proc.start()
-            child.close()
-            _POOL.append((proc, parent))
-    return _POOL[:count]
+def _session_known(ctx: _Context, added: list) -> None:
+    ctx.known.update(added)  # type: ignore[attr-defined]
 
 
-def _pool_drop(conns: list) -> None:
-    global _POOL
-    keep = []
-    for proc, conn in _POOL:
-        if conn in conns:
-            try:
-                conn.close()
-            except OSError:
-                pass
-            proc.terminate()
-            proc.join(timeout=5)
-        else:
-            keep.append((proc, conn))
-    _POOL = keep
-
-
-def shutdown_workers() -> None:
-    """Stop the persistent worker processes (they also end with this process)."""
-    global _POOL
-    for proc, conn in _POOL:
-        try:
-            conn.send(("stop",))
-            conn.close()
-        except (OSError, BrokenPipeError):
-            pass
-    for proc, _ in _POOL:
-        proc.join(timeout=5)
-        if proc.is_alive():
-            proc.terminate()
-            proc.join()
-    _POOL = []
-
-
-class _Executor:
-    """Runs a batch of attempts in this process or spread over worker processes, in order."""
-
-    def __init__(self, ctx: _Context, workers: int):
-        self.ctx = ctx
-        self.workers = workers
-        self.conns: list = []
-        self.procs: list = []
-        self.sent = 0  # pool shapes the workers already have
-        self.known_sent: list[set] = []  # per worker: histogram keys it already has
-        self.busy = False  # a batch is out (an exception now leaves results in the pipes)
-        if workers > 1:
-            init = (ctx.protos, ctx.options, ctx.seed, ctx.rules, ctx.contact_tolerance, ctx.max_parts)
-            for proc, conn in _pool_workers(workers):
-                conn.send(("init", init))
-                self.conns.append(conn)
-                self.procs.append(proc)
-                self.known_sent.append(set())
-
-    def start_iteration(self, pool: list[Shape], fresh: list[int]) -> None:
-        """The pool as of the start of an iteration (a snapshot: attempts see no later shapes)."""
-        self.ctx.pool = list(pool)
-        self.ctx.fresh = list(fresh)
-        if self.conns:
-            added = [_strip(sh) for sh in pool[self.sent:]]
-            for conn in self.conns:
-                conn.send(("pool", added, list(fresh)))
-            self.sent = len(pool)
-
-    def run(self, iteration: int, indices: list[int], known: frozenset) -> list[AttemptResult]:
-        if not self.conns:
-            return [run_attempt(self.ctx, iteration, i, known) for i in indices]
-        from multiprocessing.connection import wait
-
-        # Small chunks handed to whichever worker is free (a busy core does not hold up the
-        # batch); results are put back in chunk order = attempt order.
-        size = max(1, min(CHUNK, -(-len(indices) // len(self.conns))))
-        chunks = [indices[j:j + size] for j in range(0, len(indices), size)]
-        results: list[list[AttemptResult] | None] = [None] * len(chunks)
-        pending = list(range(len(chunks)))
-        working: dict = {}  # conn -> chunk index
-
-        def give(w: int) -> None:
-            conn, have = self.conns[w], self.known_sent[w]
-            c = pending.pop(0)
-            added = known - have
-            have |= added
-            conn.send(("run", iteration, chunks[c], sorted(added)))
-            working[conn] = (w, c)
-
-        self.busy = True
-        for w in range(min(len(self.conns), len(chunks))):
-            give(w)
-        while working:
-            for conn in wait(list(working)):
-                w, c = working.pop(conn)
-                try:
-                    results[c] = conn.recv()
-                except EOFError:
-                    from grammarkit.errors import DerivationError
-
-                    raise DerivationError("graph-sampler: a worker process died (out of memory?); "
-                                          "try fewer --workers") from None
-                if pending:
-                    give(w)
-        self.busy = False
-        return [r for part in results for r in part]  # type: ignore[union-attr]
-
-    def close(self) -> None:
-        """Release the workers: back to the pool, or stopped if a batch was interrupted."""
-        if self.busy:
-            _pool_drop(self.conns)
-        self.conns, self.procs, self.busy = [], [], False
+def _session_attempt(ctx: _Context, item: tuple[int, int]) -> "AttemptResult":
+    iteration, index = item
+    res = run_attempt(ctx, iteration, index, ctx.known)  # type: ignore[attr-defined]
+    if res.shape is not None:
+        res.shape = _strip(res.shape)
+    return res
 
 
 def default_workers() -> int:
-    try:
-        return max(1, len(os.sched_getaffinity(0)))
-    except AttributeError:  # pragma: no cover - non-Linux
-        return max(1, os.cpu_count() or 1)
+    from grammarkit.run.executor import default_workers as _default
+
+    return _default()
 
 
 @dataclass
@@ -507,19 +307,23 @@ class GraphSampler:
     """Sampler over the examples of one tiling grammar. `run()` yields kept variants."""
 
     def __init__(self, grammar=None, *, seed: int = 0, workers: int | None = None,
-                 options: SamplerOptions | None = None, examples=None, rules=None):
+                 options: SamplerOptions | None = None, examples=None, rules=None, executor=None):
         """`grammar`: a tiling Grammar (its rules and examples); or give `rules` (a
-        grammarkit.tiling Rules) and `examples` (Assemblies) directly."""
+        grammarkit.tiling Rules) and `examples` (Assemblies) directly. `executor`: a
+        grammarkit.run executor (default: a LocalExecutor with `workers` processes)."""
         if grammar is not None:
             grammar = geometry.as_grammar(grammar)
         elif rules is None or examples is None:
             raise ValueError("GraphSampler needs a grammar, or both rules and examples")
         self.grammar = grammar
         self.seed = int(seed)
-        self.workers = default_workers() if workers is None else max(1, int(workers))
-        self.options = (options or SamplerOptions()).checked()
-        if self.workers > 1:
-            _pool_workers(self.workers)  # they start up (imports) while the examples load
+        if executor is None:
+            from grammarkit.run.executor import LocalExecutor
+
+            executor = LocalExecutor(workers)
+        self.executor = executor
+        self.workers = executor.workers
+        self.options = options or SamplerOptions()
         self.rules = rules if rules is not None else geometry.rules(grammar)
         assemblies = list(examples) if examples is not None else geometry.load_examples(grammar)
         if not assemblies:
@@ -569,9 +373,10 @@ class GraphSampler:
         self.stats = []
         if n == 0 or iterations == 0:
             return
-        ctx = _Context(self.protos, [], [], opt, self.seed, self.rules, self.contact_tolerance,
-                       self.max_parts)
-        executor = _Executor(ctx, self.workers)
+        session = self.executor.session(_session_init, self.protos, opt, self.seed, self.rules,
+                                        self.contact_tolerance, self.max_parts)
+        sent = 0  # pool shapes the session already has
+        known_sent: set = set()
         try:
             for it in range(1, iterations + 1):
                 if emitted >= n or not fresh:
@@ -579,13 +384,17 @@ class GraphSampler:
                 t0 = time.perf_counter()
                 st = IterationStats(it, len(pool), len(fresh))
                 budget = min(opt.max_attempts, max(opt.min_attempts, opt.attempts_per_shape * len(fresh)))
-                executor.start_iteration(pool, fresh)
+                session.update(_session_pool, [_strip(sh) for sh in pool[sent:]], list(fresh))
+                sent = len(pool)
                 advance = progress(f"iteration {it}/{iterations}", budget) if progress else None
                 new_this: list[int] = []
                 for start in range(0, budget, opt.batch_size):
                     indices = list(range(start, min(budget, start + opt.batch_size)))
-                    known = frozenset(dedupe.histograms)
-                    for res in executor.run(it, indices, known):
+                    added = sorted(dedupe.histograms - known_sent)
+                    if added:
+                        session.update(_session_known, added)
+                        known_sent.update(added)
+                    for res in session.map(_session_attempt, [(it, i) for i in indices]):
                         st.attempts += 1
                         st.outcomes[res.outcome] += 1
                         if res.shape is None or emitted >= n:
@@ -612,7 +421,7 @@ class GraphSampler:
                 self.stats.append(st)
                 fresh = new_this
         finally:
-            executor.close()
+            session.close()
 
     def growth_table(self) -> list[dict]:
         rows = [{"iteration": 0, "shapes": len(self.examples), "new": len(self.examples)}]
@@ -656,7 +465,7 @@ def sample(grammar, n: int = 100, iterations: int = 4, seed: int = 0, workers: i
     """
     grammar = geometry.as_grammar(grammar)
     if option_kwargs:
-        options = SamplerOptions(**{**(options.__dict__ if options else {}), **option_kwargs})
+        options = SamplerOptions(**{**(options.model_dump() if options else {}), **option_kwargs})
     sampler = GraphSampler(grammar, seed=seed, workers=workers, options=options)
     for shape in sampler.run(n, iterations, progress=progress):
         yield sampler.to_assembly(shape)
