@@ -22,7 +22,7 @@ import pluggy
 if TYPE_CHECKING:  # pragma: no cover - types only
     import click
 
-    from .registry import BackendSpec, ConstraintSpec, ExporterSpec, FunctionSpec, OperationSpec
+    from .registry import BackendSpec, ConstraintSpec, ExporterSpec, FitSpec, FunctionSpec, OperationSpec
 
 PROJECT = "grammarkit"
 hookspec = pluggy.HookspecMarker(PROJECT)
@@ -78,3 +78,9 @@ def grammarkit_cli_commands() -> Iterable["click.Command"]:
 def grammarkit_train_commands() -> Iterable["click.Command"]:
     """Subcommands of `grammarkit train` (click commands), one per trainable model kind, e.g.
     `grammarkit train string-vae DATASET -o model.vae`. Names must be unique across plugins."""
+
+
+@hookspec
+def grammarkit_insert_fits() -> Iterable["FitSpec"]:
+    """Ways to fit an inserted asset into a scope, named in grammar text as
+    `i("asset.glb", fit=NAME)`; see `grammarkit.registry.FitSpec`."""

@@ -135,6 +135,9 @@ class PluginManager:
     def cli_commands(self) -> dict[str, Any]:
         return self._collect("grammarkit_cli_commands", lambda c: c.name, "command")
 
+    def fits(self) -> dict[str, Any]:
+        return self._collect("grammarkit_insert_fits", lambda f: f.name, "fit")
+
     def train_commands(self) -> dict[str, Any]:
         return self._collect("grammarkit_train_commands", lambda c: c.name, "train command")
 
@@ -144,7 +147,7 @@ class PluginManager:
 
         return Registries({"operations": self.operations, "functions": self.functions,
                            "constraints": self.constraints, "exporters": self.exporters,
-                           "backends": self.backends})
+                           "backends": self.backends, "fits": self.fits})
 
     def backend(self, name: str) -> BackendSpec:
         backends = self.backends()
@@ -162,7 +165,7 @@ class PluginManager:
     def plugins(self) -> list[PluginInfo]:
         """Every plugin with what it provides and any error, collecting all kinds first."""
         for method in (self.operations, self.functions, self.constraints, self.backends,
-                       self.exporters, self.cli_commands, self.train_commands):
+                       self.exporters, self.cli_commands, self.train_commands, self.fits):
             method()
         return sorted(self._infos.values(), key=lambda i: i.name)
 

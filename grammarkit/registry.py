@@ -86,6 +86,23 @@ class ExporterSpec:
     plugin: str = ""
 
 
+@dataclass(frozen=True)
+class FitSpec:
+    """A way to fit an inserted asset into a scope: `i("fence.glb", fit=NAME)` in split grammars.
+
+    `fit(mesh, size) -> mesh` receives the asset as a trimesh.Trimesh normalised to its bounding
+    box's minimum corner at the origin, and the scope size (sx, sy, sz); it returns the mesh to
+    insert (same frame, bounding box of `size`). The built-in behaviour (`fit=scale`, the
+    default) scales the asset; e.g. the retargeter plugin provides `fit=retarget`.
+    """
+
+    name: str
+    doc: str = ""
+    fit: Callable[[Any, tuple[float, float, float]], Any] | None = field(default=None, compare=False,
+                                                                          repr=False)
+    plugin: str = ""
+
+
 # The back-end contract lives with the run layer; re-exported here with the other specs.
 from .run.backend import BackendSpec  # noqa: E402
 
@@ -98,7 +115,7 @@ class Registries:
     the plugin manager's with `grammarkit.plugins.get_plugin_manager().registries()`.
     """
 
-    KINDS = ("operations", "functions", "constraints", "exporters", "backends")
+    KINDS = ("operations", "functions", "constraints", "exporters", "backends", "fits")
 
     def __init__(self, loaders: dict[str, Callable[[], dict]] | None = None, **mappings: dict):
         self._loaders = dict(loaders or {})
@@ -135,3 +152,7 @@ class Registries:
     @property
     def backends(self) -> dict[str, BackendSpec]:
         return self._get("backends")
+
+    @property
+    def fits(self) -> dict[str, FitSpec]:
+        return self._get("fits")
