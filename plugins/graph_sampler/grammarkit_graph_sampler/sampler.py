@@ -278,7 +278,7 @@ def _session_attempt(ctx: _Context, item: tuple[int, int]) -> "AttemptResult":
 
 
 def default_workers() -> int:
-    from grammarkit.run.executor import default_workers as _default
+    from grammarkit.run import default_workers as _default
 
     return _default()
 
@@ -318,7 +318,7 @@ class GraphSampler:
         self.grammar = grammar
         self.seed = int(seed)
         if executor is None:
-            from grammarkit.run.executor import LocalExecutor
+            from grammarkit.run import LocalExecutor
 
             executor = LocalExecutor(workers)
         self.executor = executor
