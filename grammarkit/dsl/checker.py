@@ -450,7 +450,7 @@ class Checker:
         binding = bind_operation(op, spec, fold=lambda e: self.const_value(e, scope), registries=self.reg)
         self.bag.items.extend(binding.problems)
         for bound in binding.arguments:
-            if bound.value is not None and bound.param.type not in ("axis", "selector"):
+            if bound.value is not None and bound.param.type not in ("axis", "selector", "name"):
                 self.check_expr(bound.value, scope)
         for value in binding.extra:
             self.check_expr(value, scope)
