@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import math
 import random
+import weakref
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Mapping
@@ -107,10 +108,11 @@ class CompiledGrammar:
     """The runnable form of a split grammar (one snippet binding, one set of registries).
     Immutable once compiled: per-derivation values live in the derivation (see module doc)."""
 
-    def __init__(self, grammar: Grammar, registries: Any = None):
-        self.grammar = grammar
+    def __init__(self, grammar: Grammar):
+        # no strong reference to the grammar or the registries: compile caches are keyed by
+        # them weakly, and an entry must not keep its own key alive
+        self._grammar = weakref.ref(grammar)
         self.name = grammar.name
-        self.registries = registries
         self.rules: dict[str, CRule] = {}
         self.axiom: CRule | None = None
         self.attrs: dict[str, AttrInfo] = {}
@@ -119,6 +121,11 @@ class CompiledGrammar:
         self.bindings: dict[str, str] = {}  # anchor -> snippet name
         self.base_dir = str(Path(grammar.source_path).parent) if grammar.source_path else None
         self._defaults: dict[str, Any] | None = None
+
+    @property
+    def grammar(self) -> Grammar | None:
+        """The grammar this was compiled from (None once nothing else holds it)."""
+        return self._grammar()
 
     # -- values ----------------------------------------------------------------------------
     def resolve_attr_keys(self, name: str) -> list[str]:
@@ -270,7 +277,7 @@ class _Compiler:
         self.registries = registries
         self.ops = registries.operations
         self.functions = registries.functions
-        self.out = CompiledGrammar(grammar, registries)
+        self.out = CompiledGrammar(grammar)
         self.top = {}
         for r in grammar.rules:
             if r.name in self.top:

@@ -128,6 +128,16 @@ def builtin_functions() -> dict[str, Any]:
     return {f.name: f for f in BUILTIN_FUNCTIONS}
 
 
+class _Failed:
+    """An attr or const whose value could not be computed: its error, raised where it is used
+    (an unused one, e.g. a split grammar's `scope.sx` in a mixed file, does no harm)."""
+
+    __slots__ = ("error",)
+
+    def __init__(self, error: GrammarError):
+        self.error = error
+
+
 def _env(grammar: "Grammar | None", functions: Any = None) -> dict[str, Any]:
     env: dict[str, Any] = {}
     if grammar is None:
@@ -136,8 +146,8 @@ def _env(grammar: "Grammar | None", functions: Any = None) -> dict[str, Any]:
     for st in (*grammar.attrs, *grammar.consts):
         try:
             env[st.name] = eval_value(st.value, env, functions)
-        except GrammarkitError:
-            pass
+        except GrammarError as exc:
+            env[st.name] = _Failed(exc)
     return env
 
 
@@ -146,9 +156,17 @@ def eval_value(expr, env: dict[str, Any] | None = None, functions: Any = None) -
     Errors are GrammarErrors located at the failing operator or call."""
     from ..expr_eval import evaluate
 
+    env = env or {}
+    variables = {k: v for k, v in env.items() if not isinstance(v, _Failed)}
+
+    def names(name: str) -> Any:
+        failed = env.get(name)
+        if isinstance(failed, _Failed):
+            raise failed.error
+        return name if "." not in name else None
     try:
-        return evaluate(expr, env or {}, functions=functions if functions is not None else builtin_functions(),
-                        names=lambda name: name if "." not in name else None)
+        return evaluate(expr, variables, functions=functions if functions is not None else builtin_functions(),
+                        names=names)
     except GrammarError:
         raise
     except GrammarkitError as exc:  # a DerivationError/LimitError of the evaluator: the grammar's fault here
