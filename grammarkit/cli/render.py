@@ -90,6 +90,9 @@ def render(model: Path, output: Path, style: str, size: str, pitch: float, yaw: 
     if output.suffix.lower() not in Image.registered_extensions():
         raise click.BadParameter(f"unknown image format {output.suffix or '(no suffix)'!r}; "
                                  "use .png, .jpg, .webp, ...", param_hint="--output")
+    from ..run.writer import check_outputs
+
+    check_outputs({"--output": output}, inputs=[model])  # never replace the model with its picture
     bg = _parse_color(background, "--background")
     lc = _parse_color(line_color, "--line-color") or (25, 25, 25)
     try:
