@@ -546,12 +546,16 @@ class Translator:
                 why = "texturing and UVs are not supported"
             elif name in _METADATA:
                 why = "reports, prints and labels are not collected"
+            elif name[:1].isupper():
+                why = ("no rule of this name and arity in this file (a rule that an importing "
+                       "file defines?)")
             else:
                 why = "grammarkit has no such operation"
             # Still translate the block's bodies so that their constructs are counted.
             if block is not None and rctx.counting:
                 self._count_block(block, frame, rctx)
-            self._record("op", name, "dropped", span, feature=f"op:{name}",
+            feature = "rule:undefined" if name[:1].isupper() else f"op:{name}"
+            self._record("op", name, "dropped", span, feature=feature,
                          message=f"{name}(): {why}", counting=rctx.counting)
             return []
         try:
