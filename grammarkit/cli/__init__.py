@@ -28,6 +28,7 @@ BUILTIN_COMMANDS: dict[str, tuple[str, str]] = {
     "validate": ("grammarkit.cli.tiling", "validate"),
     "render": ("grammarkit.cli.render", "render"),
     "train": ("grammarkit.cli.train", "train"),
+    "import-cga": ("grammarkit.cli.cga", "import_cga_command"),
 }
 
 
