@@ -100,13 +100,15 @@ def _error(message: str, span: Any, code: str, hint: str | None = None) -> Diagn
 
 
 def bind_operation(call: Any, spec: Any, fold: Fold | None = None, *, label: str | None = None,
-                   registries: Any = None) -> Binding:
+                   registries: Any = None, fold_fixed: Fold | None = None) -> Binding:
     """Bind the call's arguments to `spec.params` and check what the text shows of them.
 
     `call` is an `OpCall` (or a tiling `ConstraintDef`: anything with `name`, `args`, `span`),
     `spec` its OperationSpec (or ConstraintSpec); `label` names the call in messages (default:
     its name). `fold` (the checker's constant folding) lets the types of constant arguments be
-    checked too (`extrude(s)` with `attr s = "x"`); without it only literals are. With
+    checked too (`extrude(s)` with `attr s = "x"`); without it only literals are.
+    `fold_fixed` folds only what no attr override can change: values (a colour) are checked
+    on those, since an attr's default may be a placeholder (`attr c = ""` behind a guard). With
     `registries`, arguments of type `name` must name an entry of the registry kind they ask
     for (`i("a.glb", fit=retarget)`: a fit)."""
     label = label or call.name
@@ -151,7 +153,7 @@ def bind_operation(call: Any, spec: Any, fold: Fold | None = None, *, label: str
         if a is None:
             out.arguments.append(BoundArgument(p))
             continue
-        problem = _argument_problem(label, p, a.value, a.span or call.span, fold, registries)
+        problem = _argument_problem(label, p, a.value, a.span or call.span, fold, registries, fold_fixed)
         if problem is not None:
             problems.append(problem)
         out.arguments.append(BoundArgument(p, a.value, a.span or call.span))
@@ -159,7 +161,7 @@ def bind_operation(call: Any, spec: Any, fold: Fold | None = None, *, label: str
 
 
 def _argument_problem(label: str, p: Param, v: Any, where: Any, fold: Fold | None,
-                      registries: Any = None) -> Diagnostic | None:
+                      registries: Any = None, fold_fixed: Fold | None = None) -> Diagnostic | None:
     if p.type in ("axis", "selector"):
         if not isinstance(v, Ref) or "." in v.name or (p.choices and v.name not in p.choices):
             shown = "|".join(p.choices) if p.choices else "a name"
@@ -182,8 +184,10 @@ def _argument_problem(label: str, p: Param, v: Any, where: Any, fold: Fold | Non
     value = fold(v) if fold is not None and kind is None else None
     if value is not None:
         kind = _value_kind(value)
-    elif isinstance(v, Str):
+    if isinstance(v, Str):
         value = v.value
+    elif kind is None or value is not None:
+        value = fold_fixed(v) if fold_fixed is not None else None
     if kind is not None and kind != want:
         return _error(f"argument '{p.name}' of {label} must be {want}, not {kind}", where,
                       "bad-argument-type")

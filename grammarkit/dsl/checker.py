@@ -251,11 +251,13 @@ class Checker:
     def _fold(self, e: Any, scope: _Scope | None, used: list[str] | None, errors: list | None = None) -> Any:
         return fold_constant(e, lambda n: self._lookup(n, scope, used), self.reg.functions, errors)
 
-    def const_value(self, e: Any, scope: _Scope | None = None) -> Any:
+    def const_value(self, e: Any, scope: _Scope | None = None, fixed_only: bool = False) -> Any:
         """The value of a constant expression (attrs at their defaults), or None when it
-        depends on the derivation. Folded by the engines' evaluator (grammarkit.expr_eval)."""
-        value = self._fold(e, scope, None)
-        return None if value is NOT_CONSTANT else value
+        depends on the derivation (`fixed_only`: or on an attr, which `--set` may change).
+        Folded by the engines' evaluator (grammarkit.expr_eval)."""
+        used: list[str] = []
+        value = self._fold(e, scope, used if fixed_only else None)
+        return None if value is NOT_CONSTANT or used else value
 
     def report_fold_errors(self, e: Any, scope: _Scope) -> None:
         """Errors the engines would raise evaluating constant parts of `e` (`1 / 0`,
@@ -447,7 +449,8 @@ class Checker:
             for it in op.block or ():
                 self.check_block_item(it, scope)
             return
-        binding = bind_operation(op, spec, fold=lambda e: self.const_value(e, scope), registries=self.reg)
+        binding = bind_operation(op, spec, fold=lambda e: self.const_value(e, scope), registries=self.reg,
+                                 fold_fixed=lambda e: self.const_value(e, scope, fixed_only=True))
         self.bag.items.extend(binding.problems)
         for bound in binding.arguments:
             if bound.value is not None and bound.param.type not in ("axis", "selector", "name"):

@@ -59,8 +59,11 @@ def test_messages_say_what_and_where():
 def test_constant_arguments_are_checked_by_value():
     # the checker folds constants with the engines' evaluator: a colour held by an attr, a
     # string attr where a number belongs
-    codes = [d.code for d in check('attr c = "#12345g"\nLot --> extrude(1) color(c) X.\n')]
+    codes = [d.code for d in check('const c = "#12345g"\nLot --> extrude(1) color(c) X.\n')]
     assert codes == ["bad-argument-value"]
+    # an attr's default may be a placeholder that a guard keeps away (`--set` gives the colour)
+    assert not check('attr c = ""\nLot --> footprint(rect(1, 1)) extrude(1) A\n'
+                     'A --> case c != "": color(c) X. else: Y.\n')
     codes = [d.code for d in check('attr s = "tall"\nLot --> extrude(s) X.\n')]
     assert codes == ["bad-argument-type"]
     assert not check('attr c = "#abc"\nLot --> footprint(rect(1, 1)) extrude(1) color(c) X.\n')
