@@ -64,8 +64,8 @@ def _rect_or_poly(poly: Any, sx: float, sy: float) -> Any:
 def _piece(s: Shape, cs: manifold3d.CrossSection, kind: str, extra_o: tuple[float, float] = (0.0, 0.0)):
     """A child shape from a CrossSection given in `s`'s scope coordinates (normalized bbox)."""
     contours = []
-    for c in cs.to_polygons():
-        poly = tuple(map(tuple, c.tolist()))
+    for ring in cs.to_polygons():
+        poly = tuple(map(tuple, ring.tolist()))
         if abs(fp.area(poly)) > 1e-9:
             contours.append(poly)
     if not contours:
@@ -281,15 +281,15 @@ def _split_geometry(s: Shape, a: int, start: float, size: float) -> Shape | None
     if s.solid is not None:
         normal = [0.0, 0.0, 0.0]
         normal[a] = 1.0
-        piece = s.solid.trim_by_plane(tuple(normal), start)
+        trimmed = s.solid.trim_by_plane(tuple(normal), start)
         normal[a] = -1.0
-        piece = piece.trim_by_plane(tuple(normal), -(start + size))
+        trimmed = trimmed.trim_by_plane(tuple(normal), -(start + size))
         shift = [0.0, 0.0, 0.0]
         shift[a] = -start
-        piece = piece.translate(tuple(shift))
-        if piece.is_empty():
+        trimmed = trimmed.translate(tuple(shift))
+        if trimmed.is_empty():
             return None
-        return s.derived(o, tuple(sz), None, s.kind, solid=piece)
+        return s.derived(o, tuple(sz), None, s.kind, solid=trimmed)
     if s.poly is None or a == 2:
         return s.derived(o, tuple(sz), s.poly)
     x0, y0, x1, y1 = (start, 0.0, start + size, s.sz[1]) if a == 0 else (0.0, start, s.sz[0], start + size)
