@@ -106,7 +106,10 @@ def _worker_main(conn: Any) -> None:  # pragma: no cover - runs in the child pro
     _die_with_parent()
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's to handle
     states: dict[int, Any] = {}
-    conn.send(("ready",))
+    try:
+        conn.send(("ready",))
+    except (EOFError, OSError):  # the parent died while this worker started: nothing to do
+        return
     while True:
         try:
             msg = conn.recv()
