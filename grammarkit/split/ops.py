@@ -23,6 +23,7 @@ from ..dsl.binding import parse_color
 from ..geometry import footprints as fp
 from ..geometry import roofs
 from ..geometry.solids import insert_fitted, taper as taper_solid
+from .assets import load_asset_mesh, load_asset_solid
 from .engine import rotation
 from .shape import FACE, VOLUME, Shape
 
@@ -469,32 +470,6 @@ def op_center(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
     return c
 
 
-@lru_cache(maxsize=64)
-def _load_mesh(path: str) -> Any:
-    """The asset as one trimesh (a Scene's nodes in world coordinates), read once per process."""
-    try:
-        from ..geometry.meshio import load_mesh
-    except ImportError:  # pragma: no cover - the geometry helper's loader is the normal path
-        import trimesh
-
-        def load_mesh(p: str):  # type: ignore[no-redef]
-            return trimesh.load(p, force="mesh", process=False)
-    mesh = load_mesh(path)
-    if not hasattr(mesh, "faces"):  # a Scene (GLB, OBJ): all its nodes in world coordinates
-        import trimesh
-        mesh = trimesh.util.concatenate(mesh.dump()) if mesh.geometry else None
-        if mesh is None:
-            raise ValueError(f"i(): {path} contains no mesh")
-    return mesh
-
-
-@lru_cache(maxsize=64)
-def _load_part(path: str) -> manifold3d.Manifold:
-    from ..geometry.convert import to_manifold
-
-    return to_manifold(_load_mesh(path), what=path)
-
-
 def fitted_size(extent: tuple, size: tuple) -> tuple[float, float, float]:
     """The size an asset of bounding box `extent` gets in a scope of `size`: the scope's size,
     except that a zero size keeps the asset's proportion on that axis (scaled like the others),
@@ -512,7 +487,7 @@ def op_insert(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
     if not path.is_file():
         raise ValueError(f"i(): mesh file not found: {path}")
     if fit == "scale":  # the built-in fit, on the manifold directly (no mesh round trip)
-        solid, size = insert_fitted(_load_part(str(path)), s.sz)
+        solid, size = insert_fitted(load_asset_solid(str(path)), s.sz)
         return s.derived(s.o, size, None, VOLUME, solid=solid)
     fits = ctx.registries.fits if ctx.registries is not None else {}
     spec = fits.get(fit)
@@ -520,7 +495,7 @@ def op_insert(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
         raise ValueError(f"i(): unknown fit {fit!r}; known fits: {', '.join(sorted(fits)) or 'none'}")
     from ..geometry.convert import to_manifold
 
-    mesh = _load_mesh(str(path)).copy()
+    mesh = load_asset_mesh(str(path)).copy()
     lo = mesh.bounds[0]
     mesh.apply_translation(-lo)  # the asset's bounding box minimum at the origin
     target = fitted_size(tuple(float(e) for e in mesh.extents), s.sz)
