@@ -216,6 +216,12 @@ def _pow(x: Any, y: Any, span: Span | None) -> Any:
     return r
 
 
+def _negate(x: Any, span: Span | None) -> Any:
+    if not _is_number(x):
+        raise _fail(f"'-' cannot be applied to {_kind(x)}", span, "bad-operands")
+    return -x
+
+
 def _short(v: Any) -> str:
     text = repr(v)
     return text if len(text) <= 24 else text[:21] + "..."
@@ -327,10 +333,7 @@ class _Compiler:
                 return not a(env)
         elif e.op == "-":
             def g(env: Any) -> Any:
-                x = a(env)
-                if not _is_number(x):
-                    raise _fail(f"'-' cannot be applied to {_kind(x)}", span, "bad-operands")
-                return -x
+                return _negate(a(env), span)
         else:
             g = a
         return self.fold(g) if is_constant(a) else g
@@ -398,14 +401,7 @@ class _Compiler:
                                code="function-without-impl")
 
         def call(env: Any) -> Any:
-            vals = [x(env) for x in args]
-            try:
-                r = impl(*vals)
-            except (ValueError, TypeError, ZeroDivisionError, OverflowError) as exc:
-                raise _fail(f"{name}(): {exc}", span, "function-error") from None
-            if type(r) is str and len(r) > MAX_STRING_LENGTH:
-                raise _string_limit(len(r), span)
-            return r
+            return _call(impl, name, [x(env) for x in args], span)
         if all(is_constant(x) for x in args):
             return self.fold(call)
         return call
@@ -431,14 +427,86 @@ def fold_constant(expr: Any, lookup: Callable[[str], Any], functions: Mapping[st
 
     Errors of constant subexpressions (`1 / 0`, `9 ^ 9 ^ 9`, `"x" * 600000000`) are appended
     to `errors` as the DerivationErrors the engines would raise. Unknown names and functions
-    make the expression non-constant (the checker reports them on its own)."""
-    collected: list[DerivationError] = [] if errors is None else errors
+    make the expression non-constant (the checker reports them on its own).
 
-    def resolve(name: str, span: Span | None) -> Compiled:
-        value = lookup(name)
-        return _not_constant if value is NOT_CONSTANT else constant(value)
-    f = _Compiler(resolve, functions, collected).compile(expr)
-    return f._value if is_constant(f) else NOT_CONSTANT  # type: ignore[attr-defined]
+    This walks the tree instead of compiling closures (the checker folds every expression of a
+    file once), with the very operator and call implementations `compile_expr` uses, and folds
+    exactly what `compile_expr` folds."""
+    collected: list[DerivationError] = [] if errors is None else errors
+    return _Folder(lookup, functions, collected).fold(expr)
+
+
+class _Folder:
+    __slots__ = ("lookup", "functions", "errors")
+
+    def __init__(self, lookup: Callable[[str], Any], functions: Mapping[str, Any],
+                 errors: list[DerivationError]):
+        self.lookup, self.functions, self.errors = lookup, functions, errors
+
+    def _run(self, fn: Callable[[], Any]) -> Any:
+        try:
+            return fn()
+        except DerivationError as exc:
+            self.errors.append(exc)
+            return NOT_CONSTANT
+
+    def fold(self, e: Any) -> Any:  # noqa: C901 - one branch per node kind, as in _Compiler
+        if isinstance(e, Num):
+            v = e.value
+            return int(v) if float(v).is_integer() and abs(v) < 2 ** 53 else v
+        if isinstance(e, (Str, Bool)):
+            return e.value
+        if isinstance(e, Ref):
+            return self.lookup(e.name)
+        if isinstance(e, Vector):
+            items = [self.fold(i) for i in e.items]
+            return NOT_CONSTANT if any(i is NOT_CONSTANT for i in items) else tuple(items)
+        if isinstance(e, Unary):
+            x = self.fold(e.operand)
+            if x is NOT_CONSTANT:
+                return x
+            if e.op == "!":
+                return not x
+            if e.op == "-":
+                return self._run(lambda: _negate(x, e.span))
+            return x
+        if isinstance(e, Binary):
+            x, y = self.fold(e.left), self.fold(e.right)
+            if x is NOT_CONSTANT or y is NOT_CONSTANT:
+                return NOT_CONSTANT
+            op = e.op
+            if op == "&&":
+                return x and y
+            if op == "||":
+                return x or y
+            if op == "==":
+                return x == y
+            if op == "!=":
+                return x != y
+            fn = _BINARY[op]
+            return self._run(lambda: fn(x, y, e.span))
+        if isinstance(e, Call):
+            spec = self.functions.get(e.func)
+            if spec is None or arity_problem(e.func, spec, len(e.args)) is not None:
+                for a in e.args:  # their own errors still count
+                    self.fold(a)
+                return NOT_CONSTANT
+            args = [self.fold(a) for a in e.args]
+            if e.func == "rand" or spec.impl is None or any(a is NOT_CONSTANT for a in args):
+                return NOT_CONSTANT
+            return self._run(lambda: _call(spec.impl, e.func, args, e.span))
+        return NOT_CONSTANT
+
+
+def _call(impl: Callable[..., Any], name: str, vals: list, span: Span | None) -> Any:
+    """A function call as the engines make it: errors and over-long strings located."""
+    try:
+        r = impl(*vals)
+    except (ValueError, TypeError, ZeroDivisionError, OverflowError) as exc:
+        raise _fail(f"{name}(): {exc}", span, "function-error") from None
+    if type(r) is str and len(r) > MAX_STRING_LENGTH:
+        raise _string_limit(len(r), span)
+    return r
 
 
 def evaluate(expr: Any, variables: Mapping[str, Any] | None = None, *, functions: Mapping[str, Any],

@@ -16,7 +16,7 @@ from ..errors import Diagnostic, DiagnosticBag
 from ..expr_eval import NOT_CONSTANT, arity_problem, fold_constant
 from ..ir import (
     Attr, Binary, Branch, Call, Case, Choice, Const, Default, ExampleDef,
-    Grammar, Nil, OpCall, PartDef, Pattern, Push, Ref, Repeat, Rule, Seq, SiteDef,
+    Grammar, Nil, Num, OpCall, PartDef, Pattern, Push, Ref, Repeat, Rule, Seq, SiteDef,
     Snippet, Successor, Terminal, Unary, Use, Variants, Vector,
 )
 from ..ir.base import Span
@@ -62,6 +62,8 @@ class Checker:
         self._values: dict[str, Attr | Const] = {}
         self._const_cache: dict[str, Any] = {}
         self._reported: set[tuple] = set()  # fold errors already reported (span, message)
+        self._functions = registries.functions  # looked up once: folding asks for every expression
+        self._memo: dict[tuple[int, int], tuple] = {}
 
     # -- entry -----------------------------------------------------------------------------
     def run(self) -> list[Diagnostic]:
@@ -249,23 +251,35 @@ class Checker:
         return found
 
     def _fold(self, e: Any, scope: _Scope | None, used: list[str] | None, errors: list | None = None) -> Any:
-        return fold_constant(e, lambda n: self._lookup(n, scope, used), self.reg.functions, errors)
+        if isinstance(e, Num):  # most arguments and sizes are plain numbers
+            v = e.value
+            return int(v) if float(v).is_integer() and abs(v) < 2 ** 53 else v
+        return fold_constant(e, lambda n: self._lookup(n, scope, used), self._functions, errors)
+
+    def _folded(self, e: Any, scope: _Scope | None) -> tuple[Any, tuple[str, ...], tuple]:
+        """(value or NOT_CONSTANT, attrs it used, evaluation errors) of `e` in `scope`, folded
+        once per expression and scope (the binder and the error report ask for the same ones)."""
+        key = (id(e), id(scope))
+        hit = self._memo.get(key)
+        if hit is None:
+            used: list[str] = []
+            errors: list = []
+            value = self._fold(e, scope, used, errors)
+            hit = self._memo[key] = (value, tuple(used), tuple(errors), e, scope)  # keeps ids alive
+        return hit[0], hit[1], hit[2]
 
     def const_value(self, e: Any, scope: _Scope | None = None, fixed_only: bool = False) -> Any:
         """The value of a constant expression (attrs at their defaults), or None when it
         depends on the derivation (`fixed_only`: or on an attr, which `--set` may change).
         Folded by the engines' evaluator (grammarkit.expr_eval)."""
-        used: list[str] = []
-        value = self._fold(e, scope, used if fixed_only else None)
-        return None if value is NOT_CONSTANT or used else value
+        value, used, _ = self._folded(e, scope)
+        return None if value is NOT_CONSTANT or (fixed_only and used) else value
 
     def report_fold_errors(self, e: Any, scope: _Scope) -> None:
         """Errors the engines would raise evaluating constant parts of `e` (`1 / 0`,
         `9 ^ 9 ^ 9`, `"x" * 600000000`): errors, or warnings when an attr's default value is
         involved (a `--set` may avoid them)."""
-        errors: list = []
-        used: list[str] = []
-        self._fold(e, scope, used, errors)
+        _, used, errors = self._folded(e, scope)
         for exc in errors:
             d = exc.diagnostics[0]
             key = (d.span, d.message)
