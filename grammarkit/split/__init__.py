@@ -16,12 +16,30 @@ import weakref
 from pathlib import Path
 from typing import Any, Iterator, Mapping
 
+from importlib import import_module
+from typing import TYPE_CHECKING
+
 from ..errors import DerivationError, GrammarError, ShapeError
 from ..ir.grammar import Grammar
 from .compile import CompiledGrammar, compile_grammar
-from .engine import Derivation, Limits
-from .model import Model, Part, TreeNode, compose
 from .shape import FACE, Shape
+
+if TYPE_CHECKING:  # pragma: no cover
+    from .engine import Limits
+    from .model import Model, Part, TreeNode
+
+# The engine and the model need manifold3d and numpy: imported on first use, so that loading
+# the `split-operations` plugin (every `grammarkit check` does) stays light.
+_LAZY = {"Limits": "engine", "Derivation": "engine", "Model": "model", "Part": "model", "TreeNode": "model"}
+
+
+def __getattr__(name: str) -> Any:
+    module = _LAZY.get(name)
+    if module is None:
+        raise AttributeError(f"module 'grammarkit.split' has no attribute {name!r}")
+    value = getattr(import_module(f"{__name__}.{module}"), name)
+    globals()[name] = value
+    return value
 
 __all__ = ["Limits", "Model", "Part", "Shape", "TreeNode", "as_mapping", "check_attrs", "compile", "derive",
            "load_grammar", "variations"]
@@ -220,6 +238,9 @@ def derive(grammar: Any, *, seed: int = 0, attrs: Mapping[str, Any] | None = Non
     Re-entrant: any number of derivations (of one grammar or several) may run at once in
     threads; each keeps its values, seed and limits to itself.
     """
+    from .engine import Derivation, Limits
+    from .model import Model, compose
+
     seed = _seed(seed)
     attrs = as_mapping(attrs, "attrs")
     if limits is None:

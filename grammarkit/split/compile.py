@@ -37,7 +37,8 @@ from ..ir import expr as E
 from ..ir import split as S
 from ..ir.base import Span
 from ..ir.grammar import Grammar
-from .engine import fail, label_of
+from .seeds import label_of
+from .shape import fail
 
 BUILTIN_NAMES = {
     "scope.sx": 0, "scope.sy": 1, "scope.sz": 2,

@@ -15,7 +15,6 @@ final union can be traced back to the terminal (or body) they came from.
 from __future__ import annotations
 
 import math
-import zlib
 from dataclasses import dataclass
 from typing import Any
 
@@ -24,10 +23,10 @@ import manifold3d
 from ..errors import DerivationError, LimitError
 from ..geometry.footprints import cross_section
 from ..geometry.solids import frame_matrix as frame
-from .shape import FACE, Shape
+from .seeds import M64, label_of, mix  # noqa: F401 - label_of re-exported
+from .shape import FACE, Shape, fail  # noqa: F401 - fail re-exported
 
 Manifold = manifold3d.Manifold
-M64 = (1 << 64) - 1
 
 # How far a recess cut reaches out of its face, so that the cut's opening never lies exactly
 # in the facade plane (coplanar faces would make the boolean's result depend on round-off).
@@ -66,21 +65,6 @@ class Limits:
         if isinstance(v, bool) or not isinstance(v, (int, float)) or not 0 < v < math.inf:
             raise DerivationError(f"Limits(max_extent=...) must be a positive finite number, got {v!r}",
                                   None, code="bad-argument")
-
-
-def mix(a: int, b: int) -> int:
-    """A per-shape seed from the parent's seed and a path label.
-
-    Python's hash of a tuple of ints is deterministic across processes (only str/bytes hashing
-    is randomised) and costs ~0.1 us, against ~2 us for a splitmix64 in pure Python; the
-    generator seeded with it (`random.Random`) scrambles the bits anyway.
-    """
-    return hash((a, b)) & M64
-
-
-def label_of(*parts: Any) -> int:
-    """A stable (process-independent) 32-bit label for a derivation path step."""
-    return zlib.crc32("\x1f".join(map(str, parts)).encode())
 
 
 class Tag:
@@ -423,8 +407,3 @@ def rotation(rx: float, ry: float, rz: float) -> tuple:
         (sz_ * cy, sz_ * sy_ * sx_ + cz * cx, sz_ * sy_ * cx - cz * sx_),
         (-sy_, cy * sx_, cy * cx),
     )
-
-
-def fail(s: Shape, message: str, span: Any = None, **kw: Any) -> DerivationError:
-    rule = getattr(s.rule, "name", "?")
-    return DerivationError(f"in rule {rule!r} (shape #{s.node}): {message}", span or getattr(s.rule, "span", None), **kw)

@@ -21,6 +21,8 @@ from __future__ import annotations
 import random
 from typing import Any
 
+from ..errors import DerivationError
+
 Vec = tuple[float, float, float]
 
 FACE = "F"
@@ -121,3 +123,9 @@ class Shape:
     def __repr__(self) -> str:
         name = getattr(self.rule, "name", "?")
         return f"Shape({name}, kind={self.kind}, o={self.o}, size={self.sz})"
+
+
+def fail(s: Shape, message: str, span: Any = None, **kw: Any) -> DerivationError:
+    """A DerivationError naming the shape's rule and node, located at `span` (or the rule)."""
+    rule = getattr(s.rule, "name", "?")
+    return DerivationError(f"in rule {rule!r} (shape #{s.node}): {message}", span or getattr(s.rule, "span", None), **kw)
