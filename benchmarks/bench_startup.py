@@ -8,6 +8,8 @@ in the same run: a bare Python start (`python -c pass`) of the same interpreter.
 - `grammarkit --version`                           target <= 3x bare Python
 - `grammarkit check grammars/paris.grammar`
 - `grammarkit derive grammars/paris.grammar -o X.glb`  (one building)  target <= 1.0 s
+- `grammarkit.derive("grammars/paris.grammar")` in a fresh Python, no file written (the
+  difference to the row above is mostly the exporter's imports: trimesh and scipy)
 
 `--baseline-src PATH` also times the same commands with another source tree first on
 PYTHONPATH (e.g. a checkout of main before a change), interleaved run by run so that load
@@ -45,12 +47,17 @@ def commands(out_dir: Path) -> list[tuple[str, list[str], str]]:
         ("grammarkit check paris.grammar", _cli("check", str(PARIS)), ""),
         ("grammarkit derive paris.grammar (1 building)",
          _cli("derive", str(PARIS), "-o", str(out_dir / "paris.glb")), "<= 1.0 s"),
+        # the same derivation without writing a file: what the exporter's imports add
+        ("python: grammarkit.derive(paris), no file",
+         [sys.executable, "-c", f"import grammarkit; grammarkit.derive({str(PARIS)!r})"], ""),
     ]
 
 
-def _run(cmd: list[str], env: dict) -> float:
+def _run(cmd: list[str], env: dict, cwd: Path) -> float:
+    # cwd is a neutral folder: with `python -c`, the working directory comes first on sys.path
+    # and would shadow --baseline-src if it were a source tree
     t = time.perf_counter()
-    r = subprocess.run(cmd, env=env, cwd=ROOT, capture_output=True, text=True)
+    r = subprocess.run(cmd, env=env, cwd=cwd, capture_output=True, text=True)
     dt = time.perf_counter() - t
     if r.returncode != 0:
         raise SystemExit(f"command failed ({r.returncode}): {' '.join(cmd)}\n{r.stderr[-2000:]}")
@@ -66,7 +73,7 @@ def _env(src: Path | None) -> dict:
 
 def explain(out_dir: Path, top: int = 12) -> None:
     cmd = [sys.executable, "-X", "importtime", *_cli("derive", str(PARIS), "-o", str(out_dir / "x.glb"))[1:]]
-    r = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True)
+    r = subprocess.run(cmd, cwd=out_dir, capture_output=True, text=True)
     rows = []
     for line in r.stderr.splitlines():
         if not line.startswith("import time:") or "|" not in line:
@@ -99,7 +106,7 @@ def main(argv: list[str] | None = None) -> int:
         for k in range(args.runs + 1):
             for label, cmd, _ in rows:  # interleaved: every command, every tree, each round
                 for tree, src in trees:
-                    dt = _run(cmd, _env(src))
+                    dt = _run(cmd, _env(src), out_dir)
                     if k > 0:  # round 0 warms the disk caches and the parser-table cache
                         times.setdefault((tree, label), []).append(dt)
         bare = statistics.median(times[("this tree", rows[0][0])])
