@@ -89,6 +89,7 @@ class FeatureCloud:
     descriptors: np.ndarray  # (F, 352) float32, unit length (zero where no support)
     params: SamplingParams = field(default_factory=SamplingParams)
     thinned_vertex_radius: float | None = None  # set when max_features thinned the vertices
+    mesh_vertices: np.ndarray | None = None  # (V, 3) all vertices used by faces (for ICP)
 
     def describe(self, points: np.ndarray, normals: np.ndarray) -> np.ndarray:
         """SHOT descriptors of further points over the same dense support cloud."""
@@ -165,6 +166,7 @@ def build_cloud(mesh_n: trimesh.Trimesh, params: SamplingParams = SamplingParams
     normals = [dense_normals[sparse_idx]]
     is_vertex = [np.zeros(len(sparse_idx), dtype=bool)]
     thinned = None
+    all_vertices = np.asarray(mesh_n.vertices, dtype=np.float64)[np.unique(np.asarray(mesh_n.faces))]
     if params.vertices:
         verts = np.asarray(mesh_n.vertices, dtype=np.float64)
         vnormals = np.asarray(mesh_n.vertex_normals, dtype=np.float64)
@@ -188,7 +190,7 @@ def build_cloud(mesh_n: trimesh.Trimesh, params: SamplingParams = SamplingParams
                          dense_faces=cand_faces[keep], features=features,
                          feature_normals=feature_normals, is_vertex=np.concatenate(is_vertex),
                          descriptors=np.zeros((0, SHOT_DIMENSIONS), np.float32), params=params,
-                         thinned_vertex_radius=thinned)
+                         thinned_vertex_radius=thinned, mesh_vertices=all_vertices)
     cloud.descriptors = cloud.describe(features, feature_normals)
     return cloud
 

@@ -191,6 +191,22 @@ def _hausdorff_table(desc: np.ndarray, voxel: np.ndarray, chunk: int = 1024):
     return vox_ids, np.sqrt(np.maximum(h, h.T).astype(np.float64))
 
 
+def _vertex_faces(faces: np.ndarray, n_vertices: int, cap: int = 16) -> np.ndarray:
+    """(V, cap) faces around each vertex, -1 padded; a vertex with more faces (the hub of a
+    fan) keeps `cap` of them. (trimesh's `vertex_faces` pads to the largest degree, which on a
+    finely tessellated model with fan hubs is thousands of columns.)"""
+    flat = faces.ravel()
+    order = np.argsort(flat, kind="stable")
+    vert = flat[order]
+    face = order // 3
+    starts = np.searchsorted(vert, np.arange(n_vertices))
+    rank = np.arange(len(vert)) - starts[vert]
+    keep = rank < cap
+    out = np.full((n_vertices, cap), -1, dtype=np.int64)
+    out[vert[keep], rank[keep]] = face[keep]
+    return out
+
+
 class SurfaceDistance:
     """Distance from points to a mesh surface, exact where it matters and cheap where it can be.
 
@@ -211,7 +227,7 @@ class SurfaceDistance:
         self.vertices = np.asarray(mesh_n.vertices, dtype=np.float64)
         self.vertex_tree = cKDTree(self.vertices)
         self.triangles = np.asarray(mesh_n.triangles, dtype=np.float64)
-        self.vertex_faces = np.asarray(mesh_n.vertex_faces, dtype=np.int64)
+        self.vertex_faces = _vertex_faces(np.asarray(mesh_n.faces), len(self.vertices))
 
     def __call__(self, points: np.ndarray, normals: np.ndarray) -> np.ndarray:
         cloud, cap = self.cloud, self.cap

@@ -222,6 +222,28 @@ class SelfAlignment:
         agree = np.einsum("ij,ij->i", self.normals[i], self.normals[j]) > 0.9
         return i[agree], j[agree]
 
+    def snap_to_vertices(self, t: np.ndarray, vertices: np.ndarray, tree: cKDTree,
+                         min_share: float = 0.05) -> np.ndarray:
+        """Point-to-point ICP on the mesh vertices, from `t` with a shrinking inlier radius:
+        where the mesh repeats exactly, its vertices land on vertices and the offset becomes
+        exact to rounding; on curved surfaces the point-to-plane fit on samples is biased by
+        the curvature between a sample and its neighbour (~1e-4 here). Kept only while at
+        least `min_share` of the vertices pair up (and at least 8), so a mesh whose copies are
+        tessellated differently keeps the point-to-plane result."""
+        t = np.asarray(t, dtype=np.float64).copy()
+        need = max(8, int(min_share * len(vertices)))
+        radius = 2.0 * self.spacing
+        best = t.copy()
+        while radius > 1e-9:
+            dist, j = tree.query(vertices + t, distance_upper_bound=radius)
+            ok = np.isfinite(dist)
+            if ok.sum() < need:
+                break
+            t = t + np.mean(vertices[j[ok]] - vertices[ok] - t, axis=0)
+            best = t.copy()
+            radius *= 0.25
+        return best
+
     def refine(self, t0: np.ndarray, iterations: int = 30, radius: float = 0.05) -> np.ndarray:
         """Point-to-plane: minimise sum (n_q . (p + t - q))^2 over nearest pairs with agreeing
         normals. Pairs whose plane distance exceeds a threshold are dropped, and the threshold
@@ -297,6 +319,8 @@ def find_offsets(cloud: FeatureCloud, params: OffsetParams = OffsetParams()) -> 
     peak_bins = [b for b in peak_bins
                  if counts[b] >= max(params.min_count, params.min_share * strongest)]
     align = SelfAlignment(cloud.dense, cloud.dense_normals, cloud.params.dense)
+    vertices = cloud.mesh_vertices if cloud.mesh_vertices is not None else np.zeros((0, 3))
+    vertex_tree = cKDTree(vertices) if len(vertices) else None
     dominant, dom_counts = [], []
     matched = offsets[ok]
     for b in peak_bins:
@@ -320,6 +344,8 @@ def find_offsets(cloud: FeatureCloud, params: OffsetParams = OffsetParams()) -> 
         if all(abs(u @ (g / np.linalg.norm(g))) <= cos_max + 1e-9 for g in taken):
             taken.append(d)
             taken_counts.append(c)
+    if vertex_tree is not None:  # exact where the mesh repeats exactly (after the choice)
+        taken = [align.snap_to_vertices(g, vertices, vertex_tree) for g in taken]
     result.update(dominant=np.array(dominant).reshape(-1, 3),
                   dominant_counts=np.array(dom_counts, dtype=np.int64), sparsity=stats,
                   principal=[_canonical_sign(g) for g in taken], principal_counts=taken_counts,

@@ -70,9 +70,22 @@ def _png(img: Image.Image) -> bytes:
     return buf.getvalue()
 
 
+def _wrap(line: str, width: int) -> list[str]:
+    words, out, cur = line.split(" "), [], ""
+    for w in words:
+        if cur and len(cur) + 1 + len(w) > width:
+            out.append(cur)
+            cur = "    " + w
+        else:
+            cur = f"{cur} {w}" if cur else w
+    return out + [cur]
+
+
 def _caption(img: Image.Image, lines: list[str], size: int = 15) -> Image.Image:
     font = _font(size)
     line_h = size + 6
+    chars = max(20, int(img.width / (0.52 * size)))
+    lines = [w for line in lines for w in _wrap(line, chars)]
     out = Image.new("RGB", (img.width, img.height + line_h * len(lines) + 10), BACKGROUND)
     out.paste(img, (0, 0))
     draw = ImageDraw.Draw(out)
@@ -119,36 +132,41 @@ def _label_face_colors(report, mesh: trimesh.Trimesh, colors: np.ndarray) -> np.
     return colors[labels]
 
 
-def _label_grid_image(report, colors: np.ndarray, height: int) -> Image.Image:
-    """The label field: the slice through the output voxels across the two axes with the most
-    voxels, each cell in its label's colour with its label vector."""
+def _label_grid_image(report, colors: np.ndarray, height: int) -> tuple[Image.Image, str]:
+    """The label field: the slice through the output voxels across the two generators with
+    the most voxels (drawn with the one closer to world x across), each cell in its label's
+    colour with its label vector (the steps along the retargeted generators)."""
     grid, L = report.label_grid, report.labelling.labels
+    gens = report.offsets.generators
     dims = np.array(grid.shape)
-    axes = sorted(np.argsort(-dims, kind="stable")[:2])
-    third = [a for a in range(3) if a not in axes][0]
+    pair = sorted(np.argsort(-dims, kind="stable")[:2])
+    across, up = sorted(pair, key=lambda a: -abs(gens[a][0]) / np.linalg.norm(gens[a]))
+    third = [a for a in range(3) if a not in (across, up)][0]
     sl = [slice(None)] * 3
     sl[third] = dims[third] // 2
-    field = grid[tuple(sl)]  # (dims[axes[0]], dims[axes[1]])
+    field = grid[tuple(sl)]
+    if across > up:
+        field = field.T  # rows along `across`
     nx, ny = field.shape
-    cell = int(max(6, min(56, (height - 40) / max(ny, 1), 900 / max(nx, 1))))
-    img = Image.new("RGB", (nx * cell + 40, ny * cell + 40), BACKGROUND)
+    cell = int(max(6, min(56, (height - 20) / max(ny, 1), 1060 / max(nx, 1))))
+    img = Image.new("RGB", (nx * cell + 40, ny * cell + 20), BACKGROUND)
     draw = ImageDraw.Draw(img)
     font = _font(max(8, min(13, cell // 4)))
-    structured = [i for i in range(3) if report.steps[i] != 0]
+    retargeted = [i for i in range(3) if report.steps[i] != 0]
     for i in range(nx):
         for j in range(ny):
             lbl = int(field[i, j])
-            x0, y0 = 20 + i * cell, 20 + (ny - 1 - j) * cell  # second axis upwards
-            draw.rectangle([x0, y0, x0 + cell - 1, y0 + cell - 1], fill=tuple(int(c) for c in colors[lbl]),
-                           outline=(255, 255, 255))
-            if cell >= 28:
-                text = ",".join(str(int(L[lbl][a])) for a in structured) or "0"
+            x0, y0 = 20 + i * cell, 10 + (ny - 1 - j) * cell  # `up` upwards
+            draw.rectangle([x0, y0, x0 + cell - 1, y0 + cell - 1],
+                           fill=tuple(int(c) for c in colors[lbl]), outline=(255, 255, 255))
+            if cell >= 24:
+                text = ",".join(str(int(L[lbl][a])) for a in retargeted) or "0"
                 draw.text((x0 + 3, y0 + 3), text, fill=(20, 20, 20), font=font)
-    names = "uvw"
-    draw.text((20, 2), f"label field: voxels along generators {names[axes[0]]} (right) and "
-              f"{names[axes[1]]} (up), middle layer of {names[third]}", fill=(30, 30, 30),
-              font=_font(13))
-    return img
+    names = [f"v{a + 1}" for a in range(3)]
+    what = (f"label field (below): output voxels along {names[across]} (across) and "
+            f"{names[up]} (up), the middle layer along {names[third]}; each cell shows how many "
+            f"steps along {', '.join(names[a] for a in retargeted) or 'no generator'} its copy is moved")
+    return img, what
 
 
 def explain_image(report, *, size: tuple[int, int] = (1100, 460)) -> Image.Image:
@@ -194,13 +212,13 @@ def explain_image(report, *, size: tuple[int, int] = (1100, 460)) -> Image.Image
     scene, _ = _side_by_side(left, colored_out)
     img = gk_render.render(scene, _camera(), style="shaded+lines", size=size,
                            line_style=gk_render.LineStyle(width=1.0, crease_angle=40.0))
-    grid = _label_grid_image(report, colors, height=size[1])
+    grid, grid_text = _label_grid_image(report, colors, height=size[1])
     width = max(img.width, grid.width)
     combined = Image.new("RGB", (width, img.height + grid.height), BACKGROUND)
     combined.paste(img, (0, 0))
     combined.paste(grid, (0, img.height))
     legend = ["arrows: principal offsets (v1 red, v2 green, v3 blue); right: the output, "
-              "each voxel in the colour of the copy that supplies it"] + lines
+              "each voxel in the colour of the copy that supplies it", grid_text] + lines
     return _caption(combined, legend)
 
 

@@ -26,7 +26,6 @@ from .labelling import Lattice
 
 __all__ = ["merge_boxes", "stitch_solid", "stitch_surface"]
 
-CLEAN_EPS = 1e-7  # lattice units: edges shorter than this are collapsed (rounding slivers)
 
 
 def merge_boxes(mask: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
@@ -124,7 +123,6 @@ def stitch_solid(mesh_n: trimesh.Trimesh, lattice: Lattice, label_grid: np.ndarr
     if not pieces:
         raise ValueError("stitching produced an empty mesh")
     union = pieces[0] if len(pieces) == 1 else m3.Manifold.batch_boolean(pieces, m3.OpType.Add)
-    union = union.simplify(CLEAN_EPS)
     out = union.to_mesh64()
     v = lattice.to_normalised(np.asarray(out.vert_properties, dtype=np.float64)[:, :3])
     f = np.asarray(out.tri_verts, dtype=np.int64).reshape(-1, 3)

@@ -31,7 +31,8 @@ import manifold3d as m3
 import numpy as np
 import trimesh
 
-__all__ = ["MODELS", "Probe", "TestModel", "bench_railing", "build", "measure", "write_models"]
+__all__ = ["MODELS", "Probe", "TestModel", "arched_facade", "bench_model", "build", "measure",
+           "write_models"]
 
 
 @dataclass(frozen=True)
@@ -103,9 +104,11 @@ def _turned(profile: list[tuple[float, float]], segments: int) -> m3.Manifold:
 
 
 def _baluster_profile(points: int, height: float, radius: float) -> list[tuple[float, float]]:
-    """A turned baluster: square-ish foot and head, a bulging vase between (z from 0)."""
+    """A turned baluster: a vase bulging in its lower half, a collar near the top (z from 0);
+    nothing along it repeats."""
     t = np.linspace(0.0, 1.0, max(points, 4))
-    r = radius * (0.55 + 0.45 * np.sin(np.pi * t) ** 2 + 0.1 * np.sin(6 * np.pi * t))
+    r = radius * (0.55 + 0.45 * np.sin(np.pi * t ** 1.5) ** 2
+                  + 0.25 * np.exp(-((t - 0.85) / 0.04) ** 2))
     r[0] = r[-1] = radius
     return [(float(ri), float(zi)) for ri, zi in zip(r, t * height)]
 
@@ -229,15 +232,46 @@ def build(name: str) -> TestModel:
         raise KeyError(f"no test model {name!r}; known: {', '.join(MODELS)}") from None
 
 
-def bench_railing(triangles: int = 50_000) -> TestModel:
-    """The railing with finely turned balusters: about `triangles` triangles (the benchmark's
-    50k-triangle model)."""
-    segments = 24
-    model = railing(segments=segments, profile_points=12)
-    while len(model.mesh.faces) < triangles and segments < 4096:
-        segments = int(segments * max(1.05, (triangles / len(model.mesh.faces)) ** 0.5))
-        model = railing(segments=segments, profile_points=max(12, segments // 2))
-    model.name = f"railing_{len(model.mesh.faces) // 1000}k"
+def arched_facade(*, segments: int = 32) -> TestModel:
+    """The facade panel with round-arched window openings (`segments` per full circle)."""
+    p = _Parts()
+    bays, storeys, bay_w, storey_h, base_h = 5, 3, 1.2, 1.5, 0.3
+    width, depth = bays * bay_w, 0.3
+    top = base_h + storeys * storey_h
+    wall = _box((0, 0, 0), (width, depth, top))
+    arch = m3.Manifold.cylinder(0.16, 0.35, 0.35, circular_segments=segments)
+    arch = arch.rotate((-90.0, 0.0, 0.0))  # axis along +y, from y = 0 to 0.16
+    holes = []
+    for i in range(bays):
+        for j in range(storeys):
+            x0, z0 = i * bay_w + 0.25, base_h + j * storey_h + 0.35
+            holes.append(_box((x0, -0.01, z0), (x0 + 0.7, 0.15, z0 + 0.55)))
+            holes.append(arch.translate((x0 + 0.35, -0.01, z0 + 0.55)))
+    p.add(wall - m3.Manifold.batch_boolean(holes, m3.OpType.Add), "#d9c8a9")
+    for i in range(bays):
+        for j in range(storeys):
+            z = base_h + j * storey_h + 0.29
+            p.add(_box((i * bay_w + 0.18, -0.08, z), (i * bay_w + 1.02, 0.02, z + 0.06)), "#9a9a9a")
+    p.add(_box((0, -0.05, 0), (width, depth, base_h)), "#8f8373")
+    p.add(_box((-0.1, -0.12, top), (width + 0.1, depth, top + 0.2)), "#b5a68a")
+    for x in (-0.1, width - 0.1):
+        p.add(_box((x, -0.05, 0), (x + 0.2, depth, top)), "#c9b797")
+    return TestModel("arched_facade", p.mesh("arched_facade"),
+                     [np.array([bay_w, 0, 0]), np.array([0, 0, storey_h])],
+                     {0: Probe(0, (0.0, 0.19, base_h + 0.6), "gap"),
+                      2: Probe(2, (0.1 + 0.6, 0.19, 0.0), "gap")},
+                     "a wall with a 5 x 3 grid of round-arched windows")
+
+
+def bench_model(triangles: int = 50_000) -> TestModel:
+    """The benchmark's large model: the arched facade with its arches tessellated finely
+    enough for about `triangles` triangles."""
+    segments = 32
+    model = arched_facade(segments=segments)
+    while len(model.mesh.faces) < triangles and segments < 65536:
+        segments = int(segments * max(1.05, triangles / len(model.mesh.faces)))
+        model = arched_facade(segments=segments)
+    model.name = f"arched_facade_{round(len(model.mesh.faces) / 1000)}k"
     return model
 
 
