@@ -107,9 +107,9 @@ def test_failed_write_leaves_nothing(tmp_path, box, monkeypatch, fmt):
     assert [p.name for p in tmp_path.iterdir()] == [target.name]  # no temporary left
 
 
-def test_missing_folder(tmp_path, box):
-    with pytest.raises(ShapeError, match="does not exist"):
-        export(box, tmp_path / "missing" / "x.glb")
+def test_missing_folder_is_created(tmp_path, box):
+    export(box, tmp_path / "missing" / "x.glb")
+    assert (tmp_path / "missing" / "x.glb").stat().st_size > 0
 
 
 def test_nothing_to_export(tmp_path):
