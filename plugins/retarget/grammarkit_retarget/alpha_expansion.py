@@ -218,20 +218,29 @@ def alpha_expansion(problem: LabelProblem, init: np.ndarray, *, max_cycles: int 
     scale = _scale(problem)
     timing: list[float] = []
     order = np.arange(problem.n_labels) if order is None else np.asarray(order)
+    # a move is a function of the labelling: one that failed is not tried again until some
+    # other move has changed the labelling (same result, fewer max-flow calls)
+    failed_at = np.full(problem.n_labels, -1)
+    changed_at = 0
+    step = 0
     for _ in range(max_cycles):
         improved = False
         sol.cycles += 1
         for alpha in order:
+            step += 1
+            if failed_at[alpha] > changed_at:
+                continue
             new, trunc = _expansion_move(problem, sol.labels, int(alpha), scale, timing)
             sol.moves += 1
             sol.truncated += trunc
-            if new is None:
-                continue
-            e = problem.energy(new)
+            e = problem.energy(new) if new is not None else np.inf
             if e < sol.energy - 1e-9 * max(1.0, abs(sol.energy)):
                 sol.labels, sol.energy = new, e
                 sol.accepted += 1
                 improved = True
+                changed_at = step
+            else:
+                failed_at[alpha] = step
         sol.history.append(sol.energy)
         if not improved:
             break

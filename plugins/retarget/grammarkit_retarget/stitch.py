@@ -162,38 +162,57 @@ def _most_common(colors: np.ndarray) -> np.ndarray:
     return uniq[int(np.argmax(counts))]
 
 
-def _clip_to_box(mesh: trimesh.Trimesh, lattice: Lattice, lo, hi) -> trimesh.Trimesh:
-    """Triangles of `mesh` (normalised units) inside the lattice box [lo, hi)."""
+def _clip_to_box(vertices: np.ndarray, faces: np.ndarray, lattice: Lattice, lo, hi):
+    """The triangles (normalised units) inside the lattice box [lo, hi), cut at its planes
+    (numpy only: `trimesh.intersections.slice_faces_plane`)."""
     inv = lattice.inverse
-    out = mesh
     for axis in range(3):
-        # plane c_axis = value in lattice coordinates: normal inv[axis] in normalised space
-        n = inv[axis]
-        for value, sign in ((lattice.start[axis] + lo[axis], 1.0), (lattice.start[axis] + hi[axis], -1.0)):
+        n = inv[axis]  # the plane c_axis = value has this normal in normalised space
+        for value, sign in ((lattice.start[axis] + lo[axis], 1.0),
+                            (lattice.start[axis] + hi[axis], -1.0)):
+            if len(faces) == 0:
+                return vertices, faces
             origin = lattice.to_normalised(np.eye(3)[axis] * value)
-            if len(out.faces) == 0:
-                return out
-            out = out.slice_plane(origin, sign * n, cap=False)
-    return out
+            vertices, faces, *_ = trimesh.intersections.slice_faces_plane(
+                vertices, faces, sign * n, origin)
+    return vertices, faces
 
 
 def stitch_surface(mesh_n: trimesh.Trimesh, lattice: Lattice, label_grid: np.ndarray,
                    label_vectors: np.ndarray, colors: np.ndarray | None) -> StitchResult:
-    parts, n_boxes = [], 0
-    base = trimesh.Trimesh(mesh_n.vertices, mesh_n.faces, process=False)
-    if colors is not None:
-        base.visual.face_colors = colors
+    """An open mesh: each copy's triangles clipped to its label's boxes, concatenated and
+    welded (by position); one pass per face colour so that colours survive the clipping."""
+    from grammarkit.geometry.meshio import weld
+
+    verts = np.asarray(mesh_n.vertices, dtype=np.float64)
+    faces = np.asarray(mesh_n.faces, dtype=np.int64)
+    if colors is None:
+        groups = [(None, faces)]
+    else:
+        uniq, inv = np.unique(colors, axis=0, return_inverse=True)
+        groups = [(uniq[i], faces[inv.reshape(-1) == i]) for i in range(len(uniq))]
+    parts_v, parts_f, parts_c = [], [], []
+    n_boxes, offset = 0, 0
     for label in np.unique(label_grid):
         shift = lattice.to_normalised(label_vectors[label].astype(np.float64))
-        copy = base.copy()
-        copy.apply_translation(shift)
         for lo, hi in merge_boxes(label_grid == label):
             n_boxes += 1
-            piece = _clip_to_box(copy, lattice, lo, hi)
-            if len(piece.faces):
-                parts.append(piece)
-    if not parts:
+            for color, gf in groups:
+                v, f = _clip_to_box(verts + shift, gf, lattice, lo, hi)
+                if len(f) == 0:
+                    continue
+                parts_v.append(v)
+                parts_f.append(f + offset)
+                offset += len(v)
+                if color is not None:
+                    parts_c.append(np.tile(color, (len(f), 1)))
+    if not parts_f:
         raise ValueError("stitching produced an empty mesh")
-    merged = trimesh.util.concatenate(parts)
-    merged.merge_vertices(digits_vertex=7)
-    return StitchResult(merged, len(parts), n_boxes)
+    merged = trimesh.Trimesh(np.concatenate(parts_v), np.concatenate(parts_f), process=False)
+    if parts_c:
+        merged.visual.face_colors = np.concatenate(parts_c).astype(np.uint8)
+    merged = weld(merged)
+    keep = merged.nondegenerate_faces()
+    merged.update_faces(keep)
+    merged.remove_unreferenced_vertices()
+    return StitchResult(merged, len(parts_f), n_boxes)
