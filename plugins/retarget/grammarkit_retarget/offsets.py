@@ -416,6 +416,7 @@ def principal_offsets(mesh: trimesh.Trimesh, *, sampling: SamplingParams = Sampl
                          **{k: round(v, 4) for k, v in found["timings"].items()}}}
     if cloud.thinned_vertex_radius is not None:
         stats["vertex_thinning_radius"] = cloud.thinned_vertex_radius
+    gens = np.where(np.abs(gens) < 1e-15, 0.0, gens)  # no -0.0 in what users print
     return Offsets(generators=gens / frame.scale, structured=structured, counts=counts,
                    dominant=found["dominant"] / frame.scale, dominant_counts=found["dominant_counts"],
                    sparsity=found["sparsity"], frame=frame, params=params, stats=stats,

@@ -14,7 +14,7 @@ import numpy as np
 import trimesh
 from PIL import Image, ImageDraw, ImageFont
 
-from grammarkit.geometry import render as gk_render
+import grammarkit.geometry.render as gk_render
 
 __all__ = ["before_after_png", "explain_png", "label_colors"]
 

@@ -230,10 +230,14 @@ def retarget_report(mesh: Any, size: Sequence[float], *, allow_scale: bool = Fal
 
     if len(offsets) == 0:
         if not allow_scale:
+            checked = offsets.stats.get("overlap_checked") or {}
+            why = (f"the strongest offsets map at most {100 * max(checked.values()):.1f}% of the "
+                   f"surface onto itself, {100 * offsets.params.min_overlap:.0f}% needed"
+                   if checked else "no histogram peak")
             raise ShapeError(
                 f"{name}: no principal offset found: the mesh shows no repetitive structure the "
-                f"retargeter can stitch ({offsets.stats.get('matched', 0)} feature matches, no "
-                "histogram peak); pass --allow-scale (allow_scale=True) to scale it instead")
+                f"retargeter can stitch ({offsets.stats.get('matched', 0)} feature matches; {why}); "
+                "pass --allow-scale (allow_scale=True) to scale it instead")
         f = target / input_size
         return finish(scale_to(mesh, target), "scale", np.zeros(3, np.int64), f)
 
