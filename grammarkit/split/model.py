@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import json
+import os
 from dataclasses import dataclass, field
 from functools import cached_property
 from typing import Any
@@ -17,6 +18,8 @@ Manifold = manifold3d.Manifold
 
 DEFAULT_COLOR = "#b8b4ac"
 CUT_COLOR = "#3a4450"
+# the group name of triangles no terminal claims (none in practice; kept so that every face has a label)
+UNTAGGED = "untagged"
 
 __all__ = ["Model", "Part", "TreeNode", "compose"]
 
@@ -288,6 +291,95 @@ class Model:
 
     def tree_json(self, indent: int | None = None) -> str:
         return json.dumps(self.tree_dict(), indent=indent)
+
+    def face_labels(self) -> list[str]:
+        """The terminal name of every triangle (what the GLB groups nodes by), e.g. for a
+        segmentation data set: `model.face_labels()[i]` labels `model.faces[i]`."""
+        names = [t.name for t in self.tags] + [UNTAGGED]
+        return [names[i] for i in self.triangle_tags.tolist()]
+
+    def export_scene(self) -> Any:
+        """The building for the exporters (`grammarkit.geometry.exporters.Scene`): one solid,
+        its triangles grouped by terminal name, a material per (material name, colour), and
+        per group the rules, source lines and semantic tags (docs/derive.md, "Files")."""
+        from ..geometry.exporters import Material, Scene, Solid
+
+        tags = self.tags
+        group_of_name: dict[str, int] = {}
+        material_index: dict[Material, int] = {}
+        materials: list[Material] = []
+        tag_group = np.empty(len(tags) + 1, dtype=np.int64)
+        tag_material = np.empty(len(tags) + 1, dtype=np.int64)
+        info: list[dict] = []
+        nodes = self._ctx.nodes
+        for i, t in enumerate([*tags, None]):
+            if t is None:
+                name, color, mat_name = UNTAGGED, _rgba(None, DEFAULT_COLOR), None
+            else:
+                name = t.name
+                color = _rgba(t.color, CUT_COLOR if t.role == "cut" else DEFAULT_COLOR)
+                mat_name = t.material
+            g = group_of_name.get(name)
+            if g is None:
+                g = group_of_name[name] = len(info)
+                info.append({"terminal": name, "rules": set(), "sources": set(), "object_types": set(),
+                             "roles": set(), "materials": set()})
+            mat = Material(mat_name, color)
+            m = material_index.get(mat)
+            if m is None:
+                m = material_index[mat] = len(materials)
+                materials.append(mat)
+            tag_group[i], tag_material[i] = g, m
+            if t is not None:
+                d = info[g]
+                d["rules"].add(t.rule)
+                d["roles"].add(t.role)
+                d["materials"].add(mat.label)
+                if t.object_type:
+                    d["object_types"].add(t.object_type)
+                span = nodes[t.node][7] if 0 <= t.node < len(nodes) else None
+                if span is not None and getattr(span, "line", None):
+                    d["sources"].add(f"{os.path.basename(span.file or self.name)}:{span.line}")
+        tri_tags = self.triangle_tags  # -1 (untagged) picks the entry appended last
+        face_group = tag_group[tri_tags]
+        groups = []
+        for d in info:
+            extras = {k: (sorted(v) if isinstance(v, set) else v) for k, v in d.items()}
+            groups.append((d["terminal"], extras))
+        counts = np.bincount(face_group, minlength=len(groups))
+        for g, (_name, extras) in enumerate(groups):
+            extras["triangles"] = int(counts[g])
+        name = self.name or "building"
+        solid = Solid(name, self.vertices, self.faces, face_group, groups, tag_material[tri_tags], materials,
+                      extras={"grammar": self.name, "seed": self.seed})
+        extras = {"grammar": self.name, "seed": self.seed,
+                  "attrs": {k: v for k, v in self.attrs.items() if isinstance(v, (int, float, str, bool))},
+                  "bindings": dict(self.bindings),
+                  "materials": sorted({t.material for t in tags if t.material})}
+        return Scene(name, [solid], extras)
+
+    def save(self, path: Any, format: str | None = None) -> Any:
+        """Write the model through grammarkit's exporters (format from `format` or the suffix:
+        glb, gltf, obj, stl, ply), atomically; returns the path. Colours, materials, terminal
+        groups and attrs are kept (see docs/derive.md, "Files")."""
+        from pathlib import Path
+
+        from ..geometry.exporters import encode_with, exporter_for
+        from ..run.writer import write_files
+
+        path = Path(path)
+        write_files({path: encode_with(exporter_for(path, format), self)})
+        return path
+
+    def _repr_png_(self) -> bytes:
+        """A shaded picture for Jupyter (grammarkit's CPU renderer, default camera)."""
+        import io
+
+        from ..geometry.render import render
+
+        buf = io.BytesIO()
+        render(self, style="shaded+lines", size=(480, 480)).save(buf, format="PNG")
+        return buf.getvalue()
 
     def to_scene(self) -> Any:
         """A trimesh.Scene with the building as one node whose extras carry the model facts."""
