@@ -228,6 +228,8 @@ def _gltf_node_extras(path: Path) -> dict[str, dict]:
 
 def _read_obj(path: Path) -> list[Part]:
     """A small OBJ reader that keeps `o`/`g` groups as parts and reports file:line on errors."""
+    from ..geometry.meshio import weld
+
     try:
         text = path.read_text(encoding="utf-8")
     except UnicodeDecodeError:
@@ -277,7 +279,10 @@ def _read_obj(path: Path) -> list[Part]:
     for name, tris in groups.items():
         F = np.asarray(tris, dtype=np.int64)
         used, inverse = np.unique(F, return_inverse=True)
+        # OBJ writers (grammarkit's included) repeat vertices at colour seams: weld by position
         mesh = trimesh.Trimesh(V[used], inverse.reshape(-1, 3), process=False)
+        if np.isfinite(mesh.vertices).all():  # NaN is reported by finish_assembly, naming the part
+            mesh = weld(mesh)
         parts.append(Part(name, group_types.get(name) or type_from_name(name), mesh, np.eye(4),
                           {"source": str(path)}))
     return parts
