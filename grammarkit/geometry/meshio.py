@@ -370,6 +370,9 @@ def _scene_of_solids(solids: list[GltfSolid]) -> trimesh.Scene:
 def face_labels(path: str | Path) -> list[str]:
     """The label (terminal name, or part id) of every face of a grammarkit GLB/glTF, in the
     order of `load_mesh(path, single=True).faces`."""
+    path = Path(path)
+    if not path.is_file():
+        raise ShapeError(f"{path}: mesh file not found")
     solids = read_gltf_solids(path)
     if solids is None:
         raise ShapeError(f"{path}: not a GLB/glTF written by grammarkit (format 2); no face labels")
