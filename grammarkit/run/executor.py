@@ -231,6 +231,7 @@ class _LocalSession:
         self.log: list[tuple[Callable, tuple]] = []
         self.workers: list[_Worker] = []
         self.closed = False
+        self.local_only = False
 
     # -- state ------------------------------------------------------------------------------
     def update(self, fn: Callable[..., None], *args: Any) -> None:
@@ -246,13 +247,14 @@ class _LocalSession:
         if not pending:
             return
         want = self.executor.workers
+        always = self.executor.parallel == "always"
         spent, done_here = 0.0, 0
         while pending:
-            if want > 1 and not self.workers and done_here and self._worth_it(spent / done_here,
-                                                                              len(pending)):
+            if want > 1 and not self.workers and not self.local_only and (always or (done_here and self._worth_it(
+                    spent / done_here, len(pending)))):
                 self._start_workers(want)
             if self.workers:
-                yield from self._parallel(fn, pending, spent / max(done_here, 1))
+                yield from self._parallel(fn, pending, spent / done_here if done_here else None)
                 return
             _, item = pending.popleft()
             t0 = time.perf_counter()
@@ -268,18 +270,26 @@ class _LocalSession:
         return work * (1.0 - 1.0 / workers) > startup + self.executor.min_parallel_seconds
 
     def _start_workers(self, count: int) -> None:
+        try:  # state that cannot be shipped (a lambda in it, say) is computed here instead
+            pickle.dumps((self.init, self.args, self.log))
+        except Exception:  # noqa: BLE001 - any pickling failure means: stay in this process
+            self.local_only = True
+            return
         self.workers = _take_workers(count)
         for w in self.workers:
             if w.ready:
                 w.conn.send(("init", self.sid, self.init, self.args, list(self.log)))
                 w.sessions.add(self.sid)
 
-    def _parallel(self, fn: Callable, pending: deque, per_item: float) -> Iterator[Any]:
+    def _parallel(self, fn: Callable, pending: deque, per_item: float | None) -> Iterator[Any]:
         """Hand chunks to workers as they become free, run items here while none is ready,
         and yield every result in item order."""
         from multiprocessing.connection import wait
 
-        size = max(1, min(64, int(CHUNK_SECONDS / max(per_item, 1e-6))))
+        if per_item is None:  # nothing timed yet: a few chunks per worker
+            size = max(1, min(64, len(pending) // (4 * len(self.workers))))
+        else:
+            size = max(1, min(64, int(CHUNK_SECONDS / max(per_item, 1e-6))))
         results: dict[int, tuple[bool, Any]] = {}  # item position -> (ok, value)
         order = deque(pos for pos, _ in pending)
         chunk_ids = itertools.count()
@@ -305,7 +315,8 @@ class _LocalSession:
                     yield value
                 if not order:
                     break
-                if not out and pending and not any(w.ready for w in self.workers):
+                if not out and pending and not any(w.ready for w in self.workers) \
+                        and self.executor.parallel == "auto":
                     # workers still starting: do the next item here meanwhile
                     pos, item = pending.popleft()
                     try:
@@ -387,13 +398,21 @@ class LocalExecutor:
 
     workers: the most processes to use (default: the CPUs this process may run on; 1 runs
              everything in this process).
-    min_parallel_seconds: parallel work must be expected to save at least this much.
+    parallel: "auto" starts workers when the work is expected to repay their start-up;
+             "always" hands every map to workers (tests, benchmarks); "never" stays here.
+    min_parallel_seconds: with "auto", parallel work must be expected to save this much.
     """
 
     name = "local"
 
-    def __init__(self, workers: int | None = None, *, min_parallel_seconds: float = 0.5):
+    def __init__(self, workers: int | None = None, *, parallel: str = "auto",
+                 min_parallel_seconds: float = 0.5):
+        if parallel not in ("auto", "always", "never"):
+            raise ValueError(f"parallel must be 'auto', 'always' or 'never', not {parallel!r}")
         self.workers = default_workers() if workers is None else max(1, int(workers))
+        if parallel == "never":
+            self.workers = 1
+        self.parallel = parallel
         self.min_parallel_seconds = float(min_parallel_seconds)
 
     def session(self, init: Callable[..., Any], *args: Any) -> _LocalSession:
