@@ -136,7 +136,11 @@ class Model:
     - `parts`: the terminals with their tags (rule, object type, colour, material) and scopes
     - `tree` / `tree_dict()`: the derivation tree
     - `triangle_tags`: for every triangle, the index into `tags` of what it came from
-    - `to_scene()`: a trimesh.Scene for the exporters
+    - `save(path, format=None)`: write through the exporter registry (GLB: +Y up, a PBR material
+      per (material, colour), a node per terminal name; docs/derive.md "Files")
+    - `face_labels()`: the terminal name of every triangle; `export_scene()`: what exporters get
+    - `to_scene()`: a trimesh.Scene (one node with face colours)
+    - `_repr_png_()`: a picture for Jupyter
     """
 
     def __init__(self, name: str, seed: int, attrs: dict[str, Any], ctx: Derivation, manifold: Any,
