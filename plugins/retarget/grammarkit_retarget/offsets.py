@@ -1,16 +1,21 @@
 """Offset statistics and principal offsets (Wu et al., sections III-A, IV and V).
 
 1. Every feature x is matched to the feature x + v whose SHOT descriptor is nearest (L2), among
-   those with |v| > tau (0.15): Eq. (1). Exact ties (identical descriptors, e.g. the vertices
-   of identical copies) go to the shortest offset.
+   those with |v| > tau (0.15): Eq. (1) (with the tie rule below).
 2. The offsets are binned in a 3D histogram with cubic bins of 0.05; its peaks after
-   non-maximum suppression with radius 0.15 are the dominant offsets (about 20).
+   non-maximum suppression with radius 0.15 are the dominant offsets (at most 20).
 3. Each dominant offset is refined by ICP over the whole dense cloud (translation only,
    point-to-plane), from the mean of the offsets in its bin and the adjacent bins.
 4. Principal offsets, greedily in decreasing count: v1 the strongest; each next one makes an
    angle of at least 60 degrees with those taken (|cos| <= cos(pi/3)); at most 3.
    Missing directions get dummy generators of length 0.2, orthogonal to the others, along
-   which the model is never retargeted.
+   which the model is never retargeted. The chosen offsets are finally snapped by
+   point-to-point ICP on the mesh vertices (exact where the mesh repeats exactly, which the
+   stitching relies on).
+
+Checks not in the paper (see `OffsetParams`; each can be switched off): a peak needs a share
+of the strongest peak's count, and a principal offset must map part of the surface onto the
+surface (`self_overlap`), else a sphere would have principal offsets.
 
 One deviation, on by default and switchable off (`tie_ratio=1.0`) so the paper's exact
 Eq. (1) stays measurable: a feature's best match is the *nearest* of the features whose

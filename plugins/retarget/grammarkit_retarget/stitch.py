@@ -7,12 +7,12 @@ the lattice's canonical space in double precision, with vertex coordinates snapp
 repeated vertices are whole lattice units apart (`snap_periodic`): pieces of identical
 geometry then meet on exactly coincident faces and unite without slivers.
 
-Open input (`surface=True`): the same clipping on the triangles alone (a surface has no
+Open input (`stitch_surface`): the same clipping on the triangles alone (a surface has no
 inside for booleans): each copy's triangles are cut by the planes of its boxes and kept
 inside; the pieces are concatenated and welded. The output is open wherever the input was.
 
-Face colours survive: triangles that come from the input carry their input face index
-(manifold3d's face ids), and take that face's colour.
+Face colours survive: the input's triangles carry a manifold3d face id per (plane, colour),
+which the output triangles keep.
 """
 from __future__ import annotations
 
@@ -24,8 +24,7 @@ import trimesh
 
 from .labelling import Lattice
 
-__all__ = ["merge_boxes", "stitch_solid", "stitch_surface"]
-
+__all__ = ["StitchResult", "merge_boxes", "snap_periodic", "stitch_solid", "stitch_surface"]
 
 
 def merge_boxes(mask: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
