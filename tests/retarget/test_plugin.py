@@ -64,15 +64,17 @@ def test_fit_in_a_split_grammar(tmp_path, models):
     insert = ops.get("i")
     if insert is None or not any(p.name == "fit" for p in insert.params):
         pytest.skip("the split engine's i() has no fit= argument yet (being added on branch core)")
-    from grammarkit.dsl import parse
+    from grammarkit.geometry.exporters import exporter_for
     from grammarkit.split import derive
 
     path = tmp_path / "fence.glb"
-    from grammarkit.geometry.exporters import exporter_for
-
     path.write_bytes(exporter_for(path).encode(models["picket_fence"].mesh))
-    text = (f'grammar fences\nLot --> footprint(rect(8, 0.2)) extrude(1.2) Fence\n'
-            f'Fence --> i("{path}", fit=retarget)\n')
-    model = derive(parse(text), seed=0)
-    m = testmodels.measure(model.mesh, testmodels.Probe(0, (0.0, 0.1, 0.55)))
-    assert m["count"] > 12 and np.allclose(m["sizes"], 0.08, rtol=0.06)
+    lot = 'Lot --> footprint(rect(8, 0.2)) extrude(1.2) i("{}"{}) Fence.\n'
+    fitted = derive(lot.format(path.as_posix(), ", fit=retarget"))
+    scaled = derive(lot.format(path.as_posix(), ""))
+    probe = testmodels.Probe(0, (0.0, 0.09, 0.55))
+    for model, count, size in ((fitted, 12 + 19, 0.08 * 8 / 7.95), (scaled, 12, 0.08 * 8 / 3.2)):
+        mesh = trimesh.Trimesh(model.vertices, model.faces, process=False)
+        assert mesh.is_watertight and np.allclose(mesh.extents, (8, 0.2, 1.2), atol=5e-3)
+        m = testmodels.measure(mesh, probe)
+        assert m["count"] == count and np.allclose(m["sizes"], size, rtol=1e-3), (count, m)
