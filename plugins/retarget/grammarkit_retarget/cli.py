@@ -95,7 +95,7 @@ def _one_line(report) -> str:
     if report.method == "scale":
         how = "scaled (no principal offset)"
     elif report.method == "unchanged":
-        how = "unchanged (already the requested size)"
+        how = "no repeats added or removed (the nearest whole number of steps is 0)"
     else:
         gens = [f"{int(k):+d} x ({', '.join(f'{x:.3g}' for x in g)})"
                 for g, s, k in zip(report.offsets.generators, report.offsets.structured, report.steps)

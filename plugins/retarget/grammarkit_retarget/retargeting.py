@@ -49,7 +49,8 @@ class RetargetReport:
 
     mesh:       the output (world units).
     method:     "retarget" (stitched copies), "scale" (plain scaling: no structure and
-                allow_scale) or "unchanged" (the request equals the input's size).
+                allow_scale) or "unchanged" (no step along any principal offset; the mesh is
+                the input's, scaled along the axes `scale` says).
     requested:  the requested bounding box size; size: the output's.
     steps:      generator steps k (0 along dummy generators).
     scale:      per-axis scale factors applied after stitching (1 where none).
