@@ -341,14 +341,35 @@ class DaskExecutor:
         return f"DaskExecutor({where}, {self.workers} worker threads)"
 
 
+def _probe(address: str, timeout: float) -> None:
+    """Open a Dask comm to `address` and complete its handshake within `timeout` seconds.
+
+    distributed.Client's own timeout does not cover a server that accepts the connection and
+    then says nothing (its clean-up after the handshake times out waits for ever), so the
+    address is tried first with one overall deadline."""
+    import asyncio
+
+    from distributed.comm import connect
+
+    async def attempt() -> None:
+        comm = await connect(address, timeout=timeout)
+        await comm.close()
+
+    async def bounded() -> None:
+        await asyncio.wait_for(attempt(), timeout)
+
+    asyncio.run(bounded())
+
+
 def _connect(distributed: Any, address: str, timeout: float) -> Any:
     """A Client of the scheduler at `address`, or SchedulerUnreachable within about `timeout`."""
     t0 = time.monotonic()
     try:
-        return distributed.Client(address, timeout=timeout)
+        _probe(address, timeout)
+        return distributed.Client(address, timeout=max(1.0, timeout - (time.monotonic() - t0)))
     except Exception as exc:  # noqa: BLE001 - refused, timed out, or garbage from a non-Dask server
         waited = time.monotonic() - t0
-        if isinstance(exc, (OSError, TimeoutError)) and "Timed out" in str(exc):
+        if isinstance(exc, TimeoutError) or (isinstance(exc, OSError) and "Timed out" in str(exc)):
             why = f"no answer within {timeout:g} s"
         else:
             # anything else that answers on that port (an HTTP proxy, ...) makes the Dask

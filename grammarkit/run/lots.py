@@ -249,6 +249,8 @@ def _seed(value: Any) -> tuple[int | None, str | None]:
 def _attrs(props: Mapping[str, Any]) -> tuple[dict, str | None]:
     out: dict[str, Any] = {}
     given = props.get("attrs")
+    if isinstance(given, str) and not given.strip():
+        given = None  # an empty text field (shapefiles have a value in every record)
     if given is not None:
         if isinstance(given, str):  # shapefile attributes are flat text: allow a JSON object
             try:
@@ -375,12 +377,15 @@ def read_lots(path: str | Path, *, seed: int = 0, degrees: str = "project", hole
 
     lots: list[Lot] = []
     used: dict[str, int] = {}
+    seen_ids: dict[str, int] = {}
+    run_seed = seed_int(seed)
     for index, r in enumerate(raw):
         base = r["source_id"] if r["source_id"] is not None else f"lot_{r['feature']:05d}"
         if r.get("part") is not None:
             base = f"{base}-{r['part']}"
         fid = _file_id(base)
         note = None
+        occurrence = seen_ids[base] = seen_ids.get(base, 0) + 1
         if fid in used:
             k = used[fid] + 1
             while f"{fid}_{k}" in used:
@@ -398,10 +403,14 @@ def read_lots(path: str | Path, *, seed: int = 0, degrees: str = "project", hole
         if err is None:
             pts = [(x - origin[0], y - origin[1]) for x, y in r["points"]]
             far = max(max(abs(x), abs(y)) for x, y in pts)
-            try:
-                polygon = validate_polygon(pts)
-            except ValueError as exc:
-                err = _polygon_message(str(exc))
+            crossing = _first_crossing(pts)
+            if crossing is not None:
+                err = f"is self-intersecting: edges {crossing[0]} and {crossing[1]} cross"
+            else:
+                try:
+                    polygon = validate_polygon(pts)
+                except ValueError as exc:
+                    err = _polygon_message(str(exc))
             if err is None and far > MAX_EXTENT:
                 err = (f"lies {far / 1000:.0f} km from the other lots' origin (more than "
                        f"{MAX_EXTENT / 1000:.0f} km); split the file by district")
@@ -419,12 +428,39 @@ def read_lots(path: str | Path, *, seed: int = 0, degrees: str = "project", hole
             polygon = None
             where = f"feature {r['feature']}" + (f", polygon {r['part']}" if r.get("part") else "")
             err = f"lot {base!r} ({where}): {err}"
-        seed = seed_value if seed_value is not None else lot_seed(seed_int(seed), base)
+        # a lot's seed depends on its id (and which occurrence of that id it is), not on its
+        # position: adding or reordering lots keeps every other building
+        key = base if occurrence == 1 else f"{base}#{occurrence}"
+        lseed = seed_value if seed_value is not None else lot_seed(run_seed, key)
         lots.append(Lot(index=index, id=fid, feature=r["feature"], source_id=r["source_id"],
-                        part=r.get("part"), polygon=polygon, holes=r.get("holes", 0) or 0, seed=seed,
+                        part=r.get("part"), polygon=polygon, holes=r.get("holes", 0) or 0, seed=lseed,
                         attrs=attrs, error=err, note=note))
     return LotSet(path=path, lots=lots, units=units, origin=(float(origin[0]), float(origin[1])),
                   projection=projection, sha256=hashlib.sha256(data).hexdigest())
+
+
+def _first_crossing(pts: Sequence[Point]) -> tuple[int, int] | None:
+    """The first pair of non-adjacent edges that cross properly, if any.
+
+    The footprint validator checks the area before the edges, so a symmetric bow-tie (zero
+    signed area) would be reported as "zero area"; the lot's message should say what is wrong."""
+    ring = list(pts)
+    if len(ring) > 1 and ring[0] == ring[-1]:
+        ring.pop()
+    n = len(ring)
+
+    def orient(p: Point, q: Point, r: Point) -> float:
+        return (q[0] - p[0]) * (r[1] - p[1]) - (q[1] - p[1]) * (r[0] - p[0])
+
+    for i in range(n):
+        a, b = ring[i], ring[(i + 1) % n]
+        for j in range(i + 2, n):
+            if i == 0 and j == n - 1:
+                continue
+            c, d = ring[j], ring[(j + 1) % n]
+            if orient(a, b, c) * orient(a, b, d) < 0 and orient(c, d, a) * orient(c, d, b) < 0:
+                return i, j
+    return None
 
 
 def seed_int(seed: Any) -> int:
@@ -442,5 +478,5 @@ def _polygon_message(text: str) -> str:
     if "cross" in text:
         return f"is self-intersecting: {text.replace('footprint ', '')}"
     if "zero area" in text or "at least 3" in text:
-        return f"is degenerate: {text.replace('footprint ', '').replace('a footprint', 'a lot')}"
+        return f"is degenerate: {text.replace('a footprint', 'a lot').replace('footprint ', '')}"
     return text.replace("footprint", "lot")
