@@ -30,6 +30,7 @@ manifest listing exactly the complete items; running the same batch again contin
 from __future__ import annotations
 
 import io
+import os
 import time
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
@@ -305,6 +306,38 @@ def merge_models(folder: str | Path, entries: Sequence[Mapping[str, Any]], path:
     return path
 
 
+def _size(path: Path) -> int | None:
+    try:
+        return path.stat().st_size
+    except OSError:
+        return None
+
+
+def _drop_torn_line(manifest: Path, size: int | None) -> None:
+    """After a failed append (a full disk), cut a partly written last line off the manifest, so
+    that it lists exactly the complete items for every reader, not only for the writer (which
+    skips a torn line when it reopens the folder). Truncating needs no free space."""
+    if size is None:
+        return
+    try:
+        with open(manifest, "rb") as fh:
+            fh.seek(size)
+            tail = fh.read()
+        if not tail:
+            return
+        if tail.endswith(b"\n") and tail.count(b"\n") == 1:
+            try:
+                import json
+
+                json.loads(tail)
+                return  # the line is complete (the failure came after it): keep it
+            except ValueError:
+                pass
+        os.truncate(manifest, size)
+    except OSError:
+        pass  # the writer's reader still stops at a torn line
+
+
 def _consume(results: Any, todo: Sequence[Any], folder: Any, summary: BatchSummary, mode: str,
              name: str, fmt: str, fail_fast: bool, progress: Callable | None, total: int,
              deadline: float | None, timeout: float | None) -> None:
@@ -314,13 +347,19 @@ def _consume(results: Any, todo: Sequence[Any], folder: Any, summary: BatchSumma
         if not outcome["ok"] and fail_fast:
             raise BatchFailed(f"{outcome['error']} (stopped at the first failure: --fail-fast; "
                               f"{folder.done} items are complete in {folder.path}/manifest.jsonl)")
+        before = _size(folder.manifest)
         try:
             folder.add(entry, files)
         except OSError as exc:  # a full disk, a folder gone read-only
-            reason = exc.strerror or str(exc)
-            raise OutputError(f"{folder.path}: the batch stopped: cannot write {entry['id']}: "
-                              f"{reason}; manifest.jsonl lists the {folder.done} complete items; "
-                              "fix the cause and run the same command again to continue") from None
+            _drop_torn_line(folder.manifest, before)
+            if isinstance(exc, OutputError):  # already names the path and the problem
+                what = str(exc)
+            else:
+                what = f"{folder.path}: cannot write {entry['id']}: {exc.strerror or exc}"
+            done = ("nothing was written" if folder.done == 0 else
+                    f"manifest.jsonl lists the {folder.done} complete items")
+            raise OutputError(f"{what}; the batch stopped ({done}); fix the cause and run the "
+                              "same command again to continue") from None
         summary.written += 1
         summary.derive_seconds += float(outcome["metrics"].get("seconds") or 0.0)
         if progress is not None:
