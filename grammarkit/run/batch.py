@@ -258,14 +258,9 @@ def _entry(outcome: dict, item: Any, mode: str, name: str, fmt: str) -> tuple[di
     return entry, files
 
 
-def merge_models(folder: str | Path, entries: Sequence[Mapping[str, Any]], path: str | Path,
-                 registries: Any = None) -> Path:
-    """One model of every ok item's model file (each item's parts as nodes `<id>/<part>`),
-    written atomically to `path` in the format its suffix names."""
-    import trimesh
-
-    from ..geometry.exporters import encode_with
-    from .writer import write_files
+def merge_models(folder: str | Path, entries: Sequence[Mapping[str, Any]], path: str | Path) -> Path:
+    """One GLB of every ok item's GLB (grammarkit.run.merge), written atomically to `path`."""
+    from .merge import merge_glb
 
     folder, path = Path(folder), Path(path)
     ok = [e for e in entries if e.get("status", "ok") == "ok" and e.get("file")]
@@ -275,35 +270,7 @@ def merge_models(folder: str | Path, entries: Sequence[Mapping[str, Any]], path:
                               f"(more than {MAX_MERGE_TRIANGLES:,}); use the per-item files")
     if not ok:
         raise GrammarkitError(f"{path}: not merged: no item was built")
-    if registries is None:
-        from ..plugins import get_plugin_manager
-
-        registries = get_plugin_manager().registries()
-    suffix = path.suffix.lower().lstrip(".")
-    spec = registries.exporters.get(suffix)
-    if spec is None:
-        raise GrammarkitError(f"{path}: cannot tell the merged model's format from its suffix; "
-                              f"use one of: {', '.join('.' + f for f in sorted(registries.exporters))}")
-    city = trimesh.Scene()
-    for e in ok:
-        source = folder / e["file"]
-        try:
-            scene = trimesh.load(source, force="scene")
-        except Exception as exc:  # noqa: BLE001 - a model file changed or damaged since
-            raise GrammarkitError(f"{source}: cannot read it back for the merge: {exc}") from None
-        graph = scene.graph
-        for node in graph.nodes_geometry:
-            matrix, gname = graph[node]
-            mesh = scene.geometry.get(gname)
-            if not isinstance(mesh, trimesh.Trimesh) or len(mesh.faces) == 0:
-                continue
-            parent = graph.transforms.parents.get(node)
-            extras = dict(graph.transforms.edge_data.get((parent, node), {}).get("metadata") or {})
-            extras["item"] = e["id"]
-            name = f"{e['id']}/{node}"
-            city.add_geometry(mesh, node_name=name, geom_name=name, transform=matrix, metadata=extras)
-    write_files({path: encode_with(spec, city)})
-    return path
+    return merge_glb([(e["id"], folder / e["file"]) for e in ok], path)
 
 
 def _size(path: Path) -> int | None:
@@ -394,7 +361,7 @@ def run_batch(grammar: Any, items: Any, out: str | Path, *, executor: Any = None
               available (a lot's attrs come from its properties).
     render:   PNG renders per item: "sketch", "lines", "shaded", "shaded+lines" (the default
               camera: pitch 30, yaw -45, fov 45, framed), `render_size` pixels square.
-    merge:    also write every ok model as one file (format from its suffix) at the end.
+    merge:    also write every ok model into one GLB (a .glb path; items in glb) at the end.
     index:    "jsonl" (always written) or "parquet" (also index.parquet; needs pyarrow).
     progress: `progress(done, total, entry)`: once at the start (entry None), then per item.
     degrees, holes, units: how lots are read (grammarkit.run.lots.read_lots).
@@ -463,6 +430,9 @@ def run_batch(grammar: Any, items: Any, out: str | Path, *, executor: Any = None
             warnings.append(f"{lotset.path}: coordinates are lon/lat degrees; projected to metres "
                             f"(local equirectangular about lon {p['lon0']:.6f}, lat {p['lat0']:.6f})")
     merge_path = Path(merge) if merge is not None else None
+    if merge_path is not None and (fmt != "glb" or merge_path.suffix.lower() != ".glb"):
+        raise GrammarkitError(f"--merge {merge_path}: merging writes one GLB of the items' GLB files; "
+                              "use --format glb and a .glb name")
     check_outputs({"-o": Path(out), "--merge": merge_path}, inputs=inputs)
     if merge_path is not None and merge_path.parent.resolve() == Path(out).resolve():
         ids = {w.id if mode == "lots" else f"{g.name or 'model'}_{w:06d}" for w in work}
@@ -534,6 +504,6 @@ def run_batch(grammar: Any, items: Any, out: str | Path, *, executor: Any = None
         summary.index = write_index(folder.path, grammar=g, entries=entries,
                                     parquet=index == "parquet", info=info)
     if merge_path is not None:
-        summary.merged = merge_models(folder.path, entries, merge_path, registries)
+        summary.merged = merge_models(folder.path, entries, merge_path)
     summary.seconds = time.perf_counter() - t0
     return summary

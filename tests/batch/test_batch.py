@@ -51,18 +51,24 @@ def test_a_building_per_lot_with_failures_recorded_per_lot(tmp_path):
     for e in entries.values():
         if e["status"] == "failed":
             assert e["file"] is None and not (out / f"{e['id']}.glb").exists()
-    # each building reads back watertight (welded by position, as every example grammar)
+    # each building reads back watertight (grammarkit's reader, and trimesh welding by position)
+    from grammarkit.geometry.meshio import face_labels, load_mesh
+
     for name in ("good-1.glb", "good-2.glb"):
-        mesh = trimesh.load(out / name)
-        mesh = mesh.to_mesh() if isinstance(mesh, trimesh.Scene) else mesh
+        assert load_mesh(out / name, single=True).is_watertight
+        mesh = trimesh.load(out / name).to_mesh()
         welded = trimesh.Trimesh(mesh.vertices, mesh.faces)
         assert welded.is_watertight and welded.body_count == 1
-    # the merged city: both buildings, where their lots are, nodes named after their items
-    city = trimesh.load(tmp_path / "city.glb")
-    assert {n.split("/")[0] for n in city.graph.nodes_geometry} == {"good-1", "good-2"}
-    welded = trimesh.Trimesh(city.to_mesh().vertices, city.to_mesh().faces)
-    assert welded.is_watertight and welded.body_count == 2
-    assert welded.bounds[1][0] == pytest.approx(114, abs=0.01)  # good-2's east edge, in metres
+    # the merged city: both buildings where their lots are, a solid per item, labels kept
+    city = load_mesh(tmp_path / "city.glb")
+    assert sorted(city.geometry) == ["good-1", "good-2"]
+    assert all(g.is_watertight for g in city.geometry.values())
+    whole = load_mesh(tmp_path / "city.glb", single=True)
+    assert whole.body_count == 2 and whole.bounds[1][0] == pytest.approx(114, abs=0.01)
+    labels = face_labels(tmp_path / "city.glb")
+    assert labels == face_labels(out / "good-1.glb") + face_labels(out / "good-2.glb")
+    t = trimesh.load(tmp_path / "city.glb").to_mesh()
+    assert trimesh.Trimesh(t.vertices, t.faces).body_count == 2
     assert summary.merged == tmp_path / "city.glb"
 
 
@@ -213,10 +219,14 @@ def test_sampled_attrs_are_for_variations_only(tmp_path):
         run_batch(TINY, lots, tmp_path / "out", sample=True)
 
 
-def test_the_merged_file_may_not_replace_an_item(tmp_path):
+def test_the_merged_file_may_not_replace_an_item_and_is_a_glb(tmp_path):
     lots = write_lots(tmp_path / "lots.geojson", [feature(rect(0, 0, 9, 9), "city")])
     with pytest.raises(GrammarkitError, match="--merge would overwrite an item's file"):
         run_batch(TINY, lots, tmp_path / "out", merge=tmp_path / "out" / "city.glb")
+    with pytest.raises(GrammarkitError, match="use --format glb and a .glb name"):
+        run_batch(TINY, lots, tmp_path / "out", merge=tmp_path / "city.obj")
+    with pytest.raises(GrammarkitError, match="use --format glb and a .glb name"):
+        run_batch(TINY, lots, tmp_path / "out", merge=tmp_path / "city.glb", format="obj")
 
 
 def test_run_backend_runs_on_the_dask_executor(tmp_path, dask_executor):
@@ -240,3 +250,17 @@ def test_renders_are_pngs_of_the_model(tmp_path):
                                     "lines.png": "tiny_000000.lines.png"}
     shaded = Image.open(io.BytesIO((out / "tiny_000000.shaded+lines.png").read_bytes()))
     assert shaded.size == (80, 80) and len(shaded.convert("RGB").getcolors(maxcolors=100000)) > 4
+
+
+def test_merging_refuses_files_it_cannot_merge_exactly(tmp_path):
+    from grammarkit.run.merge import MergeError, merge_glb
+
+    foreign = tmp_path / "foreign.glb"
+    foreign.write_bytes(trimesh.creation.box().export(file_type="glb"))
+    with pytest.raises(MergeError, match="not a GLB written by this grammarkit"):
+        merge_glb([("a", foreign)], tmp_path / "m.glb")
+    broken = tmp_path / "broken.glb"
+    broken.write_bytes(b"glTF\x02\x00\x00\x00garbage")
+    with pytest.raises(MergeError, match="broken.glb: not a readable GLB file"):
+        merge_glb([("a", broken)], tmp_path / "m.glb")
+    assert not (tmp_path / "m.glb").exists()
