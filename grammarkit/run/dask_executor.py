@@ -24,8 +24,8 @@ How `map` keeps memory bounded. Items are submitted in chunks, at most `max_in_f
 a time (by default four per worker thread), and results are yielded in item order as the oldest
 chunk completes, so a run of 100,000 items holds a few hundred items' results at most. Chunks
 start with one item; once the first results report how long an item takes, a chunk holds about
-`CHUNK_SECONDS` of work (capped at `MAX_CHUNK` items), which keeps the scheduler's per-task
-cost (about a millisecond) small against the work.
+`CHUNK_SECONDS` of work, and on a large cluster enough items that the scheduler (about a
+millisecond per task) stays under half load (capped at `MAX_CHUNK` items).
 
 Why Dask and not Ray: Dask distributed is pure Python (a ~1.5 MB wheel plus tornado, msgpack,
 cloudpickle), starts a `LocalCluster` of processes in a couple of seconds (tests and benchmarks
@@ -41,6 +41,7 @@ import re
 import threading
 import time
 import uuid
+import warnings
 from collections import OrderedDict, deque
 from dataclasses import dataclass
 from typing import Any, Callable, Iterable, Iterator
@@ -53,6 +54,10 @@ __all__ = ["DaskExecutor", "DaskSession", "DaskUnavailable", "SchedulerUnreachab
 DEFAULT_CONNECT_TIMEOUT = 10.0  # seconds to reach a scheduler before giving up
 CHUNK_SECONDS = 0.25  # aim for chunks of about this much work once an item's cost is known
 MAX_CHUNK = 64
+# What one task costs the scheduler (Dask's docs say about 1 ms; 0.2-2.5 ms measured by
+# benchmarks/bench_batch.py on a busy 2-core machine). Chunks grow with the cluster so that the
+# scheduler stays under half load: workers / (chunk x item time) <= 0.5 / TASK_SECONDS.
+TASK_SECONDS = 1e-3
 IN_FLIGHT_PER_THREAD = 4
 INSTALL_HINT = 'pip install "grammarkit[dask]"'
 
@@ -213,7 +218,9 @@ class DaskSession:
     def _chunk_size(self) -> int:
         if self.per_item is None:
             return 1
-        return max(1, min(MAX_CHUNK, int(CHUNK_SECONDS / max(self.per_item, 1e-6))))
+        per = max(self.per_item, 1e-6)
+        want = max(CHUNK_SECONDS / per, 2.0 * self.executor.workers * TASK_SECONDS / per)
+        return max(1, min(MAX_CHUNK, int(want)))
 
     def map(self, fn: Callable[[Any, Any], Any], items: Iterable[Any]) -> Iterator[Any]:
         """Yield `fn(state, item)` for every item, in item order (see the module docstring)."""
@@ -300,9 +307,12 @@ class DaskExecutor:
         if self.address is None:
             n = default_workers() if workers is None else max(1, int(workers))
             try:
-                self.cluster = distributed.LocalCluster(
-                    n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None,
-                    silence_logs=silence_logs)
+                with warnings.catch_warnings():
+                    # its HTTP server (health checks) moves off a port another cluster holds
+                    warnings.filterwarnings("ignore", message=r"Port \d+ is already in use")
+                    self.cluster = distributed.LocalCluster(
+                        n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None,
+                        silence_logs=silence_logs)
                 self.client = distributed.Client(self.cluster, timeout=connect_timeout)
             except Exception as exc:  # noqa: BLE001 - ports, spawn failures: say what happened
                 self._shutdown()
@@ -318,12 +328,20 @@ class DaskExecutor:
         return DaskSession(self, init, args)
 
     def _shutdown(self) -> None:
-        for thing in (getattr(self, "client", None), self.cluster):
-            if thing is not None:
-                try:
-                    thing.close()
-                except Exception:  # noqa: BLE001 - closing what may already be gone
-                    pass
+        # the cluster restores the log level it silenced before it closes; its farewells
+        # (workers retired, comms closed) are not news to the user
+        logger = logging.getLogger("distributed")
+        level = logger.level
+        logger.setLevel(logging.ERROR)
+        try:
+            for thing in (getattr(self, "client", None), self.cluster):
+                if thing is not None:
+                    try:
+                        thing.close()
+                    except Exception:  # noqa: BLE001 - closing what may already be gone
+                        pass
+        finally:
+            logger.setLevel(level)
 
     def close(self) -> None:
         """Disconnect; a LocalCluster started by this executor is shut down."""

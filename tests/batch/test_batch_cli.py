@@ -99,25 +99,28 @@ def _limit_file_size(limit: int):
 
 
 def test_a_full_disk_stops_the_batch_with_the_manifest_consistent(tmp_path):
-    """RLIMIT_FSIZE makes every write past 2500 bytes fail (EFBIG), as a full disk does: the
-    manifest grows until its append fails."""
+    """RLIMIT_FSIZE makes every write past a size fail (EFBIG), as a full disk does. The limit is
+    above every model file and below the whole manifest, so the manifest's append fails."""
     lots = grid_lots(tmp_path / "lots.geojson", 12)
+    whole = tmp_path / "whole"
+    assert run_cli("batch", TINY, "--lots", lots, "-o", whole, "--workers", "1").returncode == 0
+    limit = max(len(b) for b in item_files(whole).values()) + 200
+    assert (whole / "manifest.jsonl").stat().st_size > limit + 1000
     out = tmp_path / "city"
     args = ["batch", TINY, "--lots", lots, "-o", out, "--workers", "1"]
     p = subprocess.run([*CLI, *map(str, args)], capture_output=True, text=True, timeout=300,
-                       preexec_fn=_limit_file_size(2500))
+                       preexec_fn=_limit_file_size(limit))
     assert p.returncode == 1, p.stderr
     assert "Traceback" not in p.stderr
     assert "cannot write" in p.stderr and "File too large" in p.stderr and "the batch stopped" in p.stderr
     assert "run the same command again to continue" in p.stderr
     done = len(listed(out))
     assert 0 < done < 12
+    assert (out / "manifest.jsonl").read_text().endswith("\n")  # no torn line
     consistent(out)
     # space again: the same command finishes the batch, with the files of an uninterrupted run
     again = run_cli(*args)
     assert again.returncode == 0, again.stderr
-    whole = tmp_path / "whole"
-    assert run_cli("batch", TINY, "--lots", lots, "-o", whole, "--workers", "1").returncode == 0
     assert item_files(out) == item_files(whole)
     assert without_timing(listed(out)) == without_timing(listed(whole))
 
