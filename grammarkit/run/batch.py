@@ -165,7 +165,7 @@ def _make_item(state: _WorkerState, item: Any) -> dict:
 
         if s.mode == "lots":
             model = derive(s.grammar, seed=lot.seed, attrs={**s.attrs, **lot.attrs},
-                           limits=state.limits, lot=lot.polygon)
+                           limits=state.limits, lot=lot.polygon, choices=dict(lot.choices) or None)
         elif s.sample:
             (var, model), = variations(s.grammar, 1, seed=s.seed, attrs=s.attrs, limits=state.limits,
                                        start=item)

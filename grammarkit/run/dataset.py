@@ -56,8 +56,11 @@ def _bound(fn: Any) -> Any:
     return fn(SimpleEnv())
 
 
-def attr_layout(grammar: Any) -> tuple[list[AttrColumn], list[dict]]:
-    """The attr-vector columns of a split grammar, and the attrs left out (with why)."""
+def attr_layout(grammar: Any, bindings: Iterable[tuple[str, str]] = ()) -> tuple[list[AttrColumn], list[dict]]:
+    """The attr-vector columns of a split grammar, and the attrs left out (with why).
+
+    Columns cover the grammar's own bindings, every snippet its `variants` tables may swap in,
+    and the (anchor, snippet) pairs in `bindings` (e.g. lots' own `choices`)."""
     from ..split import compile as compile_split
     from ..split import load_grammar
 
@@ -65,11 +68,18 @@ def attr_layout(grammar: Any) -> tuple[list[AttrColumn], list[dict]]:
     base = compile_split(g)
     otype = {s.name: s.object_type for s in g.snippets}
     tables = {v.object_type: [o.snippet for o in v.options] for v in g.variants}
-    compiled = [base]
+    pairs: set[tuple[str, str]] = set()
     for anchor, snip in sorted(base.bindings.items()):
         for option in tables.get(otype.get(snip, ""), []):
             if option != snip:
-                compiled.append(compile_split(g, {anchor: option}))
+                pairs.add((anchor, option))
+    pairs.update((a, s) for a, s in bindings if base.bindings.get(a) != s)
+    compiled = [base]
+    for anchor, option in sorted(pairs):
+        try:
+            compiled.append(compile_split(g, {anchor: option}))
+        except Exception:  # noqa: BLE001 - a binding the items could not use either
+            continue
     columns: dict[str, AttrColumn] = {}
     skipped: dict[str, dict] = {}
     for c in compiled:
@@ -186,7 +196,8 @@ def write_index(folder: str | Path, *, grammar: Any, entries: Sequence[Mapping[s
     if entries is None:
         entries = [json.loads(line) for line in (folder / MANIFEST).read_text(encoding="utf-8").splitlines()
                    if line.strip()]
-    columns, skipped = attr_layout(grammar)
+    seen = {(a, sn) for e in entries for a, sn in (e.get("bindings") or {}).items()}
+    columns, skipped = attr_layout(grammar, seen)
     rows = index_rows(entries, columns)
     files: dict[Path, bytes | str] = {
         folder / INDEX_JSONL: "".join(json.dumps(r, allow_nan=False) + "\n" for r in rows)}

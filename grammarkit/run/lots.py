@@ -20,6 +20,8 @@ Properties read from each feature (every other property is ignored):
   building when lots are added or reordered.
 - `attrs`: an object of attr overrides, e.g. `{"mass_h": 30, "Roof.roof_deg": 40}`; and/or one
   property per attr named `attr.<name>` (`"attr.mass_h": 30`). They override `--set` values.
+- `choices`: an object binding anchors to snippets for this lot, e.g. `{"Roof": "roof_gable"}`
+  (what `derive(choices=...)` takes; the snippet must be of the anchor's object type).
 
 Units. The split engine works in metres. Coordinates are localised: the city origin (the
 south-west corner of all lots, rounded down to whole metres) is subtracted, so GLB files keep
@@ -77,6 +79,7 @@ class Lot:
     holes: int = 0
     seed: int = 0
     attrs: Mapping[str, Any] = field(default_factory=dict)
+    choices: Mapping[str, str] = field(default_factory=dict)
     error: str | None = None  # why this lot cannot be built (recorded as failed)
     note: str | None = None  # something the manifest should say (holes filled, id renamed)
 
@@ -269,6 +272,23 @@ def _attrs(props: Mapping[str, Any]) -> tuple[dict, str | None]:
     return out, None
 
 
+def _choices(props: Mapping[str, Any]) -> tuple[dict, str | None]:
+    given = props.get("choices")
+    if isinstance(given, str):
+        if not given.strip():
+            return {}, None
+        try:
+            given = json.loads(given)
+        except ValueError:
+            return {}, f"property choices={given[:60]!r} is not a JSON object"
+    if given is None:
+        return {}, None
+    if not isinstance(given, dict) or not all(isinstance(k, str) and isinstance(v, str)
+                                              for k, v in given.items()):
+        return {}, "property choices must be an object of anchor names to snippet names"
+    return dict(given), None
+
+
 def _radii(lat0: float) -> tuple[float, float]:
     """WGS84 meridional (M) and prime-vertical (N) radii of curvature at latitude lat0 (deg)."""
     e2 = WGS84_F * (2 - WGS84_F)
@@ -398,7 +418,8 @@ def read_lots(path: str | Path, *, seed: int = 0, degrees: str = "project", hole
         props = r["props"]
         seed_value, serr = _seed(props.get("seed"))
         attrs, aerr = _attrs(props)
-        err = err or serr or aerr
+        choices, cerr = _choices(props)
+        err = err or serr or aerr or cerr
         polygon = None
         if err is None:
             pts = [(x - origin[0], y - origin[1]) for x, y in r["points"]]
@@ -434,7 +455,7 @@ def read_lots(path: str | Path, *, seed: int = 0, degrees: str = "project", hole
         lseed = seed_value if seed_value is not None else lot_seed(run_seed, key)
         lots.append(Lot(index=index, id=fid, feature=r["feature"], source_id=r["source_id"],
                         part=r.get("part"), polygon=polygon, holes=r.get("holes", 0) or 0, seed=lseed,
-                        attrs=attrs, error=err, note=note))
+                        attrs=attrs, choices=choices, error=err, note=note))
     return LotSet(path=path, lots=lots, units=units, origin=(float(origin[0]), float(origin[1])),
                   projection=projection, sha256=hashlib.sha256(data).hexdigest())
 

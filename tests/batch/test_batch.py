@@ -264,3 +264,15 @@ def test_merging_refuses_files_it_cannot_merge_exactly(tmp_path):
     with pytest.raises(MergeError, match="broken.glb: not a readable GLB file"):
         merge_glb([("a", broken)], tmp_path / "m.glb")
     assert not (tmp_path / "m.glb").exists()
+
+
+def test_lots_choose_snippets_for_their_anchors(tmp_path):
+    lots = write_lots(tmp_path / "lots.geojson", [
+        feature(rect(0, 0, 14, 10), "flat", choices={"Roof": "roof_flat"}),
+        feature(rect(30, 0, 14, 10), "wrong", choices={"Roof": "facade_grid"}),
+        feature(rect(60, 0, 14, 10), "plain")])
+    summary = run_batch(BLOCK, lots, tmp_path / "out", workers=1)
+    flat, wrong, plain = listed(tmp_path / "out")
+    assert summary.ok == 2
+    assert flat["bindings"]["Roof"] == "roof_flat" and plain["bindings"]["Roof"] == "roof_hip"
+    assert "snippet 'facade_grid' is of object type 'Facade'" in wrong["error"]
