@@ -390,7 +390,7 @@ def _consume(results: Any, todo: Sequence[Any], folder: Any, summary: BatchSumma
     writer = _Writer(folder, summary, total, progress)
     stop: BaseException | None = None
     try:
-        for item, outcome in zip(todo, results):
+        for item, outcome in zip(todo, results, strict=True):
             entry, files = _entry(outcome, item, mode, name, fmt)
             if not outcome["ok"] and fail_fast:
                 stop = BatchFailed(outcome["error"])

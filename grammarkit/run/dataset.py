@@ -56,7 +56,8 @@ def _bound(fn: Any) -> Any:
     return fn(SimpleEnv())
 
 
-def attr_layout(grammar: Any, bindings: Iterable[tuple[str, str]] = ()) -> tuple[list[AttrColumn], list[dict]]:
+def attr_layout(grammar: Any,
+                bindings: Iterable[tuple[str, str]] = ()) -> tuple[list[AttrColumn], list[dict]]:
     """The attr-vector columns of a split grammar, and the attrs left out (with why).
 
     Columns cover the grammar's own bindings, every snippet its `variants` tables may swap in,
@@ -90,8 +91,8 @@ def attr_layout(grammar: Any, bindings: Iterable[tuple[str, str]] = ()) -> tuple
                 if info.lo is not None and info.hi is not None:
                     lo, hi = float(_bound(info.lo)), float(_bound(info.hi))
                     if name not in columns:
-                        columns[name] = AttrColumn(name, key, info.scope, info.snippet if info.scope else None,
-                                                   "range", lo, hi)
+                        columns[name] = AttrColumn(name, key, info.scope,
+                                                   info.snippet if info.scope else None, "range", lo, hi)
                 elif info.choices is not None:
                     for choice in info.choices:
                         value = _bound(choice)

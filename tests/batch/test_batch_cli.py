@@ -4,7 +4,6 @@ batch cleanly; failures and --fail-fast; clear errors for bad options and dead s
 from __future__ import annotations
 
 import json
-import os
 import resource
 import signal
 import socket

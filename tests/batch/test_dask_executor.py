@@ -92,7 +92,7 @@ def test_work_in_flight_is_bounded_and_chunks_grow_with_cheap_items(dask_executo
     monkeypatch.setattr(client, "submit", counting_submit)
     consumed = 0
     with dask_executor.session(make_state, 1) as session:
-        for value in session.map(compute, range(3000)):
+        for _ in session.map(compute, range(3000)):
             consumed += 1
     assert consumed == 3000
     assert peak[0] <= dask_executor.max_in_flight
