@@ -276,3 +276,18 @@ def test_lots_choose_snippets_for_their_anchors(tmp_path):
     assert summary.ok == 2
     assert flat["bindings"]["Roof"] == "roof_flat" and plain["bindings"]["Roof"] == "roof_hip"
     assert "snippet 'facade_grid' is of object type 'Facade'" in wrong["error"]
+
+
+def test_a_time_budget_stops_resumably_and_progress_is_reported(tmp_path):
+    from grammarkit.errors import LimitError
+
+    out = tmp_path / "ds"
+    seen = []
+    with pytest.raises(LimitError, match=r"time budget \(--timeout 0.001 s\) is spent after \d+ of 20"):
+        run_batch(TINY, 20, out, workers=1, timeout=0.001,
+                  progress=lambda done, total, entry: seen.append((done, total, entry and entry["id"])))
+    done = len(listed(out))
+    assert 1 <= done < 20
+    assert seen[0] == (0, 20, None) and seen[-1][0] == done
+    summary = run_batch(TINY, 20, out, workers=1)
+    assert summary.resumed == done and summary.written == 20 - done
