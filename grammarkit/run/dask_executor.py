@@ -47,7 +47,7 @@ from dataclasses import dataclass
 from typing import Any, Callable, Iterable, Iterator
 
 from ..errors import GrammarkitError
-from .executor import WorkerError, _portable_error, default_workers
+from .executor import WorkerError, _main_without_phantom_file, _portable_error, default_workers
 
 __all__ = ["DaskExecutor", "DaskSession", "DaskUnavailable", "SchedulerUnreachable", "parse_address"]
 
@@ -307,8 +307,10 @@ class DaskExecutor:
         if self.address is None:
             n = default_workers() if workers is None else max(1, int(workers))
             try:
-                with warnings.catch_warnings():
-                    # its HTTP server (health checks) moves off a port another cluster holds
+                # spawned workers re-import the main script: hide a main "file" that is not one
+                # (code from standard input); its HTTP server (health checks) moves off a port
+                # another cluster holds, which is no news to the user
+                with _main_without_phantom_file(), warnings.catch_warnings():
                     warnings.filterwarnings("ignore", message=r"Port \d+ is already in use")
                     self.cluster = distributed.LocalCluster(
                         n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None,
