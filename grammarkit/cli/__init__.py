@@ -29,6 +29,7 @@ BUILTIN_COMMANDS: dict[str, tuple[str, str]] = {
     "render": ("grammarkit.cli.render", "render"),
     "train": ("grammarkit.cli.train", "train"),
     "import-cga": ("grammarkit.cli.cga", "import_cga_command"),
+    "batch": ("grammarkit.cli.batch", "batch"),
 }
 
 

@@ -25,6 +25,7 @@ EDGE_FUNCTIONS = {
     "grammarkit/tiling/validate.py": {"validate"},
     "grammarkit/cga/importer.py": {"_operation_names"},  # behind import_cga / translate_cga
     "grammarkit/geometry/exporters.py": {"_all_specs"},  # behind exporter_for / known_formats
+    "grammarkit/run/batch.py": {"run_batch"},  # the batch API, given no registries
 }
 
 
