@@ -231,6 +231,7 @@ class _LocalSession:
         self.log: list[tuple[Callable, tuple]] = []
         self.workers: list[_Worker] = []
         self.closed = False
+        self.local_only = False
 
     # -- state ------------------------------------------------------------------------------
     def update(self, fn: Callable[..., None], *args: Any) -> None:
@@ -249,7 +250,7 @@ class _LocalSession:
         always = self.executor.parallel == "always"
         spent, done_here = 0.0, 0
         while pending:
-            if want > 1 and not self.workers and (always or (done_here and self._worth_it(
+            if want > 1 and not self.workers and not self.local_only and (always or (done_here and self._worth_it(
                     spent / done_here, len(pending)))):
                 self._start_workers(want)
             if self.workers:
@@ -269,6 +270,11 @@ class _LocalSession:
         return work * (1.0 - 1.0 / workers) > startup + self.executor.min_parallel_seconds
 
     def _start_workers(self, count: int) -> None:
+        try:  # state that cannot be shipped (a lambda in it, say) is computed here instead
+            pickle.dumps((self.init, self.args, self.log))
+        except Exception:  # noqa: BLE001 - any pickling failure means: stay in this process
+            self.local_only = True
+            return
         self.workers = _take_workers(count)
         for w in self.workers:
             if w.ready:
@@ -309,7 +315,8 @@ class _LocalSession:
                     yield value
                 if not order:
                     break
-                if not out and pending and not any(w.ready for w in self.workers):
+                if not out and pending and not any(w.ready for w in self.workers) \
+                        and self.executor.parallel == "auto":
                     # workers still starting: do the next item here meanwhile
                     pos, item = pending.popleft()
                     try:
