@@ -43,7 +43,7 @@ from typing import Callable, Iterable, Sequence
 import numpy as np
 
 __all__ = [
-    "Operation", "OrderedGraph", "Symmetry", "brute_force_operations", "brute_force_symmetries",
+    "Operation", "OrderedGraph", "Side", "Symmetry", "brute_force_operations", "brute_force_symmetries",
     "find_operations", "find_symmetries", "operations_from_symmetry", "random_ordered_graph",
 ]
 
@@ -85,25 +85,63 @@ class Symmetry:
 
 
 @dataclass(frozen=True)
+class Side:
+    """A node set given explicitly, or as "every node of 0..n-1 except `nodes`" (the large
+    remainder of a graph, never listed during enumeration: that keeps it output-sensitive)."""
+
+    nodes: tuple[int, ...]
+    n: int
+    complement: bool = False
+
+    def members(self) -> tuple[int, ...]:
+        if not self.complement:
+            return self.nodes
+        out = set(self.nodes)
+        return tuple(v for v in range(self.n) if v not in out)
+
+    def size(self) -> int:
+        return self.n - len(self.nodes) if self.complement else len(self.nodes)
+
+    def subset_of(self, other: "Side") -> bool:
+        if not self.complement and not other.complement:
+            return set(self.nodes) <= set(other.nodes)
+        if not self.complement:  # explicit inside a complement: disjoint from what it leaves out
+            return not (set(self.nodes) & set(other.nodes))
+        if not other.complement:
+            return set(self.members()) <= set(other.nodes)
+        return set(other.nodes) <= set(self.nodes)
+
+
+@dataclass(frozen=True)
 class Operation:
-    """Cut `removed` (S) out of the host, copy `copied` (S') of the donor into the hole.
+    """Cut the piece S out of the host, copy the piece S' of the donor into the hole.
 
     pairs: the cut edges and their correspondence, ((a, w, b, w2), ...): the donor's cut edge
     (a, w) with w in S' and a outside it; the host's cut edge (b, w2) with w2 in S and b
-    outside it; the copy of w is connected to b. `recursive`: "grow" (S inside S': the
-    host's piece is replaced by a larger copy that contains it), "shrink" (S' inside S) or
-    "" (neither); only meaningful when donor and host are the same graph."""
+    outside it; the copy of w is connected to b. The pairs determine the operation (S' is what
+    the donor's cut edges enclose on the w side, S likewise in the host). `removed` (S) and
+    `copied` (S') list the nodes. `recursive`: "grow" (S inside S': the host's piece is
+    replaced by a larger copy that contains it), "shrink" (S' inside S) or "" (neither);
+    only meaningful when donor and host are the same graph."""
 
-    removed: tuple[int, ...]
-    copied: tuple[int, ...]
     pairs: tuple[tuple[int, int, int, int], ...]
+    removed_side: Side
+    copied_side: Side
     recursive: str = ""
     symmetry_size: int = 0
     violations: int = 0
 
     @property
+    def removed(self) -> tuple[int, ...]:
+        return self.removed_side.members()
+
+    @property
+    def copied(self) -> tuple[int, ...]:
+        return self.copied_side.members()
+
+    @property
     def key(self) -> tuple:
-        return (self.removed, self.copied, self.pairs)
+        return self.pairs
 
     def to_json(self, host_ids: Sequence[str] | None = None, donor_ids: Sequence[str] | None = None) -> dict:
         h = (lambda i: host_ids[i]) if host_ids is not None else int
@@ -164,15 +202,18 @@ def _sigma_choices(D: OrderedGraph, H: OrderedGraph, u: int, u2: int, rot: int, 
     return out
 
 
-def _grow0(D: OrderedGraph, H: OrderedGraph, a: int, b: int, rot: int, walked: set) -> Symmetry | None:
+def _grow0(D: OrderedGraph, H: OrderedGraph, cd: list, ch: list, a: int, b: int, rot: int,
+           walked: set, nh: int, kk: int) -> Symmetry | None:
     """The closed symmetry grown from the seed (a -> b, rotation rot), or None (q = 0).
 
     Depth-first over half-edge pairs of the dual graph: around a matched node pair the walk
     follows `next` (position i -> i + 1 on both sides); across an edge it follows `twin` into
-    the neighbour pair, which must be compatible and either new on both sides or already
-    matched to each other with the same rotation (else the closure is no symmetry). Every
-    (donor node, host node, rotation) state walked goes into `walked`, the paper's hash: the
-    walk from any of them gives the same closure, so no seed is walked twice."""
+    the neighbour pair, which must be compatible (`cd`/`ch`: class = (type, degree) per node)
+    and either new on both sides or already matched to each other with the same rotation
+    (else the closure is no symmetry). Every (donor node, host node, rotation) state walked
+    goes into `walked` (as one int), the paper's hash: the walk from any of them gives the
+    same closure, so no seed is walked twice."""
+    dn, hn, dpos, hpos = D.nbrs, H.nbrs, D.pos, H.pos
     fmap = {a: b}
     inv = {b: a}
     rots = {a: rot}
@@ -181,33 +222,43 @@ def _grow0(D: OrderedGraph, H: OrderedGraph, a: int, b: int, rot: int, walked: s
     while stack and ok:
         u = stack.pop()
         u2, r = fmap[u], rots[u]
-        nb_u, nb_u2 = D.nbrs[u], H.nbrs[u2]
+        nb_u, nb_u2 = dn[u], hn[u2]
         d = len(nb_u)
         for i in range(d):  # the `next` walk around u
-            w, w2 = nb_u[i], nb_u2[(i + r) % d]
+            w = nb_u[i]
+            w2 = nb_u2[(i + r) % d]
             m = fmap.get(w)
             if m is not None or w2 in inv:
                 # an edge inside the match: it must map onto the corresponding edge
-                if m != w2 or rots[w] != (H.pos[w2][u2] - D.pos[w][u]) % len(D.nbrs[w]):
+                if m != w2 or rots[w] != (hpos[w2][u2] - dpos[w][u]) % len(dn[w]):
                     ok = False
                     break
                 continue
-            dw = len(D.nbrs[w])
-            if D.types[w] != H.types[w2] or dw != len(H.nbrs[w2]):
+            if cd[w] != ch[w2]:
                 continue  # a boundary half-edge pair: the walk stops here
-            j, j2 = D.pos[w][u], H.pos[w2][u2]  # the `twin` step
-            rw = (j2 - j) % dw
-            fmap[w] = w2
+            fmap[w] = w2  # the `twin` step
             inv[w2] = w
-            rots[w] = rw
+            rots[w] = (hpos[w2][u2] - dpos[w][u]) % len(dn[w])
             stack.append(w)
     for x, x2 in fmap.items():
-        walked.add((x, x2, rots[x]))
+        walked.add((x * nh + x2) * kk + rots[x])
     if not ok:
         return None
     pairs = tuple(sorted(fmap.items()))
-    sig = tuple(tuple((i + rots[x]) % len(D.nbrs[x]) for i in range(len(D.nbrs[x]))) for x, _ in pairs)
+    sig = tuple(tuple((i + rots[x]) % len(dn[x]) for i in range(len(dn[x]))) for x, _ in pairs)
     return Symmetry(pairs, sig, 0)
+
+
+def _inverse(sym: Symmetry) -> Symmetry:
+    """f^-1 of a symmetry of one graph: closed whenever f is."""
+    items = []
+    for (a, b), s in zip(sym.pairs, sym.sigma):
+        inv = [0] * len(s)
+        for i, j in enumerate(s):
+            inv[j] = i
+        items.append(((b, a), tuple(inv)))
+    items.sort()
+    return Symmetry(tuple(p for p, _ in items), tuple(g for _, g in items), sym.violations)
 
 
 def _grow(D: OrderedGraph, H: OrderedGraph, a: int, b: int, rot: int, q: int) -> list[Symmetry]:
@@ -276,25 +327,36 @@ def find_symmetries(D: OrderedGraph, H: OrderedGraph | None = None, *, q: int = 
     H = D if H is None else H
     walked: set = set()
     found: dict = {}
+    classes: dict = {}
+    cd = [classes.setdefault((D.types[v], len(D.nbrs[v])), len(classes)) for v in range(len(D))]
+    ch = [classes.setdefault((H.types[v], len(H.nbrs[v])), len(classes)) for v in range(len(H))]
     by_class: dict = {}
     for b in range(len(H)):
-        by_class.setdefault((H.types[b], len(H.nbrs[b])), []).append(b)
+        by_class.setdefault(ch[b], []).append(b)
+    nh = len(H)
+    kk = max([len(r) for r in D.nbrs] + [len(r) for r in H.nbrs] + [1])
     for a in range(len(D)):
         if progress is not None:
             progress(1)
         d = len(D.nbrs[a])
-        for b in by_class.get((D.types[a], d), ()):
+        for b in by_class.get(cd[a], ()):
             for rot in range(max(d, 1)):
                 if same and a == b and rot == 0:
                     continue  # the identity
                 if q == 0:
-                    if (a, b, rot) in walked:
+                    if (a * nh + b) * kk + rot in walked:
                         continue
-                    sym = _grow0(D, H, a, b, rot, walked)
-                    syms = [sym] if sym is not None else []
-                else:
-                    syms = _grow(D, H, a, b, rot, q)
-                for sym in syms:
+                    sym = _grow0(D, H, cd, ch, a, b, rot, walked, nh, kk)
+                    if sym is None:
+                        continue
+                    found.setdefault(sym.key, sym)
+                    if same:  # its inverse is closed too: no need to walk it again
+                        inv = _inverse(sym)
+                        for (x, x2), sg in zip(inv.pairs, inv.sigma):
+                            walked.add((x * nh + x2) * kk + (sg[0] if sg else 0))
+                        found.setdefault(inv.key, inv)
+                    continue
+                for sym in _grow(D, H, a, b, rot, q):
                     if same and all(x == y for x, y in sym.pairs) and all(
                             s == tuple(range(len(s))) for s in sym.sigma):
                         continue
@@ -303,40 +365,85 @@ def find_symmetries(D: OrderedGraph, H: OrderedGraph | None = None, *, q: int = 
 
 
 # -- operations ------------------------------------------------------------------------------
-def _components(nbrs: Sequence[Sequence[int]], inside: set[int]) -> dict[int, int]:
-    """Component label of every node not in `inside`, over edges avoiding `inside`."""
-    label: dict[int, int] = {}
-    for s in range(len(nbrs)):
-        if s in inside or s in label:
+def _flood_groups(nbrs: Sequence[Sequence[int]], inside: set[int], starts: Sequence[int]):
+    """Which `starts` lie in one component of the graph without `inside`, output-sensitively.
+
+    Breadth-first floods from every start run interleaved (one node per flood per round);
+    floods that meet merge. A flood whose queue empties has found its whole component (listed).
+    Once at most one flood is still running, its component is everything else (not listed):
+    so the cost is about the size of the small components, not of the graph.
+    Returns (group of each start, {group: nodes or None for the unlisted remainder})."""
+    parent: dict[int, int] = {}
+
+    def find(x: int) -> int:
+        while parent[x] != x:
+            parent[x] = parent[parent[x]]
+            x = parent[x]
+        return x
+
+    owner: dict[int, int] = {}
+    queues: dict[int, list] = {}
+    members: dict[int, list] = {}
+    for s0 in starts:
+        if s0 in owner:
             continue
-        label[s] = s
-        stack = [s]
-        while stack:
-            v = stack.pop()
+        owner[s0] = s0
+        parent[s0] = s0
+        queues[s0] = [s0]
+        members[s0] = [s0]
+    active = [g for g in queues]
+    heads = {g: 0 for g in queues}
+    while len(active) > 1:
+        nxt = []
+        for g in active:
+            if find(g) != g:
+                continue
+            q = queues[g]
+            if heads[g] >= len(q):
+                continue  # finished: its component is complete
+            v = q[heads[g]]
+            heads[g] += 1
             for w in nbrs[v]:
-                if w not in inside and w not in label:
-                    label[w] = s
-                    stack.append(w)
-    return label
+                if w in inside:
+                    continue
+                o = owner.get(w)
+                if o is None:
+                    owner[w] = g
+                    q.append(w)
+                    members[g].append(w)
+                    continue
+                r = find(o)
+                if r != g:  # two floods meet: one component
+                    parent[r] = g
+                    q.extend(queues[r][heads[r]:])
+                    members[g].extend(members[r])
+                    for x in members[r]:
+                        owner[x] = g
+            if heads[g] < len(q):
+                nxt.append(g)
+        active = [g for g in dict.fromkeys(find(g) for g in nxt)]
+    roots = {find(g) for g in queues}
+    result = {r: (None if r in active else tuple(sorted(members[r]))) for r in roots}
+    return {s0: find(owner[s0]) for s0 in starts}, result
 
 
 def operations_from_symmetry(D: OrderedGraph, H: OrderedGraph, sym: Symmetry,
                              same: bool) -> list[Operation]:
-    """The operations a closed symmetry defines: one per linked group of unmatched components."""
+    """The operations a closed symmetry defines: one per linked group of unmatched components
+    (found by `_flood_groups`, so a huge remainder is never listed)."""
     A = {x for x, _ in sym.pairs}
     B = {y for _, y in sym.pairs}
     bpairs = []
     for (a, b), s in zip(sym.pairs, sym.sigma):
+        nb_b = H.nbrs[b]
         for i, w in enumerate(D.nbrs[a]):
             if w in A:
                 continue
-            w2 = H.nbrs[b][s[i]]
-            bpairs.append((a, w, b, w2))
+            bpairs.append((a, w, b, nb_b[s[i]]))
     if not bpairs:
         return []
-    kd = _components(D.nbrs, A)
-    kh = _components(H.nbrs, B)
-    # union-find over ("d", component) and ("h", component), linked by boundary pairs
+    gd, comps_d = _flood_groups(D.nbrs, A, [p[1] for p in bpairs])
+    gh, comps_h = _flood_groups(H.nbrs, B, [p[3] for p in bpairs])
     parent: dict = {}
 
     def find(x):  # noqa: ANN001, ANN202
@@ -346,37 +453,38 @@ def operations_from_symmetry(D: OrderedGraph, H: OrderedGraph, sym: Symmetry,
         return x
 
     for a, w, b, w2 in bpairs:
-        if w2 in B:
-            return []  # cannot happen for a closed symmetry; guards the invariant
-        ra, rb = find(("d", kd[w])), find(("h", kh[w2]))
+        ra, rb = find(("d", gd[w])), find(("h", gh[w2]))
         if ra != rb:
             parent[ra] = rb
     groups: dict = {}
     for p in bpairs:
-        groups.setdefault(find(("d", kd[p[1]])), []).append(p)
-    members_d: dict = {}
-    for v, c in kd.items():
-        members_d.setdefault(c, []).append(v)
-    members_h: dict = {}
-    for v, c in kh.items():
-        members_h.setdefault(c, []).append(v)
+        groups.setdefault(find(("d", gd[p[1]])), []).append(p)
+
+    def side(comps: dict, chosen: set, excluded_base: set, n: int) -> Side:
+        if any(comps[c] is None for c in chosen):  # the unlisted remainder is in this piece
+            out = set(excluded_base)
+            for c, nodes in comps.items():
+                if c not in chosen and nodes is not None:
+                    out.update(nodes)
+            return Side(tuple(sorted(out)), n, True)
+        return Side(tuple(sorted(v for c in chosen for v in comps[c])), n)
+
     ops = []
     for _, gp in sorted(groups.items(), key=lambda kv: min(kv[1])):
-        comps_d = sorted({kd[p[1]] for p in gp})
-        comps_h = sorted({kh[p[3]] for p in gp})
-        copied = tuple(sorted(v for c in comps_d for v in members_d[c]))
-        removed = tuple(sorted(v for c in comps_h for v in members_h[c]))
+        chosen_d = {gd[p[1]] for p in gp}
+        chosen_h = {gh[p[3]] for p in gp}
+        copied = side(comps_d, chosen_d, A, len(D))
+        removed = side(comps_h, chosen_h, B, len(H))
         pairs = tuple(sorted(gp))
         if same and copied == removed and all(w == w2 for _, w, _, w2 in pairs):
             continue  # replaces a piece by itself, attached where it was: no change
         rec = ""
         if same:
-            sc, sr = set(copied), set(removed)
-            if sr < sc:
+            if removed.size() < copied.size() and removed.subset_of(copied):
                 rec = "grow"
-            elif sc < sr:
+            elif copied.size() < removed.size() and copied.subset_of(removed):
                 rec = "shrink"
-        ops.append(Operation(removed, copied, pairs, rec, len(sym.pairs), sym.violations))
+        ops.append(Operation(pairs, removed, copied, rec, len(sym.pairs), sym.violations))
     return ops
 
 
@@ -386,12 +494,28 @@ def find_operations(D: OrderedGraph, H: OrderedGraph | None = None, *, q: int = 
     same = H is None or H is D
     H = D if H is None else H
     ops: dict = {}
+    done: set = set()
+
+    def keep(op: Operation) -> None:
+        old = ops.get(op.key)
+        if old is None or (op.violations, -op.symmetry_size) < (old.violations, -old.symmetry_size):
+            ops[op.key] = op
+
     for sym in find_symmetries(D, H, q=q, progress=progress):
-        for op in operations_from_symmetry(D, H, sym, same):
-            old = ops.get(op.key)
-            if old is None or (op.violations, -op.symmetry_size) < (old.violations, -old.symmetry_size):
-                ops[op.key] = op
-    return sorted(ops.values(), key=lambda o: (len(o.removed) + len(o.copied), o.key))
+        if sym.key in done:
+            continue
+        found = operations_from_symmetry(D, H, sym, same)
+        for op in found:
+            keep(op)
+        if same:
+            # the inverse symmetry's operations are these with the two sides exchanged
+            done.add(_inverse(sym).key)
+            rec = {"grow": "shrink", "shrink": "grow", "": ""}
+            for op in found:
+                keep(Operation(tuple(sorted((b, w2, a, w) for a, w, b, w2 in op.pairs)),
+                               op.copied_side, op.removed_side, rec[op.recursive],
+                               op.symmetry_size, op.violations))
+    return sorted(ops.values(), key=lambda o: (o.removed_side.size() + o.copied_side.size(), o.key))
 
 
 # -- brute force (reference) -----------------------------------------------------------------
@@ -504,7 +628,7 @@ def brute_force_operations(D: OrderedGraph, H: OrderedGraph | None = None) -> li
     for sym in brute_force_symmetries(D, H):
         for op in operations_from_symmetry(D, H, sym, same):
             ops.setdefault(op.key, op)
-    return sorted(ops.values(), key=lambda o: (len(o.removed) + len(o.copied), o.key))
+    return sorted(ops.values(), key=lambda o: (o.removed_side.size() + o.copied_side.size(), o.key))
 
 
 def random_ordered_graph(n: int, n_types: int, rng: np.random.Generator, extra_edges: int = 3) -> OrderedGraph:
