@@ -126,3 +126,21 @@ def test_options_out_of_range_are_located_errors(tmp_path):
 def test_backend_is_registered():
     r = gk("plugins")
     assert "substructure" in r.stdout and "substructures" in r.stdout
+
+
+def test_derive_from_examples_without_substructure_is_a_clear_error(tmp_path):
+    import trimesh
+
+    from grammarkit.tiling import Assembly, Part, write_assembly
+
+    parts = []
+    for k, t in enumerate("AB"):
+        m = trimesh.creation.box(extents=(1, 1, 1))
+        m.apply_translation([k, 0, 0.5])
+        parts.append(Part(f"{t}.0", t, m))
+    write_assembly(Assembly(parts, name="pair"), tmp_path / "pair.glb")
+    (tmp_path / "pair.grammar").write_text(
+        "grammar pair\n\npart A = box(1, 1, 1)\npart B = box(1, 1, 1)\n\nneighbors A: {B}\nneighbors B: {A}\n\nexample pair = assembly(\"pair.glb\")\n")
+    r = gk("derive", tmp_path / "pair.grammar", "--backend", "substructure", "-n", "2", "-o", tmp_path / "out")
+    assert r.returncode != 0 and "no replaceable substructure" in r.stderr and "Traceback" not in r.stderr
+    assert not (tmp_path / "out").exists()
