@@ -211,7 +211,9 @@ def run(request) -> Iterator:  # noqa: ANN001
     advance = request.progress("substructure candidates", request.n)
     try:
         next_index = 0
-        while made < request.n and next_index < opt.max_candidates:
+        last_new = 0  # candidate count when the last new variant came
+        while made < request.n and next_index < opt.max_candidates \
+                and stats["candidates"] - last_new < opt.patience:
             request.check_deadline()
             items = list(range(next_index, min(opt.max_candidates, next_index + BATCH)))
             next_index = items[-1] + 1
@@ -227,6 +229,7 @@ def run(request) -> Iterator:  # noqa: ANN001
                         continue
                     index = made
                     made += 1
+                    last_new = stats["candidates"]
                     stats["new"] += 1
                     repaired = any(h["repaired"] for h in history)
                     stats["repaired"] += int(repaired)
@@ -251,7 +254,10 @@ def run(request) -> Iterator:  # noqa: ANN001
                "seconds": round(elapsed, 3),
                "variants_per_minute": round(60.0 * made / elapsed, 1) if elapsed > 0 else None}
     if made < request.n:
-        summary["shortfall"] = (f"{stats['candidates']} candidates gave {stats['valid']} valid shapes, "
+        why = (f"the last {opt.patience} candidates gave nothing new" if stats["candidates"] - last_new >= opt.patience
+               else f"max_candidates ({opt.max_candidates}) reached" if stats["candidates"] >= opt.max_candidates
+               else "stopped")
+        summary["shortfall"] = (f"{why}: {stats['candidates']} candidates gave {stats['valid']} valid shapes, "
                                 f"{made} of them new (the rest repeat an example or an earlier result); "
                                 "more --iterations (operations per variant), --option q=1 or a larger "
                                 "--option max_candidates may find more")

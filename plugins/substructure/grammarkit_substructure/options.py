@@ -30,6 +30,8 @@ class SubstructureOptions(BaseModel):
                        "gives up (each one embedded and validated)")
     max_candidates: int = Field(20000, ge=1, description="candidates tried in all before the "
                                 "run stops short")
+    patience: int = Field(400, ge=1, description="stop after this many candidates in a row "
+                          "gave nothing new")
     max_parts: Optional[int] = Field(None, ge=1, description="largest variant (default: 4 x "
                                      "the largest example)")
     dedupe: Literal["isomorphism", "none"] = Field("isomorphism", description="skip variants "
