@@ -177,12 +177,14 @@ def main() -> None:
     ap.add_argument("--variants", type=int, default=20)
     ap.add_argument("--yield-timeout", type=float, default=120.0)
     ap.add_argument("--skip-yield", action="store_true")
+    ap.add_argument("--only-yield", action="store_true")
     args = ap.parse_args()
     import os
 
     print(f"load average at start: {os.getloadavg()[0]:.2f} (2 cores shared with other jobs)")
-    table_examples(args.runs, args.brute_limit)
-    table_scaling(args.runs, args.brute_limit, args.limit)
+    if not args.only_yield:
+        table_examples(args.runs, args.brute_limit)
+        table_scaling(args.runs, args.brute_limit, args.limit)
     if not args.skip_yield:
         table_yield(args.variants, args.yield_timeout)
 

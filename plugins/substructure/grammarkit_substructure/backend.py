@@ -114,7 +114,15 @@ def candidate(state: _State, index: int) -> dict:
         known = examples_known + ([_typed_graph(host.types, host.edges)] if host_key is None else [])
         embedded = 0
         done = False
-        for k in rng.permutation(len(options)).tolist():
+        # Local edits first: an operation whose pieces are "the rest of the shape" (stored as
+        # complements) mostly swaps one whole example for another, a trivial result; those are
+        # drawn only after every local one (random order within each group).
+        local = [k for k, (_, op) in enumerate(options)
+                 if not op.copied_side.complement and not op.removed_side.complement]
+        far = [k for k, (_, op) in enumerate(options)
+               if op.copied_side.complement or op.removed_side.complement]
+        order = [local[i] for i in rng.permutation(len(local))] + [far[i] for i in rng.permutation(len(far))]
+        for k in order:
             if embedded >= opt.tries:
                 break
             d, op = options[k]
@@ -259,6 +267,5 @@ def run(request) -> Iterator:  # noqa: ANN001
                else "stopped")
         summary["shortfall"] = (f"{why}: {stats['candidates']} candidates gave {stats['valid']} valid shapes, "
                                 f"{made} of them new (the rest repeat an example or an earlier result); "
-                                "more --iterations (operations per variant), --option q=1 or a larger "
-                                "--option max_candidates may find more")
+                                "longer chains (--option operations=8), --option q=1 or more examples may find more")
     return summary
