@@ -89,3 +89,17 @@ def test_dummy_edges_tolerate_an_ordering_defect():
     big1 = max((len(s.pairs) for s in find_symmetries(g, q=1) if (0, 5) in s.pairs), default=0)
     assert big1 > big0
     assert all(s.violations <= 1 for s in find_symmetries(g, q=1))
+
+
+def test_disconnected_graphs_match_brute_force_and_keep_other_components_out():
+    # two copies of a small typed graph side by side, not touching
+    types = ["T", "W", "W", "T", "W"] * 2
+    nbrs = [[1], [0, 2], [1, 3], [2, 4], [3],
+            [6], [5, 7], [6, 8], [7, 9], [8]]
+    g = OrderedGraph(types, nbrs)
+    fs, bs, fo, bo = _same(g)
+    assert fs == bs and fo == bo
+    for op in find_operations(g):
+        a = op.pairs[0][0]
+        comp = set(range(5)) if a < 5 else set(range(5, 10))
+        assert set(op.copied) <= comp

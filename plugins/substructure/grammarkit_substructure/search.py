@@ -63,6 +63,43 @@ class OrderedGraph:
     def __len__(self) -> int:
         return len(self.types)
 
+    def cut_nodes(self) -> set[int]:
+        """Articulation points (computed once): removing any other node leaves its neighbours
+        in one component, which lets single-node symmetries skip the floods."""
+        cached = self.__dict__.get("_cut_nodes")
+        if cached is None:
+            import networkx as nx
+
+            g = nx.Graph()
+            g.add_nodes_from(range(len(self.types)))
+            g.add_edges_from(self.edges)
+            cached = self.__dict__["_cut_nodes"] = set(nx.articulation_points(g))
+        return cached
+
+    def outside_component(self, v: int) -> tuple[int, ...]:
+        """The nodes not in v's connected component (computed once per component)."""
+        labels = self.__dict__.get("_labels")
+        if labels is None:
+            labels = {}
+            for s0 in range(len(self.types)):
+                if s0 in labels:
+                    continue
+                labels[s0] = s0
+                stack = [s0]
+                while stack:
+                    x = stack.pop()
+                    for w in self.nbrs[x]:
+                        if w not in labels:
+                            labels[w] = s0
+                            stack.append(w)
+            self.__dict__["_labels"] = labels
+            self.__dict__["_outside"] = {}
+        c = labels[v]
+        out = self.__dict__["_outside"].get(c)
+        if out is None:
+            out = self.__dict__["_outside"][c] = tuple(x for x in range(len(self.types)) if labels[x] != c)
+        return out
+
     @property
     def edges(self) -> list[tuple[int, int]]:
         return sorted({(min(u, w), max(u, w)) for u, row in enumerate(self.nbrs) for w in row})
@@ -323,6 +360,13 @@ def find_symmetries(D: OrderedGraph, H: OrderedGraph | None = None, *, q: int = 
                     progress: Callable[[int], None] | None = None) -> list[Symmetry]:
     """All closed partial symmetries from the donor D into the host H (default: D itself),
     the identity excluded. Deterministic order (by seed)."""
+    return _symmetries(D, H, q, progress, {})
+
+
+def _symmetries(D: OrderedGraph, H: OrderedGraph | None, q: int,
+                progress: Callable[[int], None] | None, inverses: dict) -> list[Symmetry]:
+    """`find_symmetries`; fills `inverses` (key of a symmetry found by its walk -> key of its
+    inverse, recorded without a walk) when D and H are one graph."""
     same = H is None or H is D
     H = D if H is None else H
     walked: set = set()
@@ -354,7 +398,9 @@ def find_symmetries(D: OrderedGraph, H: OrderedGraph | None = None, *, q: int = 
                         inv = _inverse(sym)
                         for (x, x2), sg in zip(inv.pairs, inv.sigma):
                             walked.add((x * nh + x2) * kk + (sg[0] if sg else 0))
-                        found.setdefault(inv.key, inv)
+                        if inv.key not in found:
+                            found[inv.key] = inv
+                            inverses[sym.key] = inv.key
                     continue
                 for sym in _grow(D, H, a, b, rot, q):
                     if same and all(x == y for x, y in sym.pairs) and all(
@@ -442,8 +488,14 @@ def operations_from_symmetry(D: OrderedGraph, H: OrderedGraph, sym: Symmetry,
             bpairs.append((a, w, b, nb_b[s[i]]))
     if not bpairs:
         return []
-    gd, comps_d = _flood_groups(D.nbrs, A, [p[1] for p in bpairs])
-    gh, comps_h = _flood_groups(H.nbrs, B, [p[3] for p in bpairs])
+    if len(A) == 1 and next(iter(A)) not in D.cut_nodes() and next(iter(B)) not in H.cut_nodes():
+        # one node that is no articulation point on either side: everything else is one
+        # component on each side, so there is exactly one operation (no flood needed)
+        gd, comps_d = {p[1]: -1 for p in bpairs}, {-1: None}
+        gh, comps_h = {p[3]: -1 for p in bpairs}, {-1: None}
+    else:
+        gd, comps_d = _flood_groups(D.nbrs, A, [p[1] for p in bpairs])
+        gh, comps_h = _flood_groups(H.nbrs, B, [p[3] for p in bpairs])
     parent: dict = {}
 
     def find(x):  # noqa: ANN001, ANN202
@@ -460,21 +512,24 @@ def operations_from_symmetry(D: OrderedGraph, H: OrderedGraph, sym: Symmetry,
     for p in bpairs:
         groups.setdefault(find(("d", gd[p[1]])), []).append(p)
 
-    def side(comps: dict, chosen: set, excluded_base: set, n: int) -> Side:
+    def side(comps: dict, chosen: set, excluded_base: set, n: int, other: tuple) -> Side:
         if any(comps[c] is None for c in chosen):  # the unlisted remainder is in this piece
             out = set(excluded_base)
+            out.update(other)  # other connected components of the graph are not part of it
             for c, nodes in comps.items():
                 if c not in chosen and nodes is not None:
                     out.update(nodes)
             return Side(tuple(sorted(out)), n, True)
         return Side(tuple(sorted(v for c in chosen for v in comps[c])), n)
 
+    other_d = D.outside_component(sym.pairs[0][0])
+    other_h = H.outside_component(sym.pairs[0][1])
     ops = []
     for _, gp in sorted(groups.items(), key=lambda kv: min(kv[1])):
         chosen_d = {gd[p[1]] for p in gp}
         chosen_h = {gh[p[3]] for p in gp}
-        copied = side(comps_d, chosen_d, A, len(D))
-        removed = side(comps_h, chosen_h, B, len(H))
+        copied = side(comps_d, chosen_d, A, len(D), other_d)
+        removed = side(comps_h, chosen_h, B, len(H), other_h)
         pairs = tuple(sorted(gp))
         if same and copied == removed and all(w == w2 for _, w, _, w2 in pairs):
             continue  # replaces a piece by itself, attached where it was: no change
@@ -501,7 +556,8 @@ def find_operations(D: OrderedGraph, H: OrderedGraph | None = None, *, q: int = 
         if old is None or (op.violations, -op.symmetry_size) < (old.violations, -old.symmetry_size):
             ops[op.key] = op
 
-    for sym in find_symmetries(D, H, q=q, progress=progress):
+    inverses: dict = {}
+    for sym in _symmetries(D, H, q, progress, inverses):
         if sym.key in done:
             continue
         found = operations_from_symmetry(D, H, sym, same)
@@ -509,7 +565,8 @@ def find_operations(D: OrderedGraph, H: OrderedGraph | None = None, *, q: int = 
             keep(op)
         if same:
             # the inverse symmetry's operations are these with the two sides exchanged
-            done.add(_inverse(sym).key)
+            inv_key = inverses.get(sym.key)
+            done.add(inv_key if inv_key is not None else _inverse(sym).key)
             rec = {"grow": "shrink", "shrink": "grow", "": ""}
             for op in found:
                 keep(Operation(tuple(sorted((b, w2, a, w) for a, w, b, w2 in op.pairs)),
