@@ -144,3 +144,26 @@ def test_derive_from_examples_without_substructure_is_a_clear_error(tmp_path):
     r = gk("derive", tmp_path / "pair.grammar", "--backend", "substructure", "-n", "2", "-o", tmp_path / "out")
     assert r.returncode != 0 and "no replaceable substructure" in r.stderr and "Traceback" not in r.stderr
     assert not (tmp_path / "out").exists()
+
+
+def test_results_do_not_depend_on_the_number_of_workers(tmp_path):
+    from grammarkit.run.executor import LocalExecutor
+
+    g = load(ROOT / "grammars" / "tiling" / "balltrack" / "balltrack.grammar")
+    one = run_backend(g, out=tmp_path / "one", backend="substructure", n=3, seed=3, workers=1)
+    with LocalExecutor(2, parallel="always") as ex:
+        two = run_backend(g, out=tmp_path / "two", backend="substructure", n=3, seed=3, executor=ex)
+    files = sorted((tmp_path / "one").glob("variant_*.glb"))
+    assert len(files) == 3
+    for f in files:
+        assert (tmp_path / "two" / f.name).read_bytes() == f.read_bytes()
+
+
+def test_dummy_edges_option_on_an_example():
+    track = read_assembly(ROOT / "grammars" / "tiling" / "balltrack" / "track_short.glb")
+    ops0 = substructure.enumerate(track)
+    ops1 = substructure.enumerate(track, q=1)
+    assert ops1 and all(o.violations <= 1 for o in ops1)
+    assert len(ops1) >= len(ops0) // 2
+    with pytest.raises(ValueError):
+        substructure.enumerate(track, q=5)

@@ -165,9 +165,11 @@ class _Deduper:
         return True
 
 
-def load_examples(grammar, tolerance: float | None):
-    from grammarkit.errors import DerivationError, GrammarError
-    from grammarkit.tiling import default_tolerance, load_examples as loader, validate
+def load_examples(grammar, tolerance: float | None) -> tuple[list, list[Shape], float]:
+    """The grammar's example assemblies, as Shapes at one contact tolerance (the smallest
+    example's default unless given)."""
+    from grammarkit.errors import GrammarError
+    from grammarkit.tiling import default_tolerance, load_examples as loader
 
     assemblies = list(loader(grammar))
     if not assemblies:
@@ -179,19 +181,19 @@ def load_examples(grammar, tolerance: float | None):
     for n, a in enumerate(assemblies):
         a.name = a.name or f"example{n}"
         shapes.append(Shape.from_assembly(a, tol))
-    return assemblies, shapes, tol, validate, DerivationError
+    return assemblies, shapes, tol
 
 
 def run(request) -> Iterator:  # noqa: ANN001
     """Yield up to `request.n` new valid assemblies; return the run's statistics."""
     from grammarkit.errors import DerivationError
     from grammarkit.run import Result
-    from grammarkit.tiling import rules_from_grammar
+    from grammarkit.tiling import rules_from_grammar, validate
 
     t0 = time.perf_counter()
     opt = request.options
     rules = rules_from_grammar(request.grammar)
-    assemblies, examples, tol, validate, _ = load_examples(request.grammar, opt.contact_tolerance)
+    assemblies, examples, tol = load_examples(request.grammar, opt.contact_tolerance)
     for a, s in zip(assemblies, examples):
         report = validate(rules, a, tolerance=tol, max_violations=3)
         if not report.ok:
