@@ -17,6 +17,7 @@ fixed-size batches merged in candidate order.
 from __future__ import annotations
 
 import time
+import zlib
 from collections import Counter
 from dataclasses import dataclass
 from typing import Any, Iterator
@@ -70,7 +71,8 @@ def _typed_graph(types, edges, rounds: int = 4):
         nbrs[u].append(v)
         nbrs[v].append(u)
     colour = [hash((code[t], len(nbrs[i]))) for i, t in enumerate(types)]
-    key = [tuple(names), tuple(sorted(colour))]
+    # type names enter as CRC-32 ints: str hashes change with PYTHONHASHSEED between processes
+    key = [tuple(zlib.crc32(t.encode("utf-8")) for t in names), tuple(sorted(colour))]
     for _ in range(rounds):
         colour = [hash((colour[i], tuple(sorted(colour[w] for w in nbrs[i])))) for i in range(n)]
         key.append(tuple(sorted(colour)))
