@@ -271,5 +271,6 @@ def run(request) -> Iterator:  # noqa: ANN001
                else "stopped")
         summary["shortfall"] = (f"{why}: {stats['candidates']} candidates gave {stats['valid']} valid shapes, "
                                 f"{made} of them new (the rest repeat an example or an earlier result); "
-                                "longer chains (--option operations=8), --option q=1 or more examples may find more")
+                                + ("longer chains (--option operations=8), " if opt.operations < 8 else "")
+                                + "--option q=1 or more examples may find more")
     return summary
