@@ -15,6 +15,7 @@ final union can be traced back to the terminal (or body) they came from.
 from __future__ import annotations
 
 import math
+import weakref
 from dataclasses import dataclass
 from typing import Any
 
@@ -309,7 +310,9 @@ class OperationContext:
     __slots__ = ("_derivation", "limits", "registries", "base_dir", "seed", "cache")
 
     def __init__(self, derivation: Derivation):
-        self._derivation = derivation
+        # a weak reference: the derivation holds its context, and a reference cycle would keep
+        # every finished derivation (its solids, tags, tree) alive until the cycle collector runs
+        self._derivation = weakref.proxy(derivation)
         self.limits: Limits = derivation.limits
         self.registries = derivation.registries
         self.base_dir: str | None = derivation.base_dir
