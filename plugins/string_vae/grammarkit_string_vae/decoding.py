@@ -64,7 +64,7 @@ def _choose(logits: torch.Tensor, temperature: float, rng: np.random.Generator) 
 @torch.no_grad()
 def decode_latents(model, z: torch.Tensor, *, vocab: Vocab, rules: TopologyRules, mode: str = "masked",
                    temperature: float = 0.0, seed: int = 0, batch_size: int = 256,
-                   repair_expansions: int = 300, rules_expansions: int = 3000) -> list[Decoded]:
+                   repair_expansions: int = 200, rules_expansions: int = 1500) -> list[Decoded]:
     """Decode latent points `z` (N, latent) into checked strings."""
     if mode not in MODES:
         raise ValueError(f"decoding mode must be one of {MODES}, got {mode!r}")
@@ -214,12 +214,24 @@ def _repair_backtrack(model, z: torch.Tensor, state: DecodeState, hist_h: Sequen
 
 
 def _repair_rules(state: DecodeState, expansions: int) -> bool:
-    """Complete the dead-end string (or a shorter prefix of it) by the rules-only search."""
+    """Complete the dead-end string, or a prefix of it, by the rules-only search. Prefixes are
+    tried from the longest: the dead end itself, then just before each of the last few tokens
+    that opened something (a ring label or a branch: what makes a string hard to finish),
+    then half and none of it."""
     original = list(state.tokens)
-    for back in (0, 1, 2, 4, 8, 16, 32, 64):
-        if back > len(original):
-            break
-        while state.length > len(original) - back:
+    v = state.a.vocab
+    points = [len(original)]
+    probe = state.a.start()
+    openers = []
+    for i, t in enumerate(original):
+        kind, value = v.kind(t)
+        if t == v.open_id or (kind == "ring" and value not in probe.rings):
+            openers.append(i)
+        probe.apply(t)
+    points += sorted(openers, reverse=True)[:6]
+    points += [len(original) // 2, 0]
+    for cut in dict.fromkeys(points):
+        while state.length > cut:
             state.undo()
         plan = complete(state, max_expansions=expansions)
         if plan is not None:

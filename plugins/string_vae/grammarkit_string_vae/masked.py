@@ -109,6 +109,16 @@ class Automaton:
                 return True
         return False
 
+    def capacity(self, k: int, counts: Sequence[int], total: int, wild: int) -> int:
+        """Most further neighbours (beyond the open ring labels) a part could still take."""
+        best = -1
+        for lo, hi, tlo, thi in self.boxes[k]:
+            if total + wild > thi or any(c > h for c, h in zip(counts, hi)):
+                continue
+            room = sum(h - c for c, h in zip(counts, hi)) - wild
+            best = max(best, min(thi - total - wild, room))
+        return best
+
     def deficit(self, k: int, counts: Sequence[int], total: int, wild: int) -> int:
         """Fewest further neighbours (beyond the open ring labels) an open part still needs."""
         best = INF
@@ -322,11 +332,12 @@ class DecodeState:
         if self.phase == START:
             return 2
         cur = self.current
-        # open rings the current part may still close itself (right after its letter): they
-        # fill its neighbourhood and need no new part
+        cur_cap = a.capacity(self.ntype[cur], self.counts[cur], self.total[cur], self.wild[cur])
+        # open rings the current part may still close itself (right after its letter, as far
+        # as it has room): they fill its neighbourhood and need no new part
         if self.phase == ATOM:
             adj = self.adj[cur]
-            closable = sum(1 for o in self.rings.values() if o != cur and o not in adj)
+            closable = min(max(cur_cap, 0), sum(1 for o in self.rings.values() if o != cur and o not in adj))
         else:
             closable = 0
         need_nodes = 0
@@ -349,7 +360,14 @@ class DecodeState:
         host = 1 if rings > closable else 0  # some ring needs a new part to close it
         # ring endpoints beyond the open rings cost a token each (a new ring: two tokens, two ends)
         extra_ends = max(0, ringed - rings)
-        return 1 + len(self.stack) + rings + brackets + extra_ends + max(need_nodes, count_def, host)
+        new_nodes = max(need_nodes, count_def, host)
+        if new_nodes:
+            # new parts can only hang below an open part with room for one more neighbour
+            if cur_cap <= 0 and not any(
+                    a.capacity(self.ntype[o], self.counts[o], self.total[o], self.wild[o]) > 0
+                    for o in self.stack if o != cur):
+                return INF
+        return 1 + len(self.stack) + rings + brackets + extra_ends + new_nodes
 
     def allowed(self) -> list[int]:
         """Tokens that keep the string completable locally and within the length budget."""
@@ -366,6 +384,16 @@ class DecodeState:
             if ok:
                 out.append(t)
         return out
+
+    def closing(self, allowed: list[int], slack: int) -> list[int]:
+        """End-game pressure: when at most `slack` tokens are left beyond the lower bound,
+        drop tokens that open something (a new ring label, a branch) if any other remains.
+        A steering heuristic of the decoder, not a rule: every token it drops was allowed."""
+        if self.a.max_len - self.length - self.lower_bound() > slack:
+            return allowed
+        v = self.a.vocab
+        keep = [t for t in allowed if t != v.open_id and not (v.kind(t)[0] == "ring" and v.kind(t)[1] not in self.rings)]
+        return keep or allowed
 
     def signature(self) -> tuple:
         """Everything that decides whether the state can still be completed (for memoising)."""

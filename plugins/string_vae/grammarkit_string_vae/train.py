@@ -38,6 +38,7 @@ class TrainConfig:
     hidden: int = 192
     enc_hidden: int = 192
     embed: int = 32
+    conv: tuple[int, int, int] = (64, 64, 96)
     beta: float = 1.0
     kl_warmup: float = 0.5  # fraction of the epochs over which beta grows from 0
     word_dropout: float = 0.25
@@ -49,7 +50,9 @@ class TrainConfig:
     strings_per_epoch: int | None = None  # strings of each graph per epoch, drawn anew (None: all)
 
     def to_json(self) -> dict:
-        return dict(self.__dict__)
+        out = dict(self.__dict__)
+        out["conv"] = list(self.conv)
+        return out
 
 
 @dataclass
@@ -118,7 +121,7 @@ def train_vae(dataset: Dataset, config: TrainConfig = TrainConfig(), *,
     by_graph: dict[int, list[int]] = {}
     for i, g in enumerate(tr_owner):
         by_graph.setdefault(g, []).append(i)
-    mcfg = ModelConfig(vocab_size=len(vocab), max_len=max_len, embed=config.embed,
+    mcfg = ModelConfig(vocab_size=len(vocab), max_len=max_len, embed=config.embed, conv=tuple(config.conv),
                        enc_hidden=config.enc_hidden, hidden=config.hidden, latent=config.latent)
     model = StringVAE(mcfg)
     opt = torch.optim.Adam(model.parameters(), lr=config.lr)
