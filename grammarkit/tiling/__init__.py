@@ -10,6 +10,8 @@ Public API (signatures are stable; the graph sampler builds on them):
     rules_from_grammar(grammar) -> Rules
     validate(grammar_or_rules, assembly, *, tolerance=None, graph=None, docks=True) -> Report
     learn(assemblies, name="learned", *, example_paths=None, bandwidth=0.1, docks=True) -> Grammar
+    mean_shift(points, bandwidth) -> (modes, labels)                 # learn's flat-kernel Mean Shift
+    ANGLE_SCALE_DEG                          # learn: a rotation this large weighs like one bandwidth
     dock(a_points, b_points) -> (4x4 rigid transform, rms residual)  # Kabsch, det +1
     local_frame(part) -> 4x4                                        # Kalojanov's diagonal frame
     contacts(assembly_or_parts, tolerance=None, *, geom=None, pairs=None) -> list[Contact]
@@ -37,7 +39,7 @@ _EXPORTS = {
     "shape_graph": "graph",
     "ShapeWarning": "io", "load_examples": "io", "part_prototype": "io", "read_assembly": "io",
     "type_from_name": "io", "write_assembly": "io",
-    "learn": "learn",
+    "learn": "learn", "mean_shift": "learn", "ANGLE_SCALE_DEG": "learn",
     "DockPlacement": "rules", "Rules": "rules", "rules_from_grammar": "rules",
     "Report": "validate", "Violation": "validate", "validate": "validate",
 }
@@ -82,14 +84,14 @@ if TYPE_CHECKING:  # pragma: no cover - for type checkers and IDEs
     from .frames import local_frame, relative_placement, surface_centroid
     from .graph import shape_graph
     from .io import ShapeWarning, load_examples, part_prototype, read_assembly, type_from_name, write_assembly
-    from .learn import learn
+    from .learn import ANGLE_SCALE_DEG, learn, mean_shift
     from .rules import DockPlacement, Rules, rules_from_grammar
     from .validate import Report, Violation, validate
 
 __all__ = [
     "Contact", "PartGeometry", "contacts", "prepare", "surface_centroid",
-    "DEFAULT_RELATIVE_TOLERANCE", "Assembly", "DockPlacement", "Part", "Report", "Rules", "ShapeWarning",
-    "Violation", "default_tolerance", "dock", "learn", "load_examples", "local_frame", "part_prototype",
+    "ANGLE_SCALE_DEG", "DEFAULT_RELATIVE_TOLERANCE", "Assembly", "DockPlacement", "Part", "Report", "Rules", "ShapeWarning",
+    "Violation", "default_tolerance", "dock", "learn", "load_examples", "local_frame", "mean_shift", "part_prototype",
     "read_assembly", "relative_placement", "rules_from_grammar", "shape_graph", "type_from_name",
     "validate", "write_assembly",
 ]
