@@ -12,7 +12,7 @@ A dataset folder (written as one transaction by `grammarkit.run.write_files`):
 
     dataset.json     what it is: grammar name and hash, alphabet, topology rules, source back
                      end, seed, counts, format version
-    graphs.jsonl     one graph per line: id, types, edges, histogram, source, frames
+    graphs.jsonl     one graph per line: id, types, edges, histogram, source, frames, variants
     strings.tsv      graph index <TAB> string, one line per string
     histograms.csv   graph id and the count of each part type
 """
@@ -48,6 +48,7 @@ class Dataset:
     sources: list[str]
     frames: list[list[list[float]] | None] = field(default_factory=list)  # per graph: per node 16 floats
     path: Path | None = None
+    variants: list[list[str] | None] = field(default_factory=list)  # per graph: per node geometry key
 
     @property
     def alphabet(self) -> Alphabet:
@@ -68,6 +69,8 @@ class Dataset:
                                    "histogram": g.histogram(), "source": self.sources[i]}
             if self.frames and self.frames[i] is not None:
                 row["frames"] = self.frames[i]
+            if self.variants and self.variants[i] is not None:
+                row["variants"] = self.variants[i]
             lines.append(json.dumps(row, separators=(",", ":")))
         types = list(self.alphabet.types)
         hist = ["id," + ",".join(types)]
@@ -81,10 +84,14 @@ class Dataset:
                 "histograms.csv": "\n".join(hist) + "\n"}
 
 
-def _frames_of(assembly: Any) -> list[list[float]]:
+def _frames_of(assembly: Any) -> tuple[list[list[float]], list[str]]:
+    """Each part's Kalojanov local frame (16 numbers) and geometry variant key."""
     from grammarkit.tiling import local_frame
 
-    return [[round(float(x), 7) for x in local_frame(p).ravel()] for p in assembly.parts]
+    from .categories import variant_key
+
+    return ([[round(float(x), 7) for x in local_frame(p).ravel()] for p in assembly.parts],
+            [variant_key(p) for p in assembly.parts])
 
 
 def _graph_of_result(result: Any) -> tuple[TypedGraph, Any]:
@@ -131,6 +138,7 @@ def build_dataset(grammar: Any, *, source: str = "graph-sampler", n: int = 1000,
     ids: list[str] = []
     sources: list[str] = []
     all_frames: list = []
+    all_variants: list = []
     report = {"results": 0, "duplicates": 0, "invalid": 0, "disconnected": 0}
     invalid_examples: list[str] = []
 
@@ -154,7 +162,9 @@ def build_dataset(grammar: Any, *, source: str = "graph-sampler", n: int = 1000,
         graphs.append(g)
         ids.append(gid)
         sources.append(src)
-        all_frames.append(_frames_of(asm) if (frames and asm is not None) else None)
+        fr, var = _frames_of(asm) if (frames and asm is not None) else (None, None)
+        all_frames.append(fr)
+        all_variants.append(var)
 
     if include_examples:
         for asm in load_examples(grammar):
@@ -174,7 +184,7 @@ def build_dataset(grammar: Any, *, source: str = "graph-sampler", n: int = 1000,
         shortfall = (f"back end {source!r} made {made} of the {n} results asked for (with "
                      f"{iterations} iteration(s)); more --iterations or other --option values may "
                      "give more")
-    ds = make_dataset(graphs, rules, alphabet, ids=ids, sources=sources, frames=all_frames,
+    ds = make_dataset(graphs, rules, alphabet, ids=ids, sources=sources, frames=all_frames, variants=all_variants,
                       strings_per_graph=strings_per_graph, seed=seed,
                       meta={"grammar": grammar.name, "grammar_hash": grammar_hash(grammar),
                             "grammar_file": grammar_file or (str(grammar.source_path)
@@ -192,7 +202,7 @@ def build_dataset(grammar: Any, *, source: str = "graph-sampler", n: int = 1000,
 
 def make_dataset(graphs: list[TypedGraph], rules: TopologyRules, alphabet: Alphabet, *,
                  ids: list[str] | None = None, sources: list[str] | None = None, frames: list | None = None,
-                 strings_per_graph: int = 10, seed: int = 0, meta: Mapping[str, Any] | None = None) -> Dataset:
+                 variants: list | None = None, strings_per_graph: int = 10, seed: int = 0, meta: Mapping[str, Any] | None = None) -> Dataset:
     """A dataset of given graphs (each connected and valid): up to `strings_per_graph` strings
     per graph, drawn with numpy generators seeded by (seed, graph index)."""
     from .strings import tokenize
@@ -215,7 +225,7 @@ def make_dataset(graphs: list[TypedGraph], rules: TopologyRules, alphabet: Alpha
     full.update(dict(meta or {}))
     n = len(graphs)
     return Dataset(full, list(graphs), strings, list(ids or [f"graph_{i:05d}" for i in range(n)]),
-                   list(sources or [""] * n), list(frames or [None] * n))
+                   list(sources or [""] * n), list(frames or [None] * n), None, list(variants or [None] * n))
 
 
 def write_dataset(dataset: Dataset, out: str | Path, *, overwrite: bool = False) -> Path:
@@ -260,6 +270,7 @@ def load_dataset(path: str | Path) -> Dataset:
     ids: list[str] = []
     sources: list[str] = []
     frames: list = []
+    variants: list = []
     gpath = path / "graphs.jsonl"
     try:
         lines = gpath.read_text(encoding="utf-8").splitlines()
@@ -276,6 +287,7 @@ def load_dataset(path: str | Path) -> Dataset:
         ids.append(str(row.get("id", k - 1)))
         sources.append(str(row.get("source", "")))
         frames.append(row.get("frames"))
+        variants.append(row.get("variants"))
     strings: list[list[str]] = [[] for _ in graphs]
     spath = path / "strings.tsv"
     try:
@@ -290,4 +302,4 @@ def load_dataset(path: str | Path) -> Dataset:
             raise GrammarkitError(f"{spath}:{k}: expected 'graph index<TAB>string' with an index below "
                                   f"{len(graphs)}")
         strings[int(idx)].append(text)
-    return Dataset(meta, graphs, strings, ids, sources, frames, path)
+    return Dataset(meta, graphs, strings, ids, sources, frames, path, variants)

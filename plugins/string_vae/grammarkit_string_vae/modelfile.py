@@ -89,18 +89,23 @@ def save_vae(path: str | Path, **kwargs: Any) -> Path:
     return path
 
 
-def _header(path: Path) -> dict:
-    """The metadata of a safetensors file, read without torch; refuses anything else."""
+_KIND = {FORMAT: "string-VAE model", "grammarkit-edge-categories": "edge-category model"}
+
+
+def _header(path: Path, expect: str = FORMAT) -> dict:
+    """The metadata of a safetensors file of format `expect`, read without torch; refuses
+    anything else (pickles included: nothing in them is ever run)."""
+    what = f"grammarkit {_KIND.get(expect, expect)} file"
     try:
         size = path.stat().st_size
         with open(path, "rb") as fh:
             head = fh.read(8)
             if len(head) < 8:
-                raise ModelFileError(f"{path}: not a grammarkit string-VAE model file (too short: "
+                raise ModelFileError(f"{path}: not a {what} (too short: "
                                      f"{size} bytes)")
             n = int.from_bytes(head, "little")
             if n <= 0 or n > min(size - 8, 100_000_000):
-                raise ModelFileError(f"{path}: not a grammarkit string-VAE model file (no safetensors "
+                raise ModelFileError(f"{path}: not a {what} (no safetensors "
                                      "header; pickles and other files are refused: they could run code)")
             text = fh.read(n)
     except OSError as exc:
@@ -108,19 +113,18 @@ def _header(path: Path) -> dict:
     try:
         header = json.loads(text.decode("utf-8"))
     except (UnicodeDecodeError, ValueError):
-        raise ModelFileError(f"{path}: not a grammarkit string-VAE model file (its header is not "
+        raise ModelFileError(f"{path}: not a {what} (its header is not "
                              "safetensors JSON)") from None
     if not isinstance(header, dict):
-        raise ModelFileError(f"{path}: not a grammarkit string-VAE model file")
+        raise ModelFileError(f"{path}: not a {what}")
     end = max((int(v["data_offsets"][1]) for k, v in header.items()
                if k != "__metadata__" and isinstance(v, dict) and "data_offsets" in v), default=0)
     if 8 + n + end > size:
         raise ModelFileError(f"{path}: the model file is truncated ({size} of {8 + n + end} bytes); "
                              "copy or train it again")
     meta = header.get("__metadata__") or {}
-    if meta.get("format") != FORMAT:
-        raise ModelFileError(f"{path}: not a grammarkit string-VAE model file (format "
-                             f"{meta.get('format')!r})")
+    if meta.get("format") != expect:
+        raise ModelFileError(f"{path}: not a {what} (format {meta.get('format')!r})")
     return meta
 
 

@@ -37,7 +37,7 @@ from .graphs import TypedGraph
 
 __all__ = [
     "Alphabet", "FORMATS", "MAX_STRING_LENGTH", "ParsedString", "ShapeStringError", "decode", "encode",
-    "convert", "ring_token", "strings_of", "tokenize",
+    "convert", "encode_with_order", "ring_token", "strings_of", "tokenize",
 ]
 
 LETTERS = _string.ascii_uppercase + _string.ascii_lowercase
@@ -221,6 +221,7 @@ class ParsedString:
     edge_index: dict[tuple[int, int], int]  # (i, j), i < j -> character that made the edge
     tree_edges: list[tuple[int, int]] = field(default_factory=list)  # (parent, child) in order
     ring_edges: list[tuple[int, int]] = field(default_factory=list)  # (opener, closer) in order
+    ring_chars: list[tuple[int, int]] = field(default_factory=list)  # their labels' characters
 
 
 def decode(text: str, alphabet: Alphabet, fmt: str = "smiles") -> ParsedString:
@@ -236,6 +237,7 @@ def decode(text: str, alphabet: Alphabet, fmt: str = "smiles") -> ParsedString:
     edges: dict[tuple[int, int], int] = {}
     tree: list[tuple[int, int]] = []
     rings_out: list[tuple[int, int]] = []
+    ring_chars: list[tuple[int, int]] = []
     stack: list[tuple[int, int]] = []  # (owner node, index of its '(')
     current: int | None = None
     phase = "start"  # start | atom | after-branch | branch-start
@@ -288,6 +290,7 @@ def decode(text: str, alphabet: Alphabet, fmt: str = "smiles") -> ParsedString:
                                            f"{node_index[current] + 1}", text, tok.index)
                 edges[key] = tok.index
                 rings_out.append((other, current))
+                ring_chars.append((at, tok.index))
                 if fmt == "string2shape":
                     seen_ids.add(label)
             else:
@@ -308,7 +311,7 @@ def decode(text: str, alphabet: Alphabet, fmt: str = "smiles") -> ParsedString:
                                      for lab, (_, at) in pending[1:]])
     norm = {(min(a, b), max(a, b)): at for (a, b), at in edges.items()}
     graph = TypedGraph(tuple(types), tuple(sorted(norm)))
-    return ParsedString(text, graph, node_index, norm, tree, rings_out)
+    return ParsedString(text, graph, node_index, norm, tree, rings_out, ring_chars)
 
 
 # --------------------------------------------------------------------------------------------
@@ -352,6 +355,13 @@ def encode(graph: TypedGraph, alphabet: Alphabet, *, rng: np.random.Generator | 
            root: int | None = None, fmt: str = "smiles") -> str:
     """One string of a connected graph: a random root and neighbour order from `rng` (without
     `rng`: root 0 and the edge order, deterministic)."""
+    return encode_with_order(graph, alphabet, rng=rng, root=root, fmt=fmt)[0]
+
+
+def encode_with_order(graph: TypedGraph, alphabet: Alphabet, *, rng: np.random.Generator | None = None,
+                      root: int | None = None, fmt: str = "smiles") -> tuple[str, list[int]]:
+    """`encode`, and which graph node each letter of the string is (the k-th letter is node
+    order[k]; `decode` numbers nodes by letter, so decoded node k is graph node order[k])."""
     n = len(graph.types)
     if n == 0:
         raise GrammarkitError("an empty graph has no shape string")
@@ -421,7 +431,7 @@ def encode(graph: TypedGraph, alphabet: Alphabet, *, rng: np.random.Generator | 
         if kids:
             todo.append(kids[-1])
         stack.extend(reversed(todo))
-    return "".join(out)
+    return "".join(out), order
 
 
 def strings_of(graph: TypedGraph, alphabet: Alphabet, n: int, *, rng: np.random.Generator,

@@ -1,0 +1,228 @@
+"""Edge categories (Kalojanov et al. 2019, section 6): the ways two part types dock.
+
+For every pair of part types, the relative placements of adjacent parts across a dataset (the
+placement of B's local frame in A's, `inv(F_A) @ F_B`, with Kalojanov's diagonal frames stored
+by `grammarkit dataset`) are clustered with Mean Shift into a finite set of docking
+configurations. The clustering is `grammarkit.tiling.learn`'s: the same `mean_shift`, the same
+features (translation plus the rotation matrix scaled so that a rotation of `ANGLE_SCALE_DEG`
+weighs like one bandwidth) and the same bandwidth (`bandwidth` x the median size of the two
+parts). Pairs are ordered by type name (A < B); for two parts of one type both directions are
+samples, and `reverse[k]` is the category of the opposite direction.
+
+Every part of a type is a rigid copy of one mesh (examples are built that way and back ends
+move them rigidly), so the frames of all copies correspond vertex for vertex: a category is an
+exact placement, which instantiation and compression apply directly (no symmetry
+canonicalisation, which would lose which face of a symmetric part an edge uses).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any, Iterable, Sequence
+
+import numpy as np
+
+from grammarkit.errors import GrammarkitError
+
+__all__ = ["Category", "EdgeCategories", "edge_labels", "learn_categories", "relative_placement", "variant_key"]
+
+
+def relative_placement(frame_a: np.ndarray, frame_b: np.ndarray) -> np.ndarray:
+    """B's frame in A's frame (4x4)."""
+    return np.linalg.inv(frame_a) @ frame_b
+
+
+@dataclass
+class Category:
+    index: int
+    a: str  # type of the first part (a <= b by name)
+    b: str
+    matrix: np.ndarray  # 4x4: B's frame in A's frame (the cluster's member closest to the mean)
+    count: int
+    va: str = ""  # geometry variants of the two parts (`variant_key`; "" when not recorded)
+    vb: str = ""
+
+    def to_json(self) -> dict:
+        return {"index": self.index, "a": self.a, "b": self.b, "count": self.count, "va": self.va, "vb": self.vb,
+                "matrix": [round(float(x), 9) for x in self.matrix.ravel()]}
+
+    def variant_of(self, type_name: str, first: bool) -> str:
+        return self.va if first else self.vb
+
+
+@dataclass
+class EdgeCategories:
+    types: tuple[str, ...]
+    categories: list[Category]
+    sizes: dict[str, float]  # bounding-box diagonal of each type's part
+    bandwidth: float = 0.02
+    reverse: dict[int, int] = field(default_factory=dict)  # same-type pairs: opposite direction
+    position_tolerance: float = 0.05  # classification: x the larger part's size
+    angle_tolerance: float = 20.0  # degrees
+
+    def __post_init__(self) -> None:
+        self.by_pair: dict[tuple[str, str], list[int]] = {}
+        for c in self.categories:
+            self.by_pair.setdefault((c.a, c.b), []).append(c.index)
+
+    def __len__(self) -> int:
+        return len(self.categories)
+
+    def pair_categories(self, t1: str, t2: str) -> list[int]:
+        return list(self.by_pair.get(tuple(sorted((t1, t2))), ()))  # type: ignore[arg-type]
+
+    def placement(self, k: int, parent_type: str, child_type: str) -> np.ndarray:
+        """The child's frame in the parent's frame for category k of the edge."""
+        c = self.categories[k]
+        if (c.a, c.b) == (parent_type, child_type):
+            return c.matrix
+        if (c.b, c.a) == (parent_type, child_type):
+            return np.linalg.inv(c.matrix)
+        raise GrammarkitError(f"category {k} joins {c.a} and {c.b}, not {parent_type} and {child_type}")
+
+    def variants(self, k: int, parent_type: str, child_type: str) -> tuple[str, str]:
+        """(parent's, child's) geometry variant for category k of the edge parent -> child."""
+        c = self.categories[k]
+        if (c.a, c.b) == (parent_type, child_type):
+            return c.va, c.vb
+        return c.vb, c.va
+
+    def classify(self, t1: str, t2: str, rel: np.ndarray, v1: str | None = None,
+                 v2: str | None = None) -> tuple[int | None, float]:
+        """The category of a placement `rel` (t2's frame in t1's; parts of geometry variants
+        v1, v2 if given): the nearest one of the pair within the tolerances, else None; and the
+        distance (relative to part size)."""
+        if t1 > t2:
+            t1, t2, rel, v1, v2 = t2, t1, np.linalg.inv(rel), v2, v1
+        cands = [k for k in self.by_pair.get((t1, t2), [])
+                 if (v1 is None or self.categories[k].va == v1) and (v2 is None or self.categories[k].vb == v2)]
+        size = max(self.sizes.get(t1, 1.0), self.sizes.get(t2, 1.0)) or 1.0
+        best, best_d = None, math.inf
+        cos_tol = math.cos(math.radians(self.angle_tolerance))
+        for k in cands:
+            m = self.categories[k].matrix
+            d = float(np.linalg.norm(m[:3, 3] - rel[:3, 3])) / size
+            cos = (float(np.trace(m[:3, :3].T @ rel[:3, :3])) - 1.0) / 2.0
+            if cos < cos_tol - 1e-9:
+                continue
+            if d < best_d:
+                best, best_d = k, d
+        if best is None and best_d == math.inf:
+            return None, math.inf  # no category of the pair has this orientation
+        if best is None or best_d > self.position_tolerance:
+            return None, best_d
+        return best, best_d
+
+    def to_json(self) -> dict:
+        return {"types": list(self.types), "sizes": self.sizes, "bandwidth": self.bandwidth,
+                "categories": [c.to_json() for c in self.categories],
+                "reverse": {str(k): v for k, v in self.reverse.items()},
+                "position_tolerance": self.position_tolerance, "angle_tolerance": self.angle_tolerance}
+
+    @classmethod
+    def from_json(cls, data: dict) -> "EdgeCategories":
+        try:
+            cats = [Category(int(c["index"]), str(c["a"]), str(c["b"]),
+                             np.array(c["matrix"], dtype=np.float64).reshape(4, 4), int(c["count"]),
+                             str(c.get("va", "")), str(c.get("vb", ""))) for c in data["categories"]]
+            return cls(tuple(data["types"]), cats, {k: float(v) for k, v in data["sizes"].items()},
+                       float(data["bandwidth"]), {int(k): int(v) for k, v in data.get("reverse", {}).items()},
+                       float(data.get("position_tolerance", 0.05)), float(data.get("angle_tolerance", 20.0)))
+        except (KeyError, TypeError, ValueError) as exc:
+            raise GrammarkitError(f"malformed edge categories ({type(exc).__name__}: {exc})") from None
+
+
+def _samples(types_of: Sequence[str], edges: Iterable[tuple[int, int]], frames: np.ndarray,
+             variants: Sequence[str] | None = None):
+    """(pool key, rel, (u, v)) per direction sampled: A < B by name, both ways for one type;
+    the pool key is (A, variant of A, B, variant of B)."""
+    var = variants or [""] * len(types_of)
+    for u, v in edges:
+        tu, tv = types_of[u], types_of[v]
+        dirs = [(u, v)] if tu < tv else [(v, u)] if tv < tu else [(u, v), (v, u)]
+        for a, b in dirs:
+            yield (types_of[a], var[a], types_of[b], var[b]), relative_placement(frames[a], frames[b]), (a, b)
+
+
+def variant_key(part_or_mesh) -> str:  # noqa: ANN001
+    """A geometry variant's key: the part's vertices in its own Kalojanov frame (rounded to
+    1e-4 of its size) and its faces, hashed. Rigid copies of one mesh share the key."""
+    import hashlib
+
+    from grammarkit.tiling import local_frame
+
+    mesh = getattr(part_or_mesh, "mesh", part_or_mesh)
+    V = np.asarray(mesh.vertices, dtype=np.float64)
+    F = local_frame(V, np.asarray(mesh.faces))
+    local = (V - F[:3, 3]) @ F[:3, :3]
+    size = float(np.linalg.norm(V.max(axis=0) - V.min(axis=0))) or 1.0
+    q = np.round(local / (1e-4 * size)).astype(np.int64)
+    h = hashlib.sha1(q.tobytes() + np.asarray(mesh.faces, dtype=np.int64).tobytes()).hexdigest()
+    return h[:12]
+
+
+def part_sizes(grammar: Any, types: Iterable[str]) -> dict[str, float]:
+    from grammarkit.tiling import part_prototype
+
+    out = {}
+    for t in types:
+        m = part_prototype(grammar, t)
+        out[t] = float(np.linalg.norm(m.bounds[1] - m.bounds[0]))
+    return out
+
+
+def learn_categories(graphs: Sequence[Any], frames: Sequence[Sequence[Sequence[float]] | None],
+                     sizes: dict[str, float], *, bandwidth: float = 0.02,
+                     variants: Sequence[Sequence[str] | None] | None = None) -> EdgeCategories:
+    """Cluster the relative placements of every edge of `graphs` (TypedGraphs with per-node 4x4
+    frames, flattened row-major, and optionally per-node geometry variants) per type pair and
+    variant pair."""
+    from grammarkit.tiling import ANGLE_SCALE_DEG, mean_shift
+
+    pools: dict[tuple[str, str, str, str], list[np.ndarray]] = {}
+    for i, (g, fr) in enumerate(zip(graphs, frames)):
+        if fr is None:
+            continue
+        F = np.asarray(fr, dtype=np.float64).reshape(len(g.types), 4, 4)
+        var = variants[i] if variants is not None else None
+        for key, rel, _ in _samples(g.types, g.edges, F, var):
+            pools.setdefault(key, []).append(rel)
+    if not pools:
+        raise GrammarkitError("no part frames to learn edge categories from: build the dataset with "
+                              "frames (`grammarkit dataset` stores them unless --no-frames)")
+    cats: list[Category] = []
+    for (a, va, b, vb) in sorted(pools):
+        rels = pools[(a, va, b, vb)]
+        # learn.py's placement features (see grammarkit.tiling.learn); the bandwidth is finer
+        # than learn's default: long parts (a facade's ledges) dock at many nearby places
+        bw = bandwidth * max(sizes.get(a, 1.0), sizes.get(b, 1.0))
+        rot_scale = bw / (2 * math.sqrt(2) * math.sin(math.radians(ANGLE_SCALE_DEG) / 2))
+        X = np.array([np.concatenate([r[:3, 3], rot_scale * r[:3, :3].ravel()]) for r in rels])
+        modes, labels = mean_shift(X, bw)
+        for k in range(len(modes)):
+            members = np.flatnonzero(labels == k)
+            # the member closest to the cluster mean: an actual docking of the input shapes
+            centre = X[members].mean(axis=0)
+            rep = members[int(np.argmin(np.linalg.norm(X[members] - centre, axis=1)))]
+            cats.append(Category(len(cats), a, b, rels[rep].copy(), int(len(members)), va, vb))
+    types = tuple(sorted({t for c in cats for t in (c.a, c.b)}))
+    ec = EdgeCategories(types, cats, dict(sizes), bandwidth)
+    for c in cats:
+        if c.a == c.b:
+            k, _ = ec.classify(c.a, c.b, np.linalg.inv(c.matrix), c.vb, c.va)
+            ec.reverse[c.index] = c.index if k is None else k
+    return ec
+
+
+def edge_labels(g: Any, frames: Sequence[Sequence[float]], cats: EdgeCategories,
+                variants: Sequence[str] | None = None) -> dict[tuple[int, int], int | None]:
+    """Category of every edge of a graph with frames, in both directions (u, v) and (v, u):
+    the category of v's placement in u's frame."""
+    F = np.asarray(frames, dtype=np.float64).reshape(len(g.types), 4, 4)
+    out: dict[tuple[int, int], int | None] = {}
+    for u, v in g.edges:
+        for a, b in ((u, v), (v, u)):
+            k, _ = cats.classify(g.types[a], g.types[b], relative_placement(F[a], F[b]),
+                                 variants[a] if variants else None, variants[b] if variants else None)
+            out[(a, b)] = k
+    return out

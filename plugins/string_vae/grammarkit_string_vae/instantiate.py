@@ -1,0 +1,298 @@
+"""Graph instantiation (Kalojanov et al. 2019, section 6): a shape graph with edge categories
+becomes an assembly of the example parts.
+
+Every part of a type is a rigid copy of the type's `part` geometry
+(`grammarkit.tiling.part_prototype`), placed by its Kalojanov frame. A try:
+
+1. starts from a random edge: its first part is placed where a part of that type sits in the
+   grammar's first example that has one (so shapes stand like the examples);
+2. adds the other parts breadth-first. A part joins through the edge to its parent with that
+   edge's category: the parent's frame times the category's placement (an actual docking
+   of the input shapes). The partial shape is checked: the new part must touch exactly the
+   placed parts it is adjacent to in the graph (no interpenetration, no missing contact), and
+   its placement relative to every placed neighbour (cycle edges) must be one of the grammar's
+   docking categories. If the predicted category fails, the other categories of the type
+   pair are tried in a random order (the paper's Monte-Carlo edge insertion);
+3. if a part cannot be attached at all, the try ends (the report names the edge and, if a
+   cycle edge was the reason, the cycle) and the next try starts from another random edge.
+
+A finished shape is recomputed from geometry and validated against the whole grammar (docks,
+neighbours, constraints) at the examples' contact tolerance and at `grammarkit validate`'s
+default one, and its recomputed graph must be the requested graph; only then is it returned.
+"""
+from __future__ import annotations
+
+import time
+from collections import deque
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from grammarkit.errors import GrammarkitError
+
+from .categories import EdgeCategories
+from .graphs import TypedGraph
+
+__all__ = ["Instantiation", "Instantiator"]
+
+
+@dataclass
+class Instantiation:
+    assembly: Any | None  # grammarkit.tiling.Assembly, or None when it failed
+    tries: int = 0  # tries started (start edges)
+    insertions: int = 0  # part placements tested
+    monte_carlo: int = 0  # edges placed with another category than the predicted one
+    categories: dict[tuple[int, int], int] = field(default_factory=dict)  # (u, v), u < v: used, u -> v
+    reason: str | None = None
+    seconds: float = 0.0
+
+    @property
+    def ok(self) -> bool:
+        return self.assembly is not None
+
+
+class Instantiator:
+    def __init__(self, grammar: Any, cats: EdgeCategories, *, tolerance: float | None = None):
+        from grammarkit.tiling import default_tolerance, load_examples, local_frame, part_prototype, rules_from_grammar
+
+        self.grammar = grammar
+        self.cats = cats
+        self.rules = rules_from_grammar(grammar)
+        examples = load_examples(grammar)
+        if tolerance is None:
+            tolerance = min(default_tolerance(a) for a in examples) if examples else None
+        if tolerance is None:
+            raise GrammarkitError(f"grammar {grammar.name!r} has no examples to take the contact tolerance "
+                                  "from; pass a tolerance")
+        self.tolerance = float(tolerance)
+        # geometry variants of every type, from the examples (a facade has two ledge lengths):
+        # vertices in the part's own frame, faces; the grammar's `part` geometry as a fallback
+        from .categories import variant_key
+
+        self.variants: dict[tuple[str, str], tuple[np.ndarray, np.ndarray]] = {}  # (type, key) -> local V, F
+        self.default_variant: dict[str, str] = {}
+        self.start_frame: dict[str, np.ndarray] = {}
+        meshes = [(p.type, p.mesh) for asm in examples for p in asm.parts]
+        for t in cats.types:
+            if t not in {tt for tt, _ in meshes}:
+                meshes.append((t, part_prototype(grammar, t)))
+        for t, mesh in meshes:
+            key = variant_key(mesh)
+            if (t, key) in self.variants:
+                continue
+            V = np.asarray(mesh.vertices, dtype=np.float64)
+            F = local_frame(V, np.asarray(mesh.faces))
+            self.variants[(t, key)] = ((V - F[:3, 3]) @ F[:3, :3], np.asarray(mesh.faces))
+            self.default_variant.setdefault(t, key)
+        for asm in examples:
+            for p in asm.parts:
+                if p.type not in self.start_frame:
+                    self.start_frame[p.type] = local_frame(p)
+
+    # ---- geometry ----------------------------------------------------------------------------
+    def part(self, type_name: str, frame: np.ndarray, pid: str, variant: str | None = None):  # noqa: ANN201
+        """A part of the type's geometry variant (default: its first) whose frame is `frame`."""
+        import trimesh
+
+        from grammarkit.tiling import Part
+
+        key = variant if (type_name, variant) in self.variants else self.default_variant.get(type_name)
+        if key is None:
+            raise GrammarkitError(f"no geometry for part type {type_name!r}")
+        local, faces = self.variants[(type_name, key)]
+        verts = local @ frame[:3, :3].T + frame[:3, 3]
+        mesh = trimesh.Trimesh(vertices=verts, faces=faces, process=False)
+        part = Part(pid, type_name, mesh, frame.copy())
+        part.meta["variant"] = key
+        return part
+
+    def _touching(self, new, placed: list) -> set[int]:  # noqa: ANN001
+        """Indices into `placed` (Parts) that the new part touches."""
+        from grammarkit.tiling import contacts
+
+        if not placed:
+            return set()
+        lo = np.asarray(new.mesh.vertices).min(axis=0) - self.tolerance
+        hi = np.asarray(new.mesh.vertices).max(axis=0) + self.tolerance
+        near = [i for i, p in enumerate(placed)
+                if np.all(np.asarray(p.mesh.vertices).min(axis=0) <= hi)
+                and np.all(np.asarray(p.mesh.vertices).max(axis=0) >= lo)]
+        if not near:
+            return set()
+        parts = [new] + [placed[i] for i in near]
+        pairs = np.array([[0, k + 1] for k in range(len(near))], dtype=np.int64)
+        return {near[c.b - 1] for c in contacts(parts, self.tolerance, pairs=pairs)}
+
+    # ---- the algorithm -----------------------------------------------------------------------
+    def instantiate(self, graph: TypedGraph, predicted: dict[tuple[int, int], int] | None = None, *,
+                    seed: int = 0, max_tries: int = 8, deadline: float | None = None) -> Instantiation:
+        """Place `graph` using the predicted category of each edge (u, v), u < v, direction
+        u -> v (missing edges: Monte-Carlo from the start)."""
+        t0 = time.perf_counter()
+        predicted = dict(predicted or {})
+        unknown = sorted({t for t in graph.types if t not in self.default_variant})
+        if unknown:
+            return Instantiation(None, reason=f"no edge categories for part type(s) {', '.join(unknown)}")
+        if len(graph.types) == 1:
+            asm = self._assembly(graph, [self.start_frame.get(graph.types[0], np.eye(4))])
+            return Instantiation(asm, 1, 1, reason=None, seconds=time.perf_counter() - t0)
+        adj = graph.adjacency()
+        rng = np.random.default_rng(seed)
+        out = Instantiation(None)
+        reasons: list[str] = []
+        for attempt in range(max_tries):
+            if deadline is not None and time.monotonic() > deadline:
+                reasons.append("time budget spent")
+                break
+            out.tries += 1
+            u, v = graph.edges[int(rng.integers(len(graph.edges)))]
+            start = u if rng.random() < 0.5 else v
+            placed, used, why = self._try(graph, adj, start, predicted, rng, out)
+            if placed is None:
+                reasons.append(why)
+                continue
+            asm = self._assembly(graph, *placed)
+            problem = self._final_check(graph, asm)
+            if problem is None:
+                out.assembly = asm
+                out.categories = used
+                out.reason = None
+                out.seconds = time.perf_counter() - t0
+                return out
+            reasons.append(problem)
+        out.reason = _summarise(reasons, out.tries)
+        out.seconds = time.perf_counter() - t0
+        return out
+
+    def _try(self, graph: TypedGraph, adj, start: int, predicted, rng, out: Instantiation):  # noqa: ANN001
+        n = len(graph.types)
+        T = graph.types
+        frames: list[np.ndarray | None] = [None] * n
+        variant: list[str | None] = [None] * n
+        parts: list = [None] * n
+        placed_idx: list[int] = []
+        # the start part's geometry: the one its first edge's category expects
+        first = adj[start][0]
+        cands = self._candidates(T[start], T[first], predicted.get((min(start, first), max(start, first))),
+                                 start < first, rng, None)
+        variant[start] = (self.cats.variants(cands[0], T[start], T[first])[0] if cands else "") or \
+            self.default_variant[T[start]]
+        frames[start] = self.start_frame.get(T[start], np.eye(4))
+        parts[start] = self.part(T[start], frames[start], f"{T[start]}.{start}", variant[start])
+        placed_idx.append(start)
+        used: dict[tuple[int, int], int] = {}
+        queue = deque([start])
+        seen = {start}
+        while queue:
+            x = queue.popleft()
+            nbrs = list(adj[x])
+            rng.shuffle(nbrs)
+            for y in nbrs:
+                if y in seen:
+                    continue
+                seen.add(y)
+                queue.append(y)
+                key = (min(x, y), max(x, y))
+                cands = self._candidates(T[x], T[y], predicted.get(key), x < y, rng, variant[x])
+                if not cands:
+                    return None, used, f"no docking category joins {T[x]} and {T[y]} (edge {x}-{y})"
+                placed_nbrs = [w for w in adj[y] if frames[w] is not None]
+                done = False
+                last = ""
+                for rank, k in enumerate(cands):
+                    out.insertions += 1
+                    Fy = frames[x] @ self.cats.placement(k, T[x], T[y])
+                    vy = self.cats.variants(k, T[x], T[y])[1] or self.default_variant[T[y]]
+                    bad = self._cycle_misfit(graph, y, Fy, vy, placed_nbrs, frames, variant, x)
+                    if bad is not None:
+                        last = bad
+                        continue
+                    new = self.part(T[y], Fy, f"{T[y]}.{y}", vy)
+                    placed_parts = [parts[i] for i in placed_idx]
+                    touched = {placed_idx[i] for i in self._touching(new, placed_parts)}
+                    if touched != set(placed_nbrs):
+                        extra = sorted(touched - set(placed_nbrs))
+                        missing = sorted(set(placed_nbrs) - touched)
+                        last = (f"part {y} ({T[y]}) attached to {x} ({T[x]}) "
+                                + (f"touches {', '.join(f'{i} ({T[i]})' for i in extra)}, which it may not" if extra
+                                   else f"does not reach {', '.join(f'{i} ({T[i]})' for i in missing)}: the cycle "
+                                        "through these parts does not close"))
+                        continue
+                    frames[y], parts[y], variant[y] = Fy, new, vy
+                    placed_idx.append(y)
+                    used[key] = k if x < y else self.cats.reverse.get(k, k)
+                    if rank > 0 or predicted.get(key) is None:
+                        out.monte_carlo += 1
+                    done = True
+                    break
+                if not done:
+                    return None, used, last or f"edge {x}-{y} cannot be placed"
+        return (frames, variant), used, ""
+
+    def _candidates(self, tx: str, ty: str, pred: int | None, forward: bool, rng,  # noqa: ANN001
+                    parent_variant: str | None) -> list[int]:
+        """Categories to try for edge x -> y: the predicted one first (given for min -> max;
+        turned around for a same-type pair seen the other way), then the pair's others in a
+        random order weighted by how often they occur (Monte-Carlo insertion). Only categories
+        whose parent geometry is the parent's are kept."""
+        cands = [k for k in self.cats.pair_categories(tx, ty)
+                 if parent_variant is None or self.cats.variants(k, tx, ty)[0] in ("", parent_variant)]
+        first = None
+        if pred is not None:
+            p = pred if forward else self.cats.reverse.get(pred, pred)
+            first = p if p in cands else None
+        rest = [k for k in cands if k != first]
+        if rest:
+            w = np.array([self.cats.categories[k].count for k in rest], dtype=np.float64)
+            order = rng.choice(len(rest), size=len(rest), replace=False, p=w / w.sum())
+            rest = [rest[i] for i in order]
+        return ([first] if first is not None else []) + rest
+
+    def _cycle_misfit(self, graph, y, Fy, vy, placed_nbrs, frames, variant, parent) -> str | None:  # noqa: ANN001
+        T = graph.types
+        for w in placed_nbrs:
+            if w == parent:
+                continue
+            k, d = self.cats.classify(T[w], T[y], np.linalg.inv(frames[w]) @ Fy, variant[w] or None, vy or None)
+            if k is None:
+                far = "in no docking orientation" if not np.isfinite(d) else f"{d:.2f} part sizes away from any docking"
+                return f"cycle edge {w}-{y} ({T[w]}-{T[y]}) does not close: placing {y} from {parent} puts it {far}"
+        return None
+
+    def _assembly(self, graph: TypedGraph, frames, variants=None):  # noqa: ANN001, ANN202
+        from grammarkit.tiling import Assembly
+
+        counts: dict[str, int] = {}
+        parts = []
+        for i, t in enumerate(graph.types):
+            k = counts.get(t, 0)
+            counts[t] = k + 1
+            p = self.part(t, frames[i], f"{t}.{k}", variants[i] if variants else None)
+            p.meta["node"] = i
+            parts.append(p)
+        return Assembly(parts, name="instantiated")
+
+    def _final_check(self, graph: TypedGraph, asm) -> str | None:  # noqa: ANN001
+        from grammarkit.tiling import shape_graph, validate
+
+        for tol in (self.tolerance, None):
+            sg = shape_graph(asm, tol)
+            index = {p.id: p.meta["node"] for p in asm.parts}
+            got = sorted((min(index[a], index[b]), max(index[a], index[b])) for a, b in sg.edges())
+            if got != sorted(graph.edges):
+                extra = sorted(set(got) - set(graph.edges))[:3]
+                missing = sorted(set(graph.edges) - set(got))[:3]
+                return (f"the finished shape's contacts differ from the graph (extra {extra}, missing {missing}"
+                        f"{'' if tol is not None else ', at the default validate tolerance'})")
+            report = validate(self.grammar, asm, tolerance=tol, graph=sg)
+            if not report.ok:
+                return f"the finished shape breaks the grammar: {report.violations[0].format()}"
+        return None
+
+
+def _summarise(reasons: list[str], tries: int) -> str:
+    if not reasons:
+        return "no try was made"
+    common = max(set(reasons), key=reasons.count)
+    return f"{tries} tr{'y' if tries == 1 else 'ies'} failed; most often: {common}"
