@@ -94,8 +94,8 @@ class EdgeCategories:
         distance (relative to part size)."""
         if t1 > t2:
             t1, t2, rel, v1, v2 = t2, t1, np.linalg.inv(rel), v2, v1
-        cands = [k for k in self.by_pair.get((t1, t2), [])
-                 if (v1 is None or self.categories[k].va == v1) and (v2 is None or self.categories[k].vb == v2)]
+        cands = [k for k in self.by_pair.get((t1, t2), [])  # a category without variants fits any
+                 if (v1 is None or self.categories[k].va in ("", v1)) and (v2 is None or self.categories[k].vb in ("", v2))]
         size = max(self.sizes.get(t1, 1.0), self.sizes.get(t2, 1.0)) or 1.0
         best, best_d = None, math.inf
         cos_tol = math.cos(math.radians(self.angle_tolerance))

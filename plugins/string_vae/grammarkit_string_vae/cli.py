@@ -355,3 +355,195 @@ def format_metrics(r: dict, samples: int) -> str:
                          f"{s['pairs']} | {_f(s['mean_path_weight'], 2)} | {_f(s['max_path_weight'], 2)} | "
                          f"{_f(s['mean_path_edges'], 1)} |")
     return "\n".join(lines)
+
+
+# --------------------------------------------------------------------------------------------
+# instantiation: grammarkit train edge-categories / instantiate / compress / decompress
+# --------------------------------------------------------------------------------------------
+def _dataset_grammar(ds, grammar_file: Path | None):  # noqa: ANN001, ANN202
+    if grammar_file is None:
+        stored = ds.meta.get("grammar_file")
+        if not stored or not Path(stored).exists():
+            raise click.UsageError("give --grammar GRAMMAR (the dataset does not name a grammar file that exists)")
+        grammar_file = Path(stored)
+    return _grammar(grammar_file)
+
+
+@click.command("edge-categories")
+@click.argument("dataset_dir", type=click.Path(path_type=Path))
+@click.option("-o", "--out", required=True, type=click.Path(dir_okay=False, path_type=Path),
+              help="model file to write (.edges)")
+@click.option("--grammar", "grammar_file", default=None, type=click.Path(exists=True, dir_okay=False, path_type=Path),
+              help="the grammar (default: the one the dataset was made from)")
+@click.option("--epochs", default=20, show_default=True, type=click.IntRange(1, 100_000))
+@click.option("--strings-per-graph", default=8, show_default=True, type=click.IntRange(1, 1000),
+              help="training strings drawn per graph")
+@click.option("--votes", default=8, show_default=True, type=click.IntRange(1, 1000),
+              help="strings per graph that vote on each edge's category")
+@click.option("--bandwidth", default=0.02, show_default=True, type=click.FloatRange(min=1e-6),
+              help="Mean Shift bandwidth, as a fraction of the parts' size")
+@click.option("--seed", default=0, show_default=True, type=int)
+@click.option("--threads", default=1, show_default=True, type=click.IntRange(1, 256))
+@click.option("--time-limit", default=None, type=click.FloatRange(min=1))
+def train_edge_categories(dataset_dir: Path, out: Path, grammar_file: Path | None, epochs: int, strings_per_graph: int,
+                          votes: int, bandwidth: float, seed: int, threads: int, time_limit: float | None) -> None:
+    """Learn edge categories (Mean Shift) from DATASET_DIR and train the LSTM that predicts them.
+
+    \b
+    grammarkit train edge-categories castle_ds/ -o castle.edges
+    """
+    from .requires import require_learning
+
+    require_learning("grammarkit train edge-categories")
+    from rich.console import Console
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+
+    from .dataset import load_dataset
+    from .edgemodel import EdgeTrainConfig, save_edge_model, train_edge_model
+
+    ds = load_dataset(dataset_dir)
+    grammar = _dataset_grammar(ds, grammar_file)
+    cfg = EdgeTrainConfig(epochs=epochs, strings_per_graph=strings_per_graph, vote_strings=votes,
+                          bandwidth=bandwidth, seed=seed, threads=threads, time_limit=time_limit)
+    console = Console(stderr=True)
+    progress = Progress(TextColumn("[bold]training"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
+                        TextColumn("{task.fields[info]}"), console=console, disable=not console.is_terminal)
+    task = progress.add_task("train", total=epochs, info="")
+
+    def report(row: dict) -> None:
+        info = (f"loss {row['loss']:.3f} accuracy {row['char_accuracy']:.3f} "
+                f"voted {row['edge_accuracy_voted']:.3f}")
+        progress.update(task, advance=1, info=info)
+        if not console.is_terminal:
+            click.echo(f"epoch {row['epoch']}/{epochs}: {info}", err=True)
+
+    with progress:
+        em = train_edge_model(ds, grammar, cfg, progress=report)
+    save_edge_model(em, out)
+    last = em.meta["training"]["history"][-1]
+    pairs = ", ".join(f"{a}-{b} {len(v)}" for (a, b), v in sorted(em.categories.by_pair.items()))
+    click.echo(f"wrote {out}: {len(em.categories)} edge categories ({pairs}); validation accuracy "
+               f"{last['char_accuracy']:.3f} per character, {last['edge_accuracy_voted']:.3f} per edge with voting")
+
+
+def _edge_model(path: Path, grammar):  # noqa: ANN001, ANN202
+    from .requires import require_learning
+
+    require_learning("instantiation")
+    from .edgemodel import load_edge_model
+
+    return load_edge_model(path, grammar)
+
+
+@click.command("instantiate")
+@click.argument("text", metavar="STRING")
+@click.option("--grammar", "grammar_file", required=True, type=click.Path(exists=True, dir_okay=False, path_type=Path))
+@click.option("--model", "model_file", required=True, type=click.Path(path_type=Path), help="edge-category model (.edges)")
+@click.option("-o", "--out", required=True, type=click.Path(dir_okay=False, path_type=Path), help="shape file (.glb)")
+@click.option("--format", "fmt", type=click.Choice(["smiles", "string2shape"]), default="smiles", show_default=True)
+@click.option("--tries", default=8, show_default=True, type=click.IntRange(1, 10_000), help="start edges tried")
+@click.option("--votes", default=8, show_default=True, type=click.IntRange(1, 1000))
+@click.option("--seed", default=0, show_default=True, type=int)
+def instantiate_command(text: str, grammar_file: Path, model_file: Path, out: Path, fmt: str, tries: int, votes: int,
+                        seed: int) -> None:
+    """Turn one shape STRING into a 3D shape, or say why it could not.
+
+    \b
+    grammarkit instantiate "T1WWTWWTWWTWW1" --grammar castle.grammar --model castle.edges -o shape.glb
+    """
+    from grammarkit.tiling import write_assembly
+
+    from .instantiate import Instantiator
+    from .strings import Alphabet, convert
+
+    grammar = _grammar(grammar_file)
+    em = _edge_model(model_file, grammar)
+    if fmt == "string2shape":
+        text = convert(text, Alphabet.for_types(em.alphabet.types, "index"), source="string2shape",
+                       target="smiles", target_alphabet=em.alphabet)
+    from .topology import TopologyRules
+
+    _decode_and_check(text, em.alphabet, TopologyRules.from_grammar(grammar))
+    from .strings import decode
+
+    graph = decode(text, em.alphabet).graph
+    predicted = {e: k for e, (k, _) in em.predict(graph, strings=votes, seed=seed).items()}
+    result = Instantiator(grammar, em.categories).instantiate(graph, predicted, seed=seed, max_tries=tries)
+    if not result.ok:
+        raise GrammarkitError(f"could not instantiate the string in {result.tries} tries: {result.reason}")
+    result.assembly.name = out.stem
+    write_assembly(result.assembly, out)
+    click.echo(f"wrote {out}: {len(graph)} parts; {result.tries} tr{'y' if result.tries == 1 else 'ies'}, "
+               f"{result.insertions} insertions, {result.monte_carlo} edge(s) placed by Monte-Carlo insertion "
+               f"instead of the predicted category")
+
+
+def _decode_and_check(text: str, alphabet, rules) -> None:  # noqa: ANN001
+    """Raise the located error of an invalid string (as `strings --decode` prints it)."""
+    import io
+    import contextlib
+
+    buf = io.StringIO()
+    with contextlib.redirect_stdout(buf):
+        _decode_and_report(text, alphabet, rules, "smiles", True)
+
+
+@click.command("compress")
+@click.argument("shape", type=click.Path(exists=True, path_type=Path))
+@click.option("--grammar", "grammar_file", required=True, type=click.Path(exists=True, dir_okay=False, path_type=Path))
+@click.option("--model", "model_file", required=True, type=click.Path(path_type=Path), help="edge-category model (.edges)")
+@click.option("-o", "--out", default=None, type=click.Path(dir_okay=False, path_type=Path),
+              help="record file (default: print it)")
+def compress_command(shape: Path, grammar_file: Path, model_file: Path, out: Path | None) -> None:
+    """Write SHAPE as its string and edge categories (rebuilt by `grammarkit decompress`)."""
+    from grammarkit.run import grammar_hash, write_files
+    from grammarkit.tiling import read_assembly
+
+    from .compress import compress, dumps
+
+    grammar = _grammar(grammar_file)
+    em = _edge_model(model_file, grammar)
+    asm = read_assembly(shape, grammar=grammar)
+    record = compress(asm, em.categories, em.alphabet, grammar_name=grammar.name, grammar_hash=grammar_hash(grammar))
+    text = dumps(record)
+    if out is None:
+        click.echo(text, nl=False)
+        return
+    write_files({out: text})
+    size = shape.stat().st_size
+    click.echo(f"wrote {out}: {len(text)} bytes for {record['parts']} parts ({size} bytes of {shape.suffix[1:]})",
+               err=True)
+
+
+@click.command("decompress")
+@click.argument("record_file", type=click.Path(exists=True, dir_okay=False, path_type=Path))
+@click.option("--grammar", "grammar_file", required=True, type=click.Path(exists=True, dir_okay=False, path_type=Path))
+@click.option("--model", "model_file", required=True, type=click.Path(path_type=Path), help="edge-category model (.edges)")
+@click.option("-o", "--out", required=True, type=click.Path(dir_okay=False, path_type=Path), help="shape file (.glb)")
+def decompress_command(record_file: Path, grammar_file: Path, model_file: Path, out: Path) -> None:
+    """Rebuild a shape from a record of `grammarkit compress`."""
+    from grammarkit.run import grammar_hash
+    from grammarkit.tiling import validate, write_assembly
+
+    from .compress import decompress
+    from .instantiate import Instantiator
+
+    grammar = _grammar(grammar_file)
+    em = _edge_model(model_file, grammar)
+    try:
+        record = json.loads(record_file.read_text(encoding="utf-8"))
+    except (OSError, ValueError, UnicodeDecodeError) as exc:
+        raise GrammarkitError(f"{record_file}: not a compressed shape record ({exc})") from None
+    if isinstance(record, dict) and record.get("grammar_hash") not in (None, grammar_hash(grammar)):
+        raise GrammarkitError(f"{record_file}: compressed for grammar {record.get('grammar')!r}, not {grammar.name!r}")
+    try:
+        asm = decompress(record, em.categories, em.alphabet, Instantiator(grammar, em.categories))
+    except GrammarkitError as exc:
+        raise GrammarkitError(f"{record_file}: {exc}") from None
+    report = validate(grammar, asm)
+    if not report.ok:
+        raise GrammarkitError(f"{record_file}: the rebuilt shape breaks the grammar ({report.violations[0].format()}); "
+                              "nothing written")
+    asm.name = out.stem
+    write_assembly(asm, out)
+    click.echo(f"wrote {out}: {len(asm)} parts")

@@ -1,7 +1,10 @@
-"""The `string-vae` back end's work: sample latent points, decode, keep new valid graphs.
+"""The `string-vae` back end's work: sample latent points, decode, keep new valid graphs, and,
+with an edge-category model, instantiate them in 3D.
 
-Results are data only (`Result.model` is None: a string and its graph, in the manifest) until
-an edge-category model is given (instantiation in 3D, instantiate.py).
+Without `--option categories=...` results are data only (`Result.model` is None: the string and
+its graph, in the manifest). With it, each new graph's edge categories are predicted (voting
+over several strings) and the graph is instantiated (instantiate.py); a graph that cannot be
+instantiated within the tries is skipped and counted with its reason, never written half.
 """
 from __future__ import annotations
 
@@ -34,6 +37,15 @@ def generate(request: Request) -> Iterator[Result]:
         train.add(g)
     seen = GraphSet()
     limit = opts.max_decodes or 200 * max(1, request.n)
+    em = inst = None
+    if opts.categories:
+        from .edgemodel import load_edge_model
+        from .instantiate import Instantiator
+
+        em = load_edge_model(opts.categories, request.grammar)
+        inst = Instantiator(request.grammar, em.categories)
+    failures: dict[str, int] = {}
+    inst_stats = {"instantiated": 0, "failed": 0, "tries": 0, "monte_carlo": 0, "seconds": 0.0}
     advance = request.progress("string-vae", request.n)
     index = 0
     skipped = {"invalid": 0, "training": 0, "duplicate": 0}
@@ -52,9 +64,30 @@ def generate(request: Request) -> Iterator[Result]:
             if not seen.add(g):
                 skipped["duplicate"] += 1
                 continue
+            model = None
+            extra_inst: dict = {}
+            if inst is not None:
+                gseed = int(request.seed) * 1_000_003 + sampler.decoded_points
+                predicted = {e: k for e, (k, _) in em.predict(g, strings=opts.votes, seed=gseed).items()}
+                res = inst.instantiate(g, predicted, seed=gseed, max_tries=opts.tries, deadline=request.deadline)
+                inst_stats["tries"] += res.tries
+                inst_stats["seconds"] += res.seconds
+                if not res.ok:
+                    inst_stats["failed"] += 1
+                    key = (res.reason or "?").split("most often: ")[-1].split(" (")[0][:80]
+                    failures[key] = failures.get(key, 0) + 1
+                    continue
+                inst_stats["instantiated"] += 1
+                inst_stats["monte_carlo"] += res.monte_carlo
+                model = res.assembly
+                model.name = f"{request.grammar.name}_string_{index:05d}"
+                extra_inst = {"categories": token_categories(s.text, vae.alphabet, em.categories, res.categories),
+                              "predicted": token_categories(s.text, vae.alphabet, em.categories, predicted),
+                              "instantiation": {"tries": res.tries, "insertions": res.insertions,
+                                                "monte_carlo": res.monte_carlo, "seconds": round(res.seconds, 3)}}
             rid = f"{request.grammar.name}_string_{index:05d}"
             yield Result(
-                id=rid, index=index, model=None, seed=request.seed,
+                id=rid, index=index, model=model, seed=request.seed,
                 parents=tuple(f"train:{p}" for p in s.parents),
                 metrics={"parts": len(g), "cycles": g.cycle_rank, "repaired": s.decoded.repaired},
                 extra={"string": s.text,
@@ -62,17 +95,37 @@ def generate(request: Request) -> Iterator[Result]:
                        "graph": {"nodes": [{"id": i, "type": t} for i, t in enumerate(g.types)],
                                  "edges": [list(e) for e in g.edges]},
                        "histogram": g.histogram(), "mode": opts.mode, "decoding": opts.decoding,
-                       "novel": g not in train})
+                       "novel": g not in train, **extra_inst})
             index += 1
             advance(1, decoded=sampler.decoded_points)
     stats = {"decoded": sampler.decoded_points, "valid": sampler.valid_points,
              "validity": round(sampler.valid_points / max(1, sampler.decoded_points), 4),
              "yielded": index, "skipped": skipped, "mode": opts.mode, "decoding": opts.decoding,
              "seconds": round(time.perf_counter() - t0, 2)}
+    if inst is not None:
+        stats["instantiation"] = {**inst_stats, "seconds": round(inst_stats["seconds"], 2), "failures": failures}
     if index < request.n:
         stats["shortfall"] = (f"{index} new graphs after decoding {sampler.decoded_points} latent points "
-                              f"(limit {limit}: --option max-decodes=N); skipped {skipped}")
+                              f"(limit {limit}: --option max-decodes=N); skipped {skipped}"
+                              + (f"; {inst_stats['failed']} could not be instantiated ({failures})" if inst else ""))
     return stats
+
+
+def token_categories(text: str, alphabet, cats, used: dict) -> list:  # noqa: ANN001
+    """Per token of `text`: the category of its edge as written (parent -> child, opener ->
+    closer), from `used` ({(u, v), u < v: category u -> v}); None for tokens without an edge."""
+    from .predictor import string_edges
+    from .vocab import Vocab
+
+    out = []
+    for e in string_edges(text, Vocab(alphabet, 99)):
+        if e is None:
+            out.append(None)
+            continue
+        u, v = e
+        k = used.get((min(u, v), max(u, v)))
+        out.append(None if k is None else (k if u < v else cats.reverse.get(k, k)))
+    return out
 
 
 __all__ = ["generate", "GrammarkitError"]

@@ -32,3 +32,7 @@ class StringVAEOptions(BaseModel):
     max_decodes: Optional[int] = Field(None, ge=1, description="stop after decoding this many latent "
                                        "points (default: 200 x n)")
     include_training: bool = Field(False, description="also yield graphs of the training set")
+    categories: Optional[str] = Field(None, description="edge-category model (.edges, from `grammarkit train "
+                                      "edge-categories`): instantiate every graph in 3D and write it as a shape")
+    tries: int = Field(8, ge=1, description="instantiation: start edges tried per graph")
+    votes: int = Field(8, ge=1, description="instantiation: strings per graph that vote on each edge's category")

@@ -48,13 +48,15 @@ def grammarkit_backends():
 
 @hookimpl
 def grammarkit_cli_commands():
-    from .cli import dataset_command, strings_command, vae_metrics_command
+    from .cli import (compress_command, dataset_command, decompress_command, instantiate_command, strings_command,
+                      vae_metrics_command)
 
-    return [strings_command, dataset_command, vae_metrics_command]
+    return [strings_command, dataset_command, vae_metrics_command, instantiate_command, compress_command,
+            decompress_command]
 
 
 @hookimpl
 def grammarkit_train_commands():
-    from .cli import train_string_vae
+    from .cli import train_edge_categories, train_string_vae
 
-    return [train_string_vae]
+    return [train_string_vae, train_edge_categories]

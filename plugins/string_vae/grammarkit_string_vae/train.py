@@ -39,7 +39,7 @@ class TrainConfig:
     enc_hidden: int = 192
     embed: int = 32
     conv: tuple[int, int, int] = (64, 64, 96)
-    beta: float = 1.0
+    beta: float = 0.2
     kl_warmup: float = 0.5  # fraction of the epochs over which beta grows from 0
     word_dropout: float = 0.25
     val_fraction: float = 0.05
