@@ -324,7 +324,7 @@ def format_metrics(r: dict, samples: int) -> str:
     lines = [f"model {r['model']} (grammar {r['grammar']}): {r['training_graphs']} training graphs, "
              f"training-set internal diversity {_f(r['training_internal_diversity'])}", "",
              f"| decoding | samples | validity | unique@{k} | novelty | internal diversity | "
-             "nearest-training similarity | mean parts | repaired (backtrack/rules/failed) | seconds |",
+             "nearest-training similarity | mean parts | repaired (backtrack/resample/rules/failed) | seconds |",
              "|---|---|---|---|---|---|---|---|---|---|"]
     for dec in ("free", "masked"):
         m = r.get(f"prior_{dec}")
@@ -333,7 +333,7 @@ def format_metrics(r: dict, samples: int) -> str:
         rep = m["repaired"]
         lines.append(f"| {dec} | {m['samples']} | {_f(m['validity'])} | {_f(m[f'unique@{k}'])} | "
                      f"{_f(m['novelty'])} | {_f(m['internal_diversity'])} | {_f(m['nearest_training_similarity'])} | "
-                     f"{_f(m['mean_parts'], 1)} | {rep['backtrack']}/{rep['rules']}/{rep['failed']} | {m['seconds']} |")
+                     f"{_f(m['mean_parts'], 1)} | {rep['backtrack']}/{rep['resample']}/{rep['rules']}/{rep['failed']} | {m['seconds']} |")
     for dec in ("free", "masked"):
         modes = r.get(f"modes_{dec}")
         if not modes:

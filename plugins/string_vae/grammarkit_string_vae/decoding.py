@@ -4,11 +4,14 @@ construction).
 - `free`: the decoder picks the most likely token (or samples) at every step, as in the paper;
   the string is then checked against the grammar and invalid ones are counted as such.
 - `masked`: at every step the logits of tokens that `masked.DecodeState.allowed()` rules out
-  are removed. If a string walks into a dead end (no token allowed: possible with cycles, see
-  masked.py) it is *repaired*: depth-first backtracking over the network's next-best allowed
-  tokens (chronological, a bounded number of token expansions), and if that fails, a
-  rules-only completion search (`masked.complete`) from the dead end or a few tokens before it.
-  Every string that comes out is checked against the grammar again.
+  are removed (and near the end of the budget, tokens that open rings or branches give way to
+  others: `DecodeState.closing`). If a string walks into a dead end (no token allowed:
+  possible with cycles, see masked.py) it is *repaired*: 1. depth-first backtracking over the
+  network's next-best allowed tokens (chronological, a bounded number of token expansions);
+  2. the same latent point decoded again with sampled tokens (twice); 3. a rules-only
+  completion search (`masked.complete`) from the dead end or from before one of the last
+  tokens that opened something. Every string that comes out is checked against the grammar
+  again.
 
 Latent points are decoded in batches; everything is deterministic for a given seed.
 """
@@ -38,7 +41,7 @@ class Decoded:
     graph: TypedGraph | None = None
     error: str | None = None
     backtracks: int = 0  # token expansions spent repairing a dead end (masked)
-    repaired: str | None = None  # None, "backtrack" or "rules" (masked dead ends)
+    repaired: str | None = None  # masked dead ends: None, "backtrack", "resample", "rules" or "failed"
 
 
 def check_text(text: str, alphabet: Alphabet, rules: TopologyRules) -> Decoded:
@@ -64,7 +67,8 @@ def _choose(logits: torch.Tensor, temperature: float, rng: np.random.Generator) 
 @torch.no_grad()
 def decode_latents(model, z: torch.Tensor, *, vocab: Vocab, rules: TopologyRules, mode: str = "masked",
                    temperature: float = 0.0, seed: int = 0, batch_size: int = 256,
-                   repair_expansions: int = 200, rules_expansions: int = 1500) -> list[Decoded]:
+                   repair_expansions: int = 200, rules_expansions: int = 1500, pressure: int | None = 10,
+                   resamples: int = 2) -> list[Decoded]:
     """Decode latent points `z` (N, latent) into checked strings."""
     if mode not in MODES:
         raise ValueError(f"decoding mode must be one of {MODES}, got {mode!r}")
@@ -74,13 +78,13 @@ def decode_latents(model, z: torch.Tensor, *, vocab: Vocab, rules: TopologyRules
         zb = z[start:start + batch_size]
         rng = np.random.default_rng([seed, start])
         out.extend(_decode_batch(model, zb, vocab, rules, auto, temperature, rng, repair_expansions,
-                                 rules_expansions))
+                                 rules_expansions, pressure, resamples))
     return out
 
 
-def _decode_batch(model, z: torch.Tensor, vocab: Vocab, rules: TopologyRules, auto: Automaton | None,
-                  temperature: float, rng: np.random.Generator, repair_expansions: int,
-                  rules_expansions: int) -> list[Decoded]:
+def _pass(model, z: torch.Tensor, auto: Automaton | None, temperature: float, rng: np.random.Generator,
+          pressure: int | None):
+    """One batched decoding pass: tokens, states, finished flags, per-step hiddens and logits."""
     B = z.shape[0]
     max_len = model.config.max_len
     logits, h = model.start(z)
@@ -102,6 +106,8 @@ def _decode_batch(model, z: torch.Tensor, vocab: Vocab, rules: TopologyRules, au
             row = logits[i]
             if states is not None:
                 allowed = states[i].allowed()
+                if pressure is not None and allowed:
+                    allowed = states[i].closing(allowed, pressure)
                 if not allowed:
                     dead[i] = True
                     continue
@@ -125,31 +131,48 @@ def _decode_batch(model, z: torch.Tensor, vocab: Vocab, rules: TopologyRules, au
         if not any_active:
             break
         logits, h = model.step(nxt, h, z)
-    results: list[Decoded] = []
+    return tokens, states, finished, hist_h, hist_logits
+
+
+def _decode_batch(model, z: torch.Tensor, vocab: Vocab, rules: TopologyRules, auto: Automaton | None,
+                  temperature: float, rng: np.random.Generator, repair_expansions: int,
+                  rules_expansions: int, pressure: int | None = 10, resamples: int = 2) -> list[Decoded]:
+    B = z.shape[0]
+    max_len = model.config.max_len
+    tokens, states, finished, hist_h, hist_logits = _pass(model, z, auto, temperature, rng,
+                                                          pressure if auto is not None else None)
     alphabet = vocab.alphabet
-    for i in range(B):
-        if auto is None:
-            if not finished[i]:
-                results.append(Decoded(vocab.decode(tokens[i]), False, None,
-                                       f"no end of string within {max_len} tokens"))
-            else:
-                results.append(check_text(vocab.decode(tokens[i]), alphabet, rules))
-            continue
-        state = states[i]  # type: ignore[index]
-        spent, how = 0, None
+    if auto is None:
+        return [check_text(vocab.decode(tokens[i]), alphabet, rules) if finished[i] else
+                Decoded(vocab.decode(tokens[i]), False, None, f"no end of string within {max_len} tokens")
+                for i in range(B)]
+    how: list[str | None] = [None] * B
+    spent = [0] * B
+    for i in range(B):  # 1. the network's next-best tokens, backtracking from the dead end
         if not finished[i]:
-            ok, spent = _repair_backtrack(model, z[i:i + 1], state, hist_h, hist_logits, i,
-                                          repair_expansions)
-            how = "backtrack"
-            if not ok:
-                ok = _repair_rules(state, rules_expansions)
-                how = "rules"
-            if not ok:
+            finished[i], spent[i] = _repair_backtrack(model, z[i:i + 1], states[i], hist_h, hist_logits, i,
+                                                      repair_expansions)
+            how[i] = "backtrack"
+    for r in range(resamples):  # 2. decode the same latent point again, sampling tokens
+        left = [i for i in range(B) if not finished[i]]
+        if not left:
+            break
+        _t, st2, fin2, _h, _l = _pass(model, z[left], auto, max(temperature, 0.8), rng, pressure)
+        for j, i in enumerate(left):
+            if fin2[j]:
+                states[i], finished[i], how[i] = st2[j], True, "resample"
+    results: list[Decoded] = []
+    for i in range(B):
+        state = states[i]
+        if not finished[i]:  # 3. the rules-only completion search
+            if _repair_rules(state, rules_expansions):
+                how[i] = "rules"
+            else:
                 results.append(Decoded(state.graph_text(), False, None,
-                                       "masked decoding found no valid completion", spent, "failed"))
+                                       "masked decoding found no valid completion", spent[i], "failed"))
                 continue
         d = check_text(state.graph_text(), alphabet, rules)
-        d.backtracks, d.repaired = spent, how
+        d.backtracks, d.repaired = spent[i], how[i]
         if not d.valid:  # pragma: no cover - the automaton and the checker disagree: a bug
             d.error = f"masked decoding produced an invalid string ({d.error})"
         results.append(d)

@@ -73,7 +73,7 @@ def generator_metrics(decoded: Sequence, train: GraphSet, train_graphs: Sequence
         "nearest_training_similarity": snn,
         "mean_parts": float(np.mean([len(g) for g in valid])) if valid else None,
         "repaired": {k_: sum(1 for d in decoded if getattr(d, "repaired", None) == k_)
-                     for k_ in ("backtrack", "rules", "failed")},
+                     for k_ in ("backtrack", "resample", "rules", "failed")},
     }
 
 
