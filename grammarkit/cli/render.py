@@ -13,9 +13,11 @@ from ..errors import ShapeError
 
 
 def _parse_size(value: str) -> tuple[int, int]:
-    m = re.fullmatch(r"\s*(\d+)\s*(?:[xX*]\s*(\d+))?\s*", value)
+    # ASCII digits only, and few of them: int() of thousands of digits raises, and 8192 is the cap
+    m = re.fullmatch(r"\s*([0-9]{1,6})\s*(?:[xX*]\s*([0-9]{1,6}))?\s*", value)
     if not m:
-        raise click.BadParameter(f"expected WIDTHxHEIGHT such as 512x512, got {value!r}",
+        shown = value if len(value) <= 40 else value[:37] + "..."
+        raise click.BadParameter(f"expected WIDTHxHEIGHT such as 512x512, got {shown!r}",
                                  param_hint="--size")
     w = int(m.group(1))
     h = int(m.group(2) or w)
