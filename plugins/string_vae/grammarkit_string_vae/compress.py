@@ -3,10 +3,11 @@ categories, rebuilt from the example parts.
 
 `compress(assembly, ...)` writes the shape graph as a string (deterministic traversal from
 the first part), the edge category of every character (from the geometry: each edge's
-placement classified among the model's categories), the first part's frame and geometry
-variant. `decompress` places the first part by that frame and every other part through the
-category of the edge to its parent in the string's spanning tree; with categories that are
-actual dockings of the input shapes this rebuilds the shape exactly (up to rounding).
+placement between canonical frames classified among the model's categories), and the first
+part's frame and geometry variant. `decompress` places the first part by that frame and every
+other part through the category of its tree edge; with categories that are actual dockings of
+the input shapes this rebuilds the shape exactly (up to rounding, and up to each part's own
+symmetry: a part may come back turned onto itself, the same geometry).
 """
 from __future__ import annotations
 
@@ -17,7 +18,7 @@ import numpy as np
 
 from grammarkit.errors import GrammarkitError, ShapeError
 
-from .categories import EdgeCategories, relative_placement, variant_key
+from .categories import EdgeCategories, canonical_frames, relative_placement, variant_key
 from .graphs import TypedGraph
 from .strings import Alphabet, decode, encode_with_order, tokenize
 
@@ -57,18 +58,23 @@ def compress(assembly: Any, cats: EdgeCategories, alphabet: Alphabet, *, grammar
     for (o, c), (i, j) in zip(parsed.ring_edges, parsed.ring_chars):
         edges += [(o, c, at[i]), (o, c, at[j])]
     ids = [p.id for p in assembly.parts]
-    for a, b, k in edges:
-        u, v = order[a], order[b]
-        cat, d = cats.classify(g.types[u], g.types[v], relative_placement(F[u], F[v]), variants[u], variants[v])
+
+    def category(u: int, v: int, rel: np.ndarray) -> int:
+        cat, d = cats.classify(g.types[u], g.types[v], rel, variants[u], variants[v])
         if cat is None:
             where = "in no known docking orientation" if not np.isfinite(d) else f"{d:.3f} part sizes from the nearest"
             raise ShapeError(f"{assembly.name}: parts {ids[u]} and {ids[v]} touch at a placement that no edge "
                              f"category of the model has ({where}); the model was trained on other shapes")
-        categories[k] = cat
+        return cat
+
+    Fc = canonical_frames(cats, g.types, F, variants)
+    for a, b, k in edges:
+        u, v = order[a], order[b]
+        categories[k] = category(u, v, relative_placement(Fc[u], Fc[v]))
     first = order[0]
     return {"format": COMPRESSED_FORMAT, "version": VERSION, "grammar": grammar_name, "grammar_hash": grammar_hash,
             "string": text, "categories": categories,
-            "start": [round(float(x), 9) for x in F[first].ravel()], "start_variant": variants[first],
+            "start": [round(float(x), 9) for x in Fc[first].ravel()], "start_variant": variants[first],
             "parts": len(g), "ids": [ids[order[k]] for k in range(len(order))]}
 
 
@@ -100,10 +106,10 @@ def decompress(record: dict, cats: EdgeCategories, alphabet: Alphabet, instantia
     variants[0] = record.get("start_variant")
     for p, c in parsed.tree_edges:  # parents come before children in a string
         k = categories[at[parsed.node_index[c]]]
-        if k is None or not (0 <= int(k) < len(cats)):
+        if k is None or not (0 <= int(k) < len(cats)) or {cats.categories[int(k)].a, cats.categories[int(k)].b} != {T[p], T[c]}:
             raise GrammarkitError(f"character {parsed.node_index[c] + 1}: no valid edge category for the part")
-        frames[c] = frames[p] @ cats.placement(int(k), T[p], T[c])
         variants[c] = cats.variants(int(k), T[p], T[c])[1] or None
+        frames[c] = cats.canonical_frame(T[c], variants[c], frames[p] @ cats.placement(int(k), T[p], T[c]))
     ids = record.get("ids")
     parts = []
     counts: dict[str, int] = {}

@@ -17,6 +17,7 @@ Latent points are decoded in batches; everything is deterministic for a given se
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Sequence
 
@@ -67,13 +68,14 @@ def _choose(logits: torch.Tensor, temperature: float, rng: np.random.Generator) 
 @torch.no_grad()
 def decode_latents(model, z: torch.Tensor, *, vocab: Vocab, rules: TopologyRules, mode: str = "masked",
                    temperature: float = 0.0, seed: int = 0, batch_size: int = 256,
-                   repair_expansions: int = 200, rules_expansions: int = 1500, pressure: int | None = 10,
-                   resamples: int = 2) -> list[Decoded]:
-    """Decode latent points `z` (N, latent) into checked strings."""
+                   repair_expansions: int = 200, rules_expansions: int = 1500, pressure: int | None = 40,
+                   resamples: int = 2, budget: float = 1.5) -> list[Decoded]:
+    """Decode latent points `z` (N, latent) into checked strings. Masked decoding may write up
+    to `budget` times the longest training string (the length budget of the masks)."""
     if mode not in MODES:
         raise ValueError(f"decoding mode must be one of {MODES}, got {mode!r}")
     out: list[Decoded] = []
-    auto = Automaton(rules, vocab, model.config.max_len) if mode == "masked" else None
+    auto = Automaton(rules, vocab, int(math.ceil(budget * model.config.max_len))) if mode == "masked" else None
     for start in range(0, z.shape[0], batch_size):
         zb = z[start:start + batch_size]
         rng = np.random.default_rng([seed, start])
@@ -86,7 +88,7 @@ def _pass(model, z: torch.Tensor, auto: Automaton | None, temperature: float, rn
           pressure: int | None):
     """One batched decoding pass: tokens, states, finished flags, per-step hiddens and logits."""
     B = z.shape[0]
-    max_len = model.config.max_len
+    max_len = auto.max_len if auto is not None else model.config.max_len
     logits, h = model.start(z)
     tokens: list[list[int]] = [[] for _ in range(B)]
     states: list[DecodeState] | None = [auto.start() for _ in range(B)] if auto is not None else None
@@ -136,7 +138,7 @@ def _pass(model, z: torch.Tensor, auto: Automaton | None, temperature: float, rn
 
 def _decode_batch(model, z: torch.Tensor, vocab: Vocab, rules: TopologyRules, auto: Automaton | None,
                   temperature: float, rng: np.random.Generator, repair_expansions: int,
-                  rules_expansions: int, pressure: int | None = 10, resamples: int = 2) -> list[Decoded]:
+                  rules_expansions: int, pressure: int | None = 40, resamples: int = 2) -> list[Decoded]:
     B = z.shape[0]
     max_len = model.config.max_len
     tokens, states, finished, hist_h, hist_logits = _pass(model, z, auto, temperature, rng,

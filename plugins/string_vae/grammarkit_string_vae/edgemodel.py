@@ -22,7 +22,7 @@ import numpy as np
 
 from grammarkit.errors import GrammarkitError
 
-from .categories import EdgeCategories, edge_labels, learn_categories, part_sizes
+from .categories import EdgeCategories, PartLibrary, edge_labels, learn_categories
 from .dataset import Dataset
 from .modelfile import ModelFileError, _header
 from .strings import Alphabet, encode_with_order
@@ -44,7 +44,7 @@ class EdgeTrainConfig:
     layers: int = 2
     strings_per_graph: int = 8
     vote_strings: int = 8
-    bandwidth: float = 0.05
+    bandwidth: float = 0.02
     val_fraction: float = 0.1
     seed: int = 0
     threads: int = 1
@@ -79,7 +79,7 @@ def _examples(dataset: Dataset, idx, cats: EdgeCategories, vocab: Vocab, per_gra
     rows = []
     for g in idx:
         graph = dataset.graphs[g]
-        labels = edge_labels(graph, dataset.frames[g], cats)
+        labels = edge_labels(graph, dataset.frames[g], cats, dataset.variants[g] if dataset.variants else None)
         rng = np.random.default_rng([seed, g])
         for _ in range(per_graph):
             text, order = encode_with_order(graph, vocab.alphabet, rng=rng)
@@ -105,8 +105,9 @@ def train_edge_model(dataset: Dataset, grammar: Any, config: EdgeTrainConfig = E
                               "need at least 4 (build the dataset without --no-frames)")
     torch.manual_seed(config.seed)
     torch.set_num_threads(max(1, config.threads))
-    sizes = part_sizes(grammar, dataset.alphabet.types)
-    cats = learn_categories(dataset.graphs, dataset.frames, sizes, bandwidth=config.bandwidth)
+    library = PartLibrary(grammar)
+    cats = learn_categories(dataset.graphs, dataset.frames, library, bandwidth=config.bandwidth,
+                            variants=dataset.variants if any(v is not None for v in dataset.variants) else None)
     vocab = Vocab(dataset.alphabet, max(1, int(dataset.meta.get("max_ring_label", 1))) + 4)
     rng = np.random.default_rng(config.seed)
     order = rng.permutation(with_frames)

@@ -13,8 +13,10 @@ Every part of a type is a rigid copy of the type's `part` geometry
    its placement relative to every placed neighbour (cycle edges) must be one of the grammar's
    docking categories. If the predicted category fails, the other categories of the type
    pair are tried in a random order (the paper's Monte-Carlo edge insertion);
-3. if a part cannot be attached at all, the try ends (the report names the edge and, if a
-   cycle edge was the reason, the cycle) and the next try starts from another random edge.
+3. if no category of an edge works, the previous part takes its next candidate (chronological
+   backtracking; at most `budget` insertions per try);
+4. a try that fails ends with the reason (the edge and, if a cycle edge was the reason, the
+   cycle) and the next try starts from another random edge.
 
 A finished shape is recomputed from geometry and validated against the whole grammar (docks,
 neighbours, constraints) at the examples' contact tolerance and at `grammarkit validate`'s
@@ -53,59 +55,29 @@ class Instantiation:
 
 
 class Instantiator:
-    def __init__(self, grammar: Any, cats: EdgeCategories, *, tolerance: float | None = None):
-        from grammarkit.tiling import default_tolerance, load_examples, local_frame, part_prototype, rules_from_grammar
+    def __init__(self, grammar: Any, cats: EdgeCategories, *, library: Any = None, tolerance: float | None = None,
+                 budget: int = 400):
+        from grammarkit.tiling import default_tolerance, load_examples, rules_from_grammar
+
+        from .categories import PartLibrary
 
         self.grammar = grammar
         self.cats = cats
+        self.budget = int(budget)  # part insertions per try (backtracking included)
         self.rules = rules_from_grammar(grammar)
-        examples = load_examples(grammar)
+        self.library = library or PartLibrary(grammar)
         if tolerance is None:
+            examples = load_examples(grammar)
             tolerance = min(default_tolerance(a) for a in examples) if examples else None
         if tolerance is None:
             raise GrammarkitError(f"grammar {grammar.name!r} has no examples to take the contact tolerance "
                                   "from; pass a tolerance")
         self.tolerance = float(tolerance)
-        # geometry variants of every type, from the examples (a facade has two ledge lengths):
-        # vertices in the part's own frame, faces; the grammar's `part` geometry as a fallback
-        from .categories import variant_key
+        self.default_variant = self.library.default
+        self.start_frame = self.library.start_frame
 
-        self.variants: dict[tuple[str, str], tuple[np.ndarray, np.ndarray]] = {}  # (type, key) -> local V, F
-        self.default_variant: dict[str, str] = {}
-        self.start_frame: dict[str, np.ndarray] = {}
-        meshes = [(p.type, p.mesh) for asm in examples for p in asm.parts]
-        for t in cats.types:
-            if t not in {tt for tt, _ in meshes}:
-                meshes.append((t, part_prototype(grammar, t)))
-        for t, mesh in meshes:
-            key = variant_key(mesh)
-            if (t, key) in self.variants:
-                continue
-            V = np.asarray(mesh.vertices, dtype=np.float64)
-            F = local_frame(V, np.asarray(mesh.faces))
-            self.variants[(t, key)] = ((V - F[:3, 3]) @ F[:3, :3], np.asarray(mesh.faces))
-            self.default_variant.setdefault(t, key)
-        for asm in examples:
-            for p in asm.parts:
-                if p.type not in self.start_frame:
-                    self.start_frame[p.type] = local_frame(p)
-
-    # ---- geometry ----------------------------------------------------------------------------
     def part(self, type_name: str, frame: np.ndarray, pid: str, variant: str | None = None):  # noqa: ANN201
-        """A part of the type's geometry variant (default: its first) whose frame is `frame`."""
-        import trimesh
-
-        from grammarkit.tiling import Part
-
-        key = variant if (type_name, variant) in self.variants else self.default_variant.get(type_name)
-        if key is None:
-            raise GrammarkitError(f"no geometry for part type {type_name!r}")
-        local, faces = self.variants[(type_name, key)]
-        verts = local @ frame[:3, :3].T + frame[:3, 3]
-        mesh = trimesh.Trimesh(vertices=verts, faces=faces, process=False)
-        part = Part(pid, type_name, mesh, frame.copy())
-        part.meta["variant"] = key
-        return part
+        return self.library.part(type_name, frame, pid, variant)
 
     def _touching(self, new, placed: list) -> set[int]:  # noqa: ANN001
         """Indices into `placed` (Parts) that the new part touches."""
@@ -166,76 +138,104 @@ class Instantiator:
         return out
 
     def _try(self, graph: TypedGraph, adj, start: int, predicted, rng, out: Instantiation):  # noqa: ANN001
+        """One try from `start`: parts in breadth-first order, each through the edge to its BFS
+        parent; when no category of an edge works, backtrack chronologically to the previous
+        part and take its next candidate (at most `self.budget` insertions per try)."""
         n = len(graph.types)
         T = graph.types
-        frames: list[np.ndarray | None] = [None] * n
-        variant: list[str | None] = [None] * n
-        parts: list = [None] * n
-        placed_idx: list[int] = []
-        # the start part's geometry: the one its first edge's category expects
-        first = adj[start][0]
-        cands = self._candidates(T[start], T[first], predicted.get((min(start, first), max(start, first))),
-                                 start < first, rng, None)
-        variant[start] = (self.cats.variants(cands[0], T[start], T[first])[0] if cands else "") or \
-            self.default_variant[T[start]]
-        frames[start] = self.start_frame.get(T[start], np.eye(4))
-        parts[start] = self.part(T[start], frames[start], f"{T[start]}.{start}", variant[start])
-        placed_idx.append(start)
-        used: dict[tuple[int, int], int] = {}
-        queue = deque([start])
+        order: list[tuple[int, int]] = []  # (node, its BFS parent)
         seen = {start}
+        queue = deque([start])
         while queue:
             x = queue.popleft()
             nbrs = list(adj[x])
             rng.shuffle(nbrs)
             for y in nbrs:
-                if y in seen:
-                    continue
-                seen.add(y)
-                queue.append(y)
-                key = (min(x, y), max(x, y))
-                cands = self._candidates(T[x], T[y], predicted.get(key), x < y, rng, variant[x])
-                if not cands:
+                if y not in seen:
+                    seen.add(y)
+                    queue.append(y)
+                    order.append((y, x))
+        frames: list[np.ndarray | None] = [None] * n
+        variant: list[str | None] = [None] * n
+        parts: list = [None] * n
+        placed: list[int] = [start]
+        first = adj[start][0]
+        cands0 = self._candidates(T[start], T[first], predicted.get((min(start, first), max(start, first))),
+                                  start < first, rng, None)
+        variant[start] = (self.cats.variants(cands0[0][0], T[start], T[first])[0] if cands0 else "") or \
+            self.default_variant[T[start]]
+        frames[start] = self.cats.canonical_frame(T[start], variant[start], self.start_frame.get(T[start], np.eye(4)))
+        parts[start] = self.part(T[start], frames[start], f"{T[start]}.{start}", variant[start])
+        used: dict[tuple[int, int], int] = {}
+        # per position of `order`: its candidate list and the index of the one in use
+        cand_lists: list[list[int] | None] = [None] * len(order)
+        pick = [0] * len(order)
+        budget = self.budget
+        why = ""
+        i = 0
+        while i < len(order):
+            y, x = order[i]
+            key = (min(x, y), max(x, y))
+            if cand_lists[i] is None:
+                cand_lists[i] = self._candidates(T[x], T[y], predicted.get(key), x < y, rng, variant[x])
+                pick[i] = 0
+                if not cand_lists[i]:
                     return None, used, f"no docking category joins {T[x]} and {T[y]} (edge {x}-{y})"
-                placed_nbrs = [w for w in adj[y] if frames[w] is not None]
-                done = False
-                last = ""
-                for rank, k in enumerate(cands):
-                    out.insertions += 1
-                    Fy = frames[x] @ self.cats.placement(k, T[x], T[y])
-                    vy = self.cats.variants(k, T[x], T[y])[1] or self.default_variant[T[y]]
-                    bad = self._cycle_misfit(graph, y, Fy, vy, placed_nbrs, frames, variant, x)
-                    if bad is not None:
-                        last = bad
-                        continue
-                    new = self.part(T[y], Fy, f"{T[y]}.{y}", vy)
-                    placed_parts = [parts[i] for i in placed_idx]
-                    touched = {placed_idx[i] for i in self._touching(new, placed_parts)}
-                    if touched != set(placed_nbrs):
-                        extra = sorted(touched - set(placed_nbrs))
-                        missing = sorted(set(placed_nbrs) - touched)
-                        last = (f"part {y} ({T[y]}) attached to {x} ({T[x]}) "
-                                + (f"touches {', '.join(f'{i} ({T[i]})' for i in extra)}, which it may not" if extra
-                                   else f"does not reach {', '.join(f'{i} ({T[i]})' for i in missing)}: the cycle "
-                                        "through these parts does not close"))
-                        continue
-                    frames[y], parts[y], variant[y] = Fy, new, vy
-                    placed_idx.append(y)
-                    used[key] = k if x < y else self.cats.reverse.get(k, k)
-                    if rank > 0 or predicted.get(key) is None:
-                        out.monte_carlo += 1
-                    done = True
-                    break
-                if not done:
-                    return None, used, last or f"edge {x}-{y} cannot be placed"
+            placed_nbrs = [w for w in adj[y] if frames[w] is not None]
+            ok = False
+            while pick[i] < len(cand_lists[i]):
+                k, A, vy = cand_lists[i][pick[i]]
+                pick[i] += 1
+                if budget <= 0:
+                    return None, used, why or f"insertion budget spent at edge {x}-{y}"
+                budget -= 1
+                out.insertions += 1
+                Fy = self.cats.canonical_frame(T[y], vy, frames[x] @ A)
+                bad = self._cycle_misfit(graph, y, Fy, vy, placed_nbrs, frames, variant, x)
+                if bad is not None:
+                    why = bad
+                    continue
+                new = self.part(T[y], Fy, f"{T[y]}.{y}", vy)
+                touched = {placed[j] for j in self._touching(new, [parts[p] for p in placed])}
+                if touched != set(placed_nbrs):
+                    extra = sorted(touched - set(placed_nbrs))
+                    missing = sorted(set(placed_nbrs) - touched)
+                    why = (f"part {y} ({T[y]}) attached to {x} ({T[x]}) "
+                           + (f"touches {', '.join(f'{j} ({T[j]})' for j in extra)}, which it may not" if extra
+                              else f"does not reach {', '.join(f'{j} ({T[j]})' for j in missing)}: the cycle "
+                                   "through these parts does not close"))
+                    continue
+                frames[y], parts[y], variant[y] = Fy, new, vy
+                placed.append(y)
+                used[key] = k if x < y else self.cats.reverse.get(k, k)
+                ok = True
+                break
+            if ok:
+                i += 1
+                continue
+            # backtrack: forget this position's candidates, undo the previous part
+            cand_lists[i] = None
+            i -= 1
+            if i < 0:
+                return None, used, why or "no placement works"
+            y_prev, x_prev = order[i]
+            frames[y_prev] = parts[y_prev] = variant[y_prev] = None
+            placed.pop()
+            used.pop((min(x_prev, y_prev), max(x_prev, y_prev)), None)
+        for j, (y, x) in enumerate(order):
+            k_used = cand_lists[j][pick[j] - 1][0] if cand_lists[j] else None
+            p = predicted.get((min(x, y), max(x, y)))
+            if p is None or k_used != (p if x < y else self.cats.reverse.get(p, p)):
+                out.monte_carlo += 1
         return (frames, variant), used, ""
 
     def _candidates(self, tx: str, ty: str, pred: int | None, forward: bool, rng,  # noqa: ANN001
-                    parent_variant: str | None) -> list[int]:
-        """Categories to try for edge x -> y: the predicted one first (given for min -> max;
-        turned around for a same-type pair seen the other way), then the pair's others in a
-        random order weighted by how often they occur (Monte-Carlo insertion). Only categories
-        whose parent geometry is the parent's are kept."""
+                    parent_variant: str | None) -> list[tuple[int, np.ndarray, str]]:
+        """(category, child placement in the parent's frame, child variant) to try for edge
+        x -> y: the predicted category first (given for min -> max; turned around for a
+        same-type pair seen the other way), then the pair's others in a random order weighted
+        by how often they occur (Monte-Carlo insertion). Only categories whose parent geometry
+        is the parent's are kept."""
         cands = [k for k in self.cats.pair_categories(tx, ty)
                  if parent_variant is None or self.cats.variants(k, tx, ty)[0] in ("", parent_variant)]
         first = None
@@ -247,7 +247,11 @@ class Instantiator:
             w = np.array([self.cats.categories[k].count for k in rest], dtype=np.float64)
             order = rng.choice(len(rest), size=len(rest), replace=False, p=w / w.sum())
             rest = [rest[i] for i in order]
-        return ([first] if first is not None else []) + rest
+        out = []
+        for k in ([first] if first is not None else []) + rest:
+            vy = self.cats.variants(k, tx, ty)[1] or self.default_variant[ty]
+            out.append((k, self.cats.placement(k, tx, ty), vy))
+        return out
 
     def _cycle_misfit(self, graph, y, Fy, vy, placed_nbrs, frames, variant, parent) -> str | None:  # noqa: ANN001
         T = graph.types

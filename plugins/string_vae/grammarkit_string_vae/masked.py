@@ -32,6 +32,7 @@ the network steers wherever it can. See docs/string-vae.md.
 """
 from __future__ import annotations
 
+import math
 from typing import Sequence
 
 from .topology import TopologyRules
@@ -75,6 +76,10 @@ class Automaton:
                 e[p] = 1
                 need.append(self.deficit(y, e, 1, 0))
             self.needs_ring.append(bool(kids) and min(need) >= 1)
+        # close_cap[t]: most ring labels a new type-t part can close (all its neighbours but its
+        # parent)
+        self.close_cap = [max((b[3] for b in self.boxes[t]), default=0) - 1 if t in self.letters else 0
+                          for t in range(self.T)]
 
     def start(self) -> "DecodeState":
         return DecodeState(self)
@@ -337,7 +342,12 @@ class DecodeState:
         # as it has room): they fill its neighbourhood and need no new part
         if self.phase == ATOM:
             adj = self.adj[cur]
-            closable = min(max(cur_cap, 0), sum(1 for o in self.rings.values() if o != cur and o not in adj))
+            ct = self.ntype[cur]
+            closable = min(max(cur_cap, 0), sum(
+                1 for o in self.rings.values()
+                if o != cur and o not in adj and a.pair_ok[self.ntype[o]][ct]
+                and a.fits(self.ntype[o], self.counts[o], self.total[o], self.wild[o] - 1, self.is_open(o), add=ct)
+                and a.fits(ct, self.counts[cur], self.total[cur], self.wild[cur], True, add=self.ntype[o])))
         else:
             closable = 0
         need_nodes = 0
@@ -358,9 +368,26 @@ class DecodeState:
         count_def += len({b_ for a_, b_ in a.reach if self.type_count[a_] and not self.type_count[b_]})
         rings = len(self.rings)
         host = 1 if rings > closable else 0  # some ring needs a new part to close it
+        # typed closers: every ring the current part does not close needs a new part of a type
+        # its owner can still take; such a part closes at most close_cap of them
+        shares = []
+        for o in self.rings.values():
+            to = self.ntype[o]
+            best = 0
+            for t in a.letters:
+                if a.close_cap[t] > best and a.pair_ok[to][t] and \
+                        a.fits(to, self.counts[o], self.total[o], self.wild[o] - 1, self.is_open(o), add=t):
+                    best = a.close_cap[t]
+            shares.append(1.0 / best if best > 0 else math.inf)
+        shares.sort()
+        if closable:
+            shares = shares[:-closable]  # the current part takes the dearest ones
+        closers = math.ceil(sum(shares) - 1e-9) if shares else 0
+        if closers >= INF or any(math.isinf(x) for x in shares):
+            return INF
         # ring endpoints beyond the open rings cost a token each (a new ring: two tokens, two ends)
         extra_ends = max(0, ringed - rings)
-        new_nodes = max(need_nodes, count_def, host)
+        new_nodes = max(need_nodes, count_def, host, closers)
         if new_nodes:
             # new parts can only hang below an open part with room for one more neighbour
             if cur_cap <= 0 and not any(
@@ -386,12 +413,19 @@ class DecodeState:
         return out
 
     def closing(self, allowed: list[int], slack: int) -> list[int]:
-        """End-game pressure: when at most `slack` tokens are left beyond the lower bound,
-        drop tokens that open something (a new ring label, a branch) if any other remains.
-        A steering heuristic of the decoder, not a rule: every token it drops was allowed."""
-        if self.a.max_len - self.length - self.lower_bound() > slack:
+        """End-game pressure, a steering heuristic of the decoder (not a rule: every token it
+        drops was allowed). With at most `slack` tokens to spare beyond the lower bound, tokens
+        that open something (a new ring label, a branch) give way to the others; with at most
+        half of that, a token that closes something (a ring label, `)`, the end) is taken
+        whenever one is allowed."""
+        spare = self.a.max_len - self.length - self.lower_bound()
+        if spare > slack:
             return allowed
         v = self.a.vocab
+        if spare <= slack // 2:
+            closers = [t for t in allowed if t in (EOS, v.close_id) or (v.kind(t)[0] == "ring" and v.kind(t)[1] in self.rings)]
+            if closers:
+                return closers
         keep = [t for t in allowed if t != v.open_id and not (v.kind(t)[0] == "ring" and v.kind(t)[1] not in self.rings)]
         return keep or allowed
 
