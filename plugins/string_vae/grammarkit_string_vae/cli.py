@@ -23,6 +23,24 @@ def _grammar(path: Path):  # noqa: ANN202
     return grammar
 
 
+def progress_factory(console):  # noqa: ANN001, ANN201
+    """A rich Progress and a `progress(description, total) -> advance(n=1, **fields)` factory,
+    the shape `grammarkit.run.Request.progress` has."""
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+
+    progress = Progress(TextColumn("[bold]{task.description}"), BarColumn(), MofNCompleteColumn(),
+                        TimeElapsedColumn(), TextColumn("{task.fields[info]}"), console=console,
+                        disable=not console.is_terminal)
+
+    def factory(description: str, total: int | None = None):  # noqa: ANN202
+        task = progress.add_task(description, total=total, info="")
+
+        def advance(n: int = 1, **fields) -> None:  # noqa: ANN003
+            progress.update(task, advance=n, info=" ".join(f"{k}={v}" for k, v in fields.items()))
+        return advance
+    return progress, factory
+
+
 def _pairs(values: tuple[str, ...]) -> dict[str, str]:
     out = {}
     for item in values:
@@ -165,8 +183,6 @@ def dataset_command(grammar_file: Path, source: str, count: int, out: Path, iter
     grammarkit dataset castle.grammar --from graph-sampler -n 5000 -o castle_ds/
     """
     from rich.console import Console
-
-    from grammarkit.cli.derive import progress_factory
 
     from .dataset import build_dataset, write_dataset
 

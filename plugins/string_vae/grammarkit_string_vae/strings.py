@@ -31,7 +31,7 @@ from typing import Iterable, Mapping, Sequence
 import numpy as np
 
 from grammarkit.errors import GrammarkitError
-from grammarkit.ir.base import Span
+from grammarkit.ir import Span
 
 from .graphs import TypedGraph
 
