@@ -14,12 +14,14 @@ and `reverse[k]` is the category of the opposite direction.
 the part's own symmetries (an octagonal tower turned by 45 degrees, a wall turned end for end;
 the graph sampler makes such copies) has another frame although nothing about the shape
 changed, and the same docking would show up as several placements. So every frame is first
-made canonical: of the frames the part's symmetries allow (`grammarkit.tiling.
-symmetry_offsets`: F @ S), the one whose axes, in world coordinates, are smallest
-(lexicographically, rounded). Physically equal copies get equal frames; a category stays an
-exact placement, so it still says on which face of a tower a wall sits (which instantiation
-and compression need), and placing a part by a category and then taking the canonical frame
-of the result gives the frame every further category is measured from.
+made canonical from the part's surroundings: of the frames its symmetries allow
+(`grammarkit.tiling.symmetry_offsets`: F @ S), the one in which the positions of its
+neighbours' frame origins, rounded and sorted, are smallest (world axes break remaining ties).
+This does not depend on how the whole shape is turned, nor on the string: equal local
+configurations give equal categories, and a category stays an exact placement between
+canonical frames, so it still says on which face of a tower a wall sits. Placing a part from
+its parent's canonical frame by a category gives its own canonical frame, so instantiation
+and decompression need not recompute them.
 
 `PartLibrary` collects what this needs from a grammar: each type's geometry variants (the
 facade has two ledge lengths), sizes, symmetries and a start frame.
@@ -151,15 +153,26 @@ class EdgeCategories:
             s = self.symmetries.get((t, self.default_variant.get(t, "")))
         return s if s is not None else np.eye(3)[None]
 
-    def canonical_frame(self, t: str, v: str | None, frame: np.ndarray) -> np.ndarray:
-        """Of the frames F @ S the part's symmetries allow, the one with the smallest rounded
-        world axes (see the module docstring)."""
+    def canonical_frame(self, t: str, v: str | None, frame: np.ndarray,
+                        neighbours: np.ndarray | None = None) -> np.ndarray:
+        """Of the frames F @ S the part's symmetries allow, the one in which the neighbours'
+        positions (world points, (m, 3)), rounded and sorted, are smallest; ties by the
+        rounded world axes (see the module docstring)."""
         S = self.sym(t, v)
         if len(S) == 1:
             return frame
-        R = np.einsum("ij,kjl->kil", frame[:3, :3], S)  # (k, 3, 3)
-        keys = np.round(R.reshape(len(S), 9) / 1e-3)
-        best = int(np.lexsort(keys.T[::-1])[0])
+        R = np.einsum("ij,kjl->kil", frame[:3, :3], S)  # (k, 3, 3) candidate axes
+        size = self.sizes.get(t, 1.0) or 1.0
+        keys = []
+        for k in range(len(S)):
+            key: list[float] = []
+            if neighbours is not None and len(neighbours):
+                local = (np.asarray(neighbours, dtype=np.float64) - frame[:3, 3]) @ R[k]
+                q = np.round(local / (1e-3 * size)).astype(np.int64)
+                key += q[np.lexsort(q.T[::-1])].ravel().tolist()
+            key += np.round(R[k].ravel() / 1e-3).astype(np.int64).tolist()
+            keys.append(tuple(key))
+        best = min(range(len(S)), key=lambda k: keys[k])
         out = frame.copy()
         out[:3, :3] = R[best]
         return out
@@ -266,7 +279,7 @@ def learn_categories(graphs: Sequence[Any], frames: Sequence[Sequence[Sequence[f
         if fr is None:
             continue
         var = variants[i] if variants is not None else None
-        F = canonical_frames(ec, g.types, fr, var)
+        F = canonical_frames(ec, g.types, fr, var, g.edges)
         for key, rel, _ in _samples(g.types, g.edges, F, var):
             pools.setdefault(key, []).append(rel)
     if not pools:
@@ -296,17 +309,25 @@ def learn_categories(graphs: Sequence[Any], frames: Sequence[Sequence[Sequence[f
     return ec
 
 
-def canonical_frames(cats: EdgeCategories, types: Sequence[str], frames, variants=None) -> np.ndarray:  # noqa: ANN001
-    """(n, 4, 4) canonical frames of a graph's parts (frames flattened row-major or 4x4)."""
+def canonical_frames(cats: EdgeCategories, types: Sequence[str], frames, variants=None,  # noqa: ANN001
+                     edges: Iterable[tuple[int, int]] = ()) -> np.ndarray:
+    """(n, 4, 4) canonical frames of a shape's parts (frames flattened row-major or 4x4), each
+    anchored by its neighbours along `edges`."""
     F = np.asarray(frames, dtype=np.float64).reshape(len(types), 4, 4)
-    return np.array([cats.canonical_frame(t, variants[i] if variants else None, F[i]) for i, t in enumerate(types)])
+    nbrs: list[list[int]] = [[] for _ in types]
+    for u, v in edges:
+        nbrs[u].append(v)
+        nbrs[v].append(u)
+    return np.array([cats.canonical_frame(t, variants[i] if variants else None, F[i],
+                                          F[nbrs[i], :3, 3] if nbrs[i] else None)
+                     for i, t in enumerate(types)])
 
 
 def edge_labels(g: Any, frames: Sequence[Sequence[float]], cats: EdgeCategories,
                 variants: Sequence[str] | None = None) -> dict[tuple[int, int], int | None]:
     """Category of every edge of a graph with frames, in both directions (u, v) and (v, u):
     the category of v's placement in u's frame (canonical frames)."""
-    F = canonical_frames(cats, g.types, frames, variants)
+    F = canonical_frames(cats, g.types, frames, variants, g.edges)
     out: dict[tuple[int, int], int | None] = {}
     for u, v in g.edges:
         for a, b in ((u, v), (v, u)):

@@ -67,7 +67,7 @@ def compress(assembly: Any, cats: EdgeCategories, alphabet: Alphabet, *, grammar
                              f"category of the model has ({where}); the model was trained on other shapes")
         return cat
 
-    Fc = canonical_frames(cats, g.types, F, variants)
+    Fc = canonical_frames(cats, g.types, F, variants, g.edges)
     for a, b, k in edges:
         u, v = order[a], order[b]
         categories[k] = category(u, v, relative_placement(Fc[u], Fc[v]))
@@ -109,7 +109,7 @@ def decompress(record: dict, cats: EdgeCategories, alphabet: Alphabet, instantia
         if k is None or not (0 <= int(k) < len(cats)) or {cats.categories[int(k)].a, cats.categories[int(k)].b} != {T[p], T[c]}:
             raise GrammarkitError(f"character {parsed.node_index[c] + 1}: no valid edge category for the part")
         variants[c] = cats.variants(int(k), T[p], T[c])[1] or None
-        frames[c] = cats.canonical_frame(T[c], variants[c], frames[p] @ cats.placement(int(k), T[p], T[c]))
+        frames[c] = frames[p] @ cats.placement(int(k), T[p], T[c])
     ids = record.get("ids")
     parts = []
     counts: dict[str, int] = {}

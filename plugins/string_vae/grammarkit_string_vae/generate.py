@@ -8,6 +8,7 @@ instantiated within the tries is skipped and counted with its reason, never writ
 """
 from __future__ import annotations
 
+import re
 import time
 from typing import Iterator
 
@@ -74,7 +75,9 @@ def generate(request: Request) -> Iterator[Result]:
                 inst_stats["seconds"] += res.seconds
                 if not res.ok:
                     inst_stats["failed"] += 1
-                    key = (res.reason or "?").split("most often: ")[-1].split(" (")[0][:80]
+                    # group failures by kind: the reason without part numbers and distances
+                    why = (res.reason or "?").split("most often: ")[-1]
+                    key = re.sub(r"\d+(\.\d+)?", "N", why.split(": placing")[0].split(" puts ")[0])[:90]
                     failures[key] = failures.get(key, 0) + 1
                     continue
                 inst_stats["instantiated"] += 1

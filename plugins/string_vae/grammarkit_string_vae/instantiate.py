@@ -164,7 +164,9 @@ class Instantiator:
                                   start < first, rng, None)
         variant[start] = (self.cats.variants(cands0[0][0], T[start], T[first])[0] if cands0 else "") or \
             self.default_variant[T[start]]
-        frames[start] = self.cats.canonical_frame(T[start], variant[start], self.start_frame.get(T[start], np.eye(4)))
+        # any frame of the start part will do: another of its symmetric frames turns the whole
+        # shape rigidly about it
+        frames[start] = self.start_frame.get(T[start], np.eye(4))
         parts[start] = self.part(T[start], frames[start], f"{T[start]}.{start}", variant[start])
         used: dict[tuple[int, int], int] = {}
         # per position of `order`: its candidate list and the index of the one in use
@@ -190,7 +192,7 @@ class Instantiator:
                     return None, used, why or f"insertion budget spent at edge {x}-{y}"
                 budget -= 1
                 out.insertions += 1
-                Fy = self.cats.canonical_frame(T[y], vy, frames[x] @ A)
+                Fy = frames[x] @ A  # the child's canonical frame, as the category is defined
                 bad = self._cycle_misfit(graph, y, Fy, vy, placed_nbrs, frames, variant, x)
                 if bad is not None:
                     why = bad
