@@ -129,13 +129,13 @@ def prior_table(vae, args) -> None:  # noqa: ANN001
         times[mode] = statistics.median(secs)
         rep = m["repaired"]
         rows.append([mode, m["samples"], m["validity"], m[f"unique@{min(1000, args.samples)}"], m["novelty"],
-                     m["internal_diversity"], m["mean_parts"], f"{rep['backtrack']}/{rep['rules']}/{rep['failed']}",
+                     m["internal_diversity"], m["mean_parts"], f"{rep['backtrack']}/{rep['resample']}/{rep['rules']}/{rep['failed']}",
                      times[mode], m["valid"] / max(times[mode], 1e-9)])
     base = rows[0][2] or 0
     print(f"\n## Prior samples: {args.samples} latent points z ~ N(0, I), temperature {args.temperature} "
           f"(median of {args.runs} decodes)\n")
     print(table(["decoding", "samples", "validity", f"unique@{min(1000, args.samples)}", "novelty",
-                 "internal diversity", "mean parts", "repaired (backtrack/rules/failed)", "seconds",
+                 "internal diversity", "mean parts", "repaired (backtrack/resample/rules/failed)", "seconds",
                  "valid strings/s"], rows))
     if base:
         print(f"\nmasked validity / free validity: {rows[1][2] / base:.1f}x")

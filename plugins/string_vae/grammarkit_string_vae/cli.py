@@ -483,7 +483,7 @@ def instantiate_command(text: str, grammar_file: Path, model_file: Path, out: Pa
     from .strings import decode
 
     graph = decode(text, em.alphabet).graph
-    predicted = {e: k for e, (k, _) in em.predict(graph, strings=votes, seed=seed).items()}
+    predicted = em.rankings(graph, strings=votes, seed=seed)
     result = Instantiator(grammar, em.categories).instantiate(graph, predicted, seed=seed, max_tries=tries)
     if not result.ok:
         raise GrammarkitError(f"could not instantiate the string in {result.tries} tries: {result.reason}")

@@ -72,6 +72,14 @@ class EdgeModel:
         n = strings or int(self.meta.get("training", {}).get("config", {}).get("vote_strings", 8))
         return predict_graph(self.model, graph, self.vocab, self.categories, strings=n, seed=seed)
 
+    def rankings(self, graph, *, strings: int | None = None, seed: int = 0) -> dict:  # noqa: ANN001
+        """Per edge (u, v), u < v: the categories of its type pair, most likely first (votes)."""
+        out = {}
+        for e, (_k, votes) in self.predict(graph, strings=strings, seed=seed).items():
+            order = [int(c) for c in np.argsort(-votes, kind="stable") if votes[c] > -1e8]
+            out[e] = order
+        return out
+
 
 def _examples(dataset: Dataset, idx, cats: EdgeCategories, vocab: Vocab, per_graph: int, seed: int):
     from .predictor import encode_targets

@@ -69,7 +69,7 @@ def generate(request: Request) -> Iterator[Result]:
             extra_inst: dict = {}
             if inst is not None:
                 gseed = int(request.seed) * 1_000_003 + sampler.decoded_points
-                predicted = {e: k for e, (k, _) in em.predict(g, strings=opts.votes, seed=gseed).items()}
+                predicted = em.rankings(g, strings=opts.votes, seed=gseed)
                 res = inst.instantiate(g, predicted, seed=gseed, max_tries=opts.tries, deadline=request.deadline)
                 inst_stats["tries"] += res.tries
                 inst_stats["seconds"] += res.seconds
@@ -85,7 +85,8 @@ def generate(request: Request) -> Iterator[Result]:
                 model = res.assembly
                 model.name = f"{request.grammar.name}_string_{index:05d}"
                 extra_inst = {"categories": token_categories(s.text, vae.alphabet, em.categories, res.categories),
-                              "predicted": token_categories(s.text, vae.alphabet, em.categories, predicted),
+                              "predicted": token_categories(s.text, vae.alphabet, em.categories,
+                                                            {e: r[0] for e, r in predicted.items() if r}),
                               "instantiation": {"tries": res.tries, "insertions": res.insertions,
                                                 "monte_carlo": res.monte_carlo, "seconds": round(res.seconds, 3)}}
             rid = f"{request.grammar.name}_string_{index:05d}"

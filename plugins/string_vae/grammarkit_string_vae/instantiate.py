@@ -13,8 +13,10 @@ Every part of a type is a rigid copy of the type's `part` geometry
    its placement relative to every placed neighbour (cycle edges) must be one of the grammar's
    docking categories. If the predicted category fails, the other categories of the type
    pair are tried in a random order (the paper's Monte-Carlo edge insertion);
-3. if no category of an edge works, the previous part takes its next candidate (chronological
-   backtracking; at most `budget` insertions per try);
+3. if no category of an edge works, the search jumps back to the latest placed part the
+   failures were traced to (the parts on the tree path between the new part and the one it
+   misses or hits: conflict-directed backjumping) and takes its next candidate, at most
+   `budget` insertions per try;
 4. a try that fails ends with the reason (the edge and, if a cycle edge was the reason, the
    cycle) and the next try starts from another random edge.
 
@@ -100,7 +102,8 @@ class Instantiator:
     def instantiate(self, graph: TypedGraph, predicted: dict[tuple[int, int], int] | None = None, *,
                     seed: int = 0, max_tries: int = 8, deadline: float | None = None) -> Instantiation:
         """Place `graph` using the predicted category of each edge (u, v), u < v, direction
-        u -> v (missing edges: Monte-Carlo from the start)."""
+        u -> v: one category, or a ranking (best first; the predictor's order is tried before
+        the Monte-Carlo order). Missing edges: Monte-Carlo from the start."""
         t0 = time.perf_counter()
         predicted = dict(predicted or {})
         unknown = sorted({t for t in graph.types if t not in self.default_variant})
@@ -169,9 +172,36 @@ class Instantiator:
         frames[start] = self.start_frame.get(T[start], np.eye(4))
         parts[start] = self.part(T[start], frames[start], f"{T[start]}.{start}", variant[start])
         used: dict[tuple[int, int], int] = {}
-        # per position of `order`: its candidate list and the index of the one in use
-        cand_lists: list[list[int] | None] = [None] * len(order)
+        parent = {y: x for y, x in order}
+        pos = {y: j for j, (y, _x) in enumerate(order)}
+        pos[start] = -1
+
+        def path(a: int, b: int) -> set[int]:
+            """Nodes on the spanning-tree path between a and b (the parts whose placements
+            decide where b lands relative to a)."""
+            up: dict[int, int] = {}
+            v, d = a, 0
+            while True:
+                up[v] = d
+                if v == start:
+                    break
+                v, d = parent[v], d + 1
+            out_: set[int] = set()
+            v = b
+            while v not in up:
+                out_.add(v)
+                v = parent[v]
+            w = a
+            while w != v:
+                out_.add(w)
+                w = parent[w]
+            return out_
+
+        # per position of `order`: its candidate list, the index of the one in use, and the
+        # parts its failures were traced to (conflict-directed backjumping)
+        cand_lists: list[list | None] = [None] * len(order)
         pick = [0] * len(order)
+        conflicts: list[set[int]] = [set() for _ in order]
         budget = self.budget
         why = ""
         i = 0
@@ -181,6 +211,7 @@ class Instantiator:
             if cand_lists[i] is None:
                 cand_lists[i] = self._candidates(T[x], T[y], predicted.get(key), x < y, rng, variant[x])
                 pick[i] = 0
+                conflicts[i] = set()
                 if not cand_lists[i]:
                     return None, used, f"no docking category joins {T[x]} and {T[y]} (edge {x}-{y})"
             placed_nbrs = [w for w in adj[y] if frames[w] is not None]
@@ -195,13 +226,16 @@ class Instantiator:
                 Fy = frames[x] @ A  # the child's canonical frame, as the category is defined
                 bad = self._cycle_misfit(graph, y, Fy, vy, placed_nbrs, frames, variant, x)
                 if bad is not None:
-                    why = bad
+                    why, w = bad
+                    conflicts[i] |= path(x, w)
                     continue
                 new = self.part(T[y], Fy, f"{T[y]}.{y}", vy)
                 touched = {placed[j] for j in self._touching(new, [parts[p] for p in placed])}
                 if touched != set(placed_nbrs):
                     extra = sorted(touched - set(placed_nbrs))
                     missing = sorted(set(placed_nbrs) - touched)
+                    for j in extra + missing:
+                        conflicts[i] |= path(x, j)
                     why = (f"part {y} ({T[y]}) attached to {x} ({T[x]}) "
                            + (f"touches {', '.join(f'{j} ({T[j]})' for j in extra)}, which it may not" if extra
                               else f"does not reach {', '.join(f'{j} ({T[j]})' for j in missing)}: the cycle "
@@ -215,19 +249,29 @@ class Instantiator:
             if ok:
                 i += 1
                 continue
-            # backtrack: forget this position's candidates, undo the previous part
-            cand_lists[i] = None
-            i -= 1
-            if i < 0:
+            # back-jump to the latest part the failures were traced to (its next candidate may
+            # fix them); everything placed after it is undone
+            culprits = [pos[v] for v in conflicts[i] | {x} if v != y]
+            target = max(culprits) if culprits else i - 1
+            if target < 0:
                 return None, used, why or "no placement works"
-            y_prev, x_prev = order[i]
-            frames[y_prev] = parts[y_prev] = variant[y_prev] = None
-            placed.pop()
-            used.pop((min(x_prev, y_prev), max(x_prev, y_prev)), None)
+            merged = (conflicts[i] | {x}) - {order[target][0]}
+            for j in range(i, target - 1, -1):
+                yj, xj = order[j]
+                if frames[yj] is not None and yj != start:
+                    frames[yj] = parts[yj] = variant[yj] = None
+                    placed.remove(yj)
+                    used.pop((min(xj, yj), max(xj, yj)), None)
+                if j > target:
+                    cand_lists[j] = None
+            conflicts[target] |= merged
+            i = target
         for j, (y, x) in enumerate(order):
             k_used = cand_lists[j][pick[j] - 1][0] if cand_lists[j] else None
             p = predicted.get((min(x, y), max(x, y)))
-            if p is None or k_used != (p if x < y else self.cats.reverse.get(p, p)):
+            if p is not None and not isinstance(p, (int, np.integer)):
+                p = list(p)[0] if len(p) else None
+            if p is None or k_used != (p if x < y else self.cats.reverse.get(int(p), int(p))):
                 out.monte_carlo += 1
         return (frames, variant), used, ""
 
@@ -240,22 +284,23 @@ class Instantiator:
         is the parent's are kept."""
         cands = [k for k in self.cats.pair_categories(tx, ty)
                  if parent_variant is None or self.cats.variants(k, tx, ty)[0] in ("", parent_variant)]
-        first = None
-        if pred is not None:
-            p = pred if forward else self.cats.reverse.get(pred, pred)
-            first = p if p in cands else None
-        rest = [k for k in cands if k != first]
+        ranked: list[int] = []
+        for p in ([pred] if isinstance(pred, (int, np.integer)) else list(pred or [])):
+            p = int(p) if forward else self.cats.reverse.get(int(p), int(p))
+            if p in cands and p not in ranked:
+                ranked.append(p)
+        rest = [k for k in cands if k not in ranked]
         if rest:
             w = np.array([self.cats.categories[k].count for k in rest], dtype=np.float64)
             order = rng.choice(len(rest), size=len(rest), replace=False, p=w / w.sum())
             rest = [rest[i] for i in order]
         out = []
-        for k in ([first] if first is not None else []) + rest:
+        for k in ranked + rest:
             vy = self.cats.variants(k, tx, ty)[1] or self.default_variant[ty]
             out.append((k, self.cats.placement(k, tx, ty), vy))
         return out
 
-    def _cycle_misfit(self, graph, y, Fy, vy, placed_nbrs, frames, variant, parent) -> str | None:  # noqa: ANN001
+    def _cycle_misfit(self, graph, y, Fy, vy, placed_nbrs, frames, variant, parent):  # noqa: ANN001, ANN201
         T = graph.types
         for w in placed_nbrs:
             if w == parent:
@@ -263,7 +308,7 @@ class Instantiator:
             k, d = self.cats.classify(T[w], T[y], np.linalg.inv(frames[w]) @ Fy, variant[w] or None, vy or None)
             if k is None:
                 far = "in no docking orientation" if not np.isfinite(d) else f"{d:.2f} part sizes away from any docking"
-                return f"cycle edge {w}-{y} ({T[w]}-{T[y]}) does not close: placing {y} from {parent} puts it {far}"
+                return f"cycle edge {w}-{y} ({T[w]}-{T[y]}) does not close: placing {y} from {parent} puts it {far}", w
         return None
 
     def _assembly(self, graph: TypedGraph, frames, variants=None):  # noqa: ANN001, ANN202
