@@ -78,6 +78,8 @@ def main() -> int:
     ap.add_argument("--threads", type=int, default=1)
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--reuse", action="store_true", help="reuse the predictor saved in --work by an earlier run")
+    ap.add_argument("--vae", type=Path, default=None, help="string-VAE model for the end-to-end row "
+                    "(default: WORK/EXAMPLE.vae from bench_string_vae.py)")
     ap.add_argument("--quick", action="store_true")
     args = ap.parse_args()
     if args.quick:
@@ -175,7 +177,7 @@ def main() -> int:
           f"probability (1/c)^L; here c = {n_cat:.1f} on average per type pair, so a 15-part cycle: "
           f"{(1 / n_cat) ** 15:.2e} (paper: 1/6^15 = {6.0 ** -15:.2e}).")
     # 3. end to end
-    vae = args.work / f"{args.example}.vae"
+    vae = args.vae or args.work / f"{args.example}.vae"
     if not vae.exists():
         print("\n(end-to-end skipped: run bench_string_vae.py first to train the string VAE in --work)")
         return 0

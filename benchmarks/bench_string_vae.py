@@ -264,8 +264,9 @@ def main() -> int:
     skip = set(filter(None, args.skip.split(",")))
     print(f"# bench_string_vae: {args.example}, load average {load_average()} (2 cores; shared machine: "
           "times are noisy)\n")
-    ds, _ = build_or_load_dataset(args, args.work)
-    vae, training = train_or_load(args, ds, args.work)
+    if {"prior", "modes", "table2"} - skip:
+        ds, _ = build_or_load_dataset(args, args.work)
+        vae, training = train_or_load(args, ds, args.work)
     if "prior" not in skip:
         prior_table(vae, args)
     if "modes" not in skip:

@@ -128,9 +128,26 @@ def _header(path: Path, expect: str = FORMAT) -> dict:
     return meta
 
 
+WEIGHTS = Path(__file__).resolve().parent / "weights"
+
+
+def resolve(path: str | Path) -> Path:
+    """A model path; `builtin:NAME` names a file shipped in the package's weights folder
+    (`builtin:castle` -> weights/castle.vae, made by scripts/train_castle_weights.py)."""
+    text = str(path)
+    if text.startswith("builtin:"):
+        name = text[len("builtin:"):]
+        found = sorted(WEIGHTS.glob(f"{name}.*")) if name and "/" not in name else []
+        if not found:
+            shipped = ", ".join(sorted(p.stem for p in WEIGHTS.glob("*.vae"))) or "none"
+            raise ModelFileError(f"{text}: no shipped model of that name (shipped: {shipped})")
+        return found[0]
+    return Path(path)
+
+
 def read_meta(path: str | Path) -> dict:
     """The model file's metadata (decoded JSON fields), without loading tensors or torch."""
-    path = Path(path)
+    path = resolve(path)
     if not path.exists():
         raise ModelFileError(f"{path}: no such model file")
     if path.is_dir():
@@ -174,7 +191,7 @@ def load_vae(path: str | Path, grammar: Any = None) -> LoadedVAE:
 
     from .model import ModelConfig, StringVAE
 
-    path = Path(path)
+    path = resolve(path)
     meta = read_meta(path)
     if grammar is not None:
         check_grammar(meta, grammar, path)

@@ -14,7 +14,8 @@ class StringVAEOptions(BaseModel):
 
     model_config = ConfigDict(extra="forbid", frozen=True, protected_namespaces=())
 
-    model: str = Field(..., description="the trained model file (.vae, from `grammarkit train string-vae`)")
+    model: str = Field(..., description="the trained model file (.vae, from `grammarkit train string-vae`), "
+                       "or builtin:castle for the shipped one")
     mode: Literal["perturb", "interpolate", "path", "prior"] = Field(
         "perturb", description="latent sampling: around training points, between two, along a latent "
         "path, or from the prior N(0, I)")

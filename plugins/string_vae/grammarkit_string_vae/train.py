@@ -46,6 +46,7 @@ class TrainConfig:
     seed: int = 0
     threads: int = 1
     time_limit: float | None = None  # seconds; stops after the epoch that passes it
+    stop_after: int | None = None  # stop after this many epochs (the schedules still span `epochs`)
     monitor_samples: int = 64  # prior samples decoded per epoch for the validity column
     strings_per_epoch: int | None = None  # strings of each graph per epoch, drawn anew (None: all)
 
@@ -183,6 +184,9 @@ def train_vae(dataset: Dataset, config: TrainConfig = TrainConfig(), *,
             progress(row)
         if config.time_limit is not None and time.perf_counter() - t0 > config.time_limit and epoch < config.epochs:
             stopped = f"time limit of {config.time_limit:g} s reached after epoch {epoch} of {config.epochs}"
+            break
+        if config.stop_after is not None and epoch >= config.stop_after and epoch < config.epochs:
+            stopped = f"stopped after epoch {epoch} of {config.epochs} (stop_after)"
             break
     model.eval()
     return TrainResult(model, vocab, rules, history, train_g, val_g, time.perf_counter() - t0, stopped)

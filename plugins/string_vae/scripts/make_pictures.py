@@ -3,9 +3,10 @@
     python plugins/string_vae/scripts/make_pictures.py --vae castle.vae --edges castle.edges \
         [--grammar grammars/tiling/castle/castle.grammar] [--out docs/images] [--count 3] [--seed 0]
 
-Samples new valid strings (masked decoding, perturbation), predicts their edge categories,
-instantiates them and writes docs/images/string_instantiated.png (the shapes side by side) and
-prints each string with its predicted categories for the caption.
+Samples valid strings (masked decoding, perturbation; training graphs allowed), predicts their
+edge categories, instantiates them (`derive --backend string-vae` with categories) and writes
+docs/images/string_instantiated.png (the shapes side by side); prints each string with its
+predicted and used categories for the caption.
 """
 from __future__ import annotations
 
@@ -37,17 +38,19 @@ def main() -> int:
     ap.add_argument("--out", type=Path, default=ROOT / "docs/images")
     ap.add_argument("--count", type=int, default=3)
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--mode", default="perturb")
     args = ap.parse_args()
     from PIL import Image
 
     from grammarkit.geometry.render import render
     from grammarkit.run import iter_results
 
-    opts = {"model": str(args.vae), "categories": str(args.edges), "mode": "perturb"}
+    opts = {"model": str(args.vae), "categories": str(args.edges), "mode": args.mode,
+            "include_training": "true", "max_decodes": "4000"}
     tiles = []
     for res in iter_results(str(args.grammar), backend="string-vae", n=args.count, seed=args.seed, options=opts):
-        cats = [c for c in res.extra["categories"]]
-        print(f"{res.id}: {res.extra['string']}\n  categories: {cats}\n  predicted:  {res.extra['predicted']}\n"
+        print(f"{res.id}: {res.extra['string']}  (novel: {res.extra['novel']})\n"
+              f"  categories used: {res.extra['categories']}\n  predicted:       {res.extra['predicted']}\n"
               f"  {res.extra['instantiation']}")
         tiles.append(render(coloured(res.model), size=(360, 300)))
     out = Image.new("RGB", (360 * max(1, len(tiles)), 300), "white")
