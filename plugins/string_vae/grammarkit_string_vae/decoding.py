@@ -69,9 +69,13 @@ def _choose(logits: torch.Tensor, temperature: float, rng: np.random.Generator) 
 def decode_latents(model, z: torch.Tensor, *, vocab: Vocab, rules: TopologyRules, mode: str = "masked",
                    temperature: float = 0.0, seed: int = 0, batch_size: int = 256,
                    repair_expansions: int = 200, rules_expansions: int = 1500, pressure: int | None = 40,
-                   resamples: int = 2, budget: float = 1.5) -> list[Decoded]:
+                   resamples: int = 2, budget: float = 1.2, soft_end: int | None = None) -> list[Decoded]:
     """Decode latent points `z` (N, latent) into checked strings. Masked decoding may write up
-    to `budget` times the longest training string (the length budget of the masks)."""
+    to `budget` times the longest training string (the length budget of the masks); from
+    `soft_end` tokens on (default: the model's `soft_end`, a length 90% of its training
+    strings stay within) it closes rather than opens (`DecodeState.closing`)."""
+    if soft_end is None:
+        soft_end = getattr(model, "soft_end", None)
     if mode not in MODES:
         raise ValueError(f"decoding mode must be one of {MODES}, got {mode!r}")
     out: list[Decoded] = []
@@ -80,12 +84,12 @@ def decode_latents(model, z: torch.Tensor, *, vocab: Vocab, rules: TopologyRules
         zb = z[start:start + batch_size]
         rng = np.random.default_rng([seed, start])
         out.extend(_decode_batch(model, zb, vocab, rules, auto, temperature, rng, repair_expansions,
-                                 rules_expansions, pressure, resamples))
+                                 rules_expansions, pressure, resamples, soft_end))
     return out
 
 
 def _pass(model, z: torch.Tensor, auto: Automaton | None, temperature: float, rng: np.random.Generator,
-          pressure: int | None):
+          pressure: int | None, soft_end: int | None = None):
     """One batched decoding pass: tokens, states, finished flags, per-step hiddens and logits."""
     B = z.shape[0]
     max_len = auto.max_len if auto is not None else model.config.max_len
@@ -109,7 +113,7 @@ def _pass(model, z: torch.Tensor, auto: Automaton | None, temperature: float, rn
             if states is not None:
                 allowed = states[i].allowed()
                 if pressure is not None and allowed:
-                    allowed = states[i].closing(allowed, pressure)
+                    allowed = states[i].closing(allowed, pressure, soft_end)
                 if not allowed:
                     dead[i] = True
                     continue
@@ -138,11 +142,12 @@ def _pass(model, z: torch.Tensor, auto: Automaton | None, temperature: float, rn
 
 def _decode_batch(model, z: torch.Tensor, vocab: Vocab, rules: TopologyRules, auto: Automaton | None,
                   temperature: float, rng: np.random.Generator, repair_expansions: int,
-                  rules_expansions: int, pressure: int | None = 40, resamples: int = 2) -> list[Decoded]:
+                  rules_expansions: int, pressure: int | None = 40, resamples: int = 2,
+                  soft_end: int | None = None) -> list[Decoded]:
     B = z.shape[0]
     max_len = model.config.max_len
     tokens, states, finished, hist_h, hist_logits = _pass(model, z, auto, temperature, rng,
-                                                          pressure if auto is not None else None)
+                                                          pressure if auto is not None else None, soft_end)
     alphabet = vocab.alphabet
     if auto is None:
         return [check_text(vocab.decode(tokens[i]), alphabet, rules) if finished[i] else
@@ -159,7 +164,7 @@ def _decode_batch(model, z: torch.Tensor, vocab: Vocab, rules: TopologyRules, au
         left = [i for i in range(B) if not finished[i]]
         if not left:
             break
-        _t, st2, fin2, _h, _l = _pass(model, z[left], auto, max(temperature, 0.8), rng, pressure)
+        _t, st2, fin2, _h, _l = _pass(model, z[left], auto, max(temperature, 0.8), rng, pressure, soft_end)
         for j, i in enumerate(left):
             if fin2[j]:
                 states[i], finished[i], how[i] = st2[j], True, "resample"

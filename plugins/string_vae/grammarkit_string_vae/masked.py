@@ -412,13 +412,17 @@ class DecodeState:
                 out.append(t)
         return out
 
-    def closing(self, allowed: list[int], slack: int) -> list[int]:
+    def closing(self, allowed: list[int], slack: int, soft_end: int | None = None) -> list[int]:
         """End-game pressure, a steering heuristic of the decoder (not a rule: every token it
         drops was allowed). With at most `slack` tokens to spare beyond the lower bound, tokens
         that open something (a new ring label, a branch) give way to the others; with at most
         half of that, a token that closes something (a ring label, `)`, the end) is taken
-        whenever one is allowed."""
-        spare = self.a.max_len - self.length - self.lower_bound()
+        whenever one is allowed. With `soft_end` (a length training strings seldom exceed), the
+        string is treated as having no tokens to spare from there on."""
+        lb = self.lower_bound()
+        spare = self.a.max_len - self.length - lb
+        if soft_end is not None:  # past the length where training strings usually end
+            spare = min(spare, max(0, soft_end - self.length - lb) + slack // 2)
         if spare > slack:
             return allowed
         v = self.a.vocab
@@ -426,6 +430,17 @@ class DecodeState:
             closers = [t for t in allowed if t in (EOS, v.close_id) or (v.kind(t)[0] == "ring" and v.kind(t)[1] in self.rings)]
             if closers:
                 return closers
+            if self.rings:  # letters right after which an open ring label can close
+                ahead = []
+                for t in allowed:
+                    if v.kind(t)[0] != "node":
+                        continue
+                    self.apply(t)
+                    if any(v.kind(u)[0] == "ring" and v.kind(u)[1] in self.rings for u in self.local_allowed()):
+                        ahead.append(t)
+                    self.undo()
+                if ahead:
+                    return ahead
         keep = [t for t in allowed if t != v.open_id and not (v.kind(t)[0] == "ring" and v.kind(t)[1] not in self.rings)]
         return keep or allowed
 

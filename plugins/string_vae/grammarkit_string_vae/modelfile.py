@@ -221,6 +221,9 @@ def load_vae(path: str | Path, grammar: Any = None) -> LoadedVAE:
         first = str(exc).splitlines()[0]
         raise ModelFileError(f"{path}: the tensors do not fit the network described in the file ({first})") from None
     model.eval()
+    # the length 90% of the training strings stay within: masked decoding closes from there on
+    lengths = sorted(len(vocab.encode(t)) + 1 for t in train_strings) if train_strings else []
+    model.soft_end = lengths[int(0.9 * (len(lengths) - 1))] if lengths else None
     mu = tensors.get("train_mu")
     if mu is None or mu.ndim != 2 or mu.shape[1] != config.latent or mu.shape[0] != len(train_strings):
         raise ModelFileError(f"{path}: the training-set encodings are missing or do not match")
