@@ -179,3 +179,18 @@ def test_commands_say_how_to_install_torch_when_it_is_missing(castle_dataset, tm
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     assert out.returncode == 1
     assert "learning" in out.stderr and "pip install" in out.stderr and "Traceback" not in out.stderr
+
+
+def test_the_shipped_castle_weights_load_for_the_castle_grammar_and_decode_validly(castle_grammar):
+    from grammarkit_string_vae.modelfile import WEIGHTS
+
+    if not (WEIGHTS / "castle.vae").exists():
+        pytest.skip("no shipped weights in this checkout")
+    vae = load_vae("builtin:castle", grammar=castle_grammar)
+    meta = vae.meta["training"]
+    assert meta["config"]["epochs"] == 40 and meta["config"]["seed"] == 0  # as scripts/train_castle_weights.py
+    z = torch.randn(16, vae.model.config.latent, generator=torch.Generator().manual_seed(3))
+    out = decode_latents(vae.model, z, vocab=vae.vocab, rules=vae.rules, mode="masked")
+    assert all(d.valid for d in out)
+    with pytest.raises(ModelFileError, match="no shipped model"):
+        load_vae("builtin:nonesuch")
