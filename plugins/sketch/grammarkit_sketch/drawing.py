@@ -1,0 +1,144 @@
+"""Line drawings of stage models (training sketches, refinement proposals, previews) and the
+drawing styles used to train and to test robustness.
+
+The renderer (grammarkit.geometry.render) draws every feature edge of what it is given. Here
+the host (see stages.py) must hide what lies behind it without being drawn, so the prepared
+geometry's edge list is filtered: an edge is kept when at least one of its two triangles does
+not lie on the host block's surface. (Membership is decided by geometry, not by colour: face
+terminals only paint whole triangles of the surface they lie on, so colours would follow the
+host's triangulation rather than the snippet's shapes.) Colour boundaries are not drawn for
+the same reason: a sketch shows shapes. Dropping a random share of the remaining edges gives
+the "missing strokes" style.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+from typing import Any
+
+import numpy as np
+
+
+#: drawing styles: "sketchy" is the paper's training style (hand-drawn polylines), "plain"
+#: the exact line drawing (the paper's Table 3 baseline); the others are robustness tests
+#: never trained on.
+STYLES = ("sketchy", "plain", "jitter", "missing", "overdrawn", "thick", "perspective")
+
+
+@dataclass(frozen=True)
+class DrawStyle:
+    """Pen settings of one drawing. Sizes are pixels of a 256 x 256 canvas; on another
+    canvas they scale with its shorter side (the side the network input does not squeeze)."""
+
+    sketchy: bool = True
+    width: float = 2.0
+    jitter: float = 1.2
+    overshoot: float = 5.0
+    strokes: int = 2
+    missing: float = 0.0  # share of edges left out
+    seed: int = 0
+    pitch_offset: float = 0.0  # a slightly wrong perspective (degrees)
+    yaw_offset: float = 0.0
+
+    def line_style(self, scale: float = 1.0):  # noqa: ANN201
+        from grammarkit.geometry.render import LineStyle
+
+        return LineStyle(width=max(0.5, self.width * scale), sketchy=self.sketchy, material_edges=False,
+                         jitter=self.jitter * scale, overshoot=self.overshoot * scale,
+                         strokes=self.strokes if self.sketchy else 1, seed=self.seed)
+
+
+def training_style(rng: np.random.Generator, kind: str = "sketchy") -> DrawStyle:
+    """A random pen for a training image: sketchy lines of varied width and wobble, or the
+    plain line drawing."""
+    seed = int(rng.integers(0, 2**31 - 1))
+    width = float(rng.uniform(1.4, 3.0))
+    if kind == "plain":
+        return DrawStyle(sketchy=False, width=width, seed=seed)
+    return DrawStyle(sketchy=True, width=width, jitter=float(rng.uniform(0.5, 1.6)),
+                     overshoot=float(rng.uniform(2.0, 6.0)), strokes=int(rng.integers(1, 3)),
+                     seed=seed)
+
+
+def test_style(kind: str, rng: np.random.Generator) -> DrawStyle:
+    """Held-out drawing styles: the trained one with new seeds, or one never trained on."""
+    base = training_style(rng, "sketchy")
+    if kind == "sketchy":
+        return base
+    if kind == "plain":
+        return training_style(rng, "plain")
+    if kind == "jitter":  # a shakier hand: 2.5x the largest trained wobble
+        return replace(base, jitter=4.0, overshoot=9.0)
+    if kind == "missing":  # a quarter of the edges not drawn
+        return replace(base, missing=0.25)
+    if kind == "overdrawn":  # every edge gone over four times
+        return replace(base, strokes=4, jitter=2.0)
+    if kind == "thick":  # a felt pen: twice the widest trained line
+        return replace(base, width=6.0)
+    if kind == "perspective":  # the view off by a few degrees
+        sign = rng.choice([-1.0, 1.0], size=2)
+        return replace(base, pitch_offset=float(sign[0] * rng.uniform(3, 6)),
+                       yaw_offset=float(sign[1] * rng.uniform(3, 6)))
+    raise ValueError(f"unknown drawing style {kind!r}; expected one of {', '.join(STYLES)}")
+
+
+def on_box_surface(vertices: np.ndarray, faces: np.ndarray, box: tuple[np.ndarray, np.ndarray] | None,
+                   tol: float = 2e-3) -> np.ndarray:
+    """For each triangle: does it lie in one face of the axis-aligned box (within `tol`)?"""
+    if box is None or len(faces) == 0:
+        return np.zeros(len(faces), dtype=bool)
+    lo, hi = np.asarray(box[0], float), np.asarray(box[1], float)
+    tri = vertices[faces]  # (F, 3, 3)
+    inside = ((tri >= lo - tol) & (tri <= hi + tol)).all(axis=(1, 2))
+    flat = np.zeros(len(faces), dtype=bool)
+    for axis in range(3):
+        for plane in (lo[axis], hi[axis]):
+            flat |= (np.abs(tri[:, :, axis] - plane) <= tol).all(axis=1)
+    return inside & flat
+
+
+def drawable_geometry(model: Any, host_box: Any = None, missing: float = 0.0, seed: int = 0):  # noqa: ANN201
+    """The prepared geometry of a stage model without the host block's own edges (and, for the
+    "missing strokes" style, without a random share of the others)."""
+    from grammarkit.geometry.render import prepare
+
+    geom = prepare(model)
+    host = on_box_surface(geom.vertices, geom.faces, host_box)
+    f1, f2 = geom.edge_faces[:, 0], geom.edge_faces[:, 1]
+    keep = ~(host[f1] & np.where(f2 >= 0, host[np.maximum(f2, 0)], True))
+    if missing > 0:
+        rng = np.random.default_rng(seed ^ 0x4D15)
+        keep &= rng.random(len(keep)) >= missing
+    idx = np.flatnonzero(keep)
+    return replace(geom, edges=geom.edges[idx], edge_faces=geom.edge_faces[idx],
+                   edge_angle=geom.edge_angle[idx], edge_material=geom.edge_material[idx],
+                   edge_open=geom.edge_open[idx])
+
+
+def draw(model: Any, view: Any, style: DrawStyle, host_box: Any = None, *,
+         supersample: int = 2) -> np.ndarray:
+    """Ink image (float32, H x W, 1 = black line) of a stage model seen through `view`."""
+    from grammarkit.geometry.render import render
+
+    geom = drawable_geometry(model, host_box, style.missing, style.seed)
+    scale = min(view.size) / 256.0
+    img = render(geom, view, style="lines", size=view.size, line_style=style.line_style(scale),
+                 supersample=supersample)
+    return 1.0 - np.asarray(img.convert("L"), dtype=np.float32) / 255.0
+
+
+def strokes_to_ink(strokes: Any, size: tuple[int, int], width: float = 2.0) -> np.ndarray:
+    """Rasterise polylines (lists of (x, y) in canvas pixels) into an ink image."""
+    from PIL import Image, ImageDraw
+
+    W, H = size
+    img = Image.new("L", (W, H), 0)
+    d = ImageDraw.Draw(img)
+    w = max(1, int(round(width)))
+    for line in strokes:
+        pts = [(float(x), float(y)) for x, y in line]
+        if len(pts) == 1:
+            x, y = pts[0]
+            d.ellipse([x - w / 2, y - w / 2, x + w / 2, y + w / 2], fill=255)
+        elif pts:
+            d.line(pts, fill=255, width=w, joint="curve")
+    return np.asarray(img, dtype=np.float32) / 255.0
