@@ -142,3 +142,70 @@ def strokes_to_ink(strokes: Any, size: tuple[int, int], width: float = 2.0) -> n
         elif pts:
             d.line(pts, fill=255, width=w, joint="curve")
     return np.asarray(img, dtype=np.float32) / 255.0
+
+
+def _feature_edges(geom: Any, front: np.ndarray, crease_angle: float = 30.0) -> np.ndarray:
+    """Silhouette, crease and boundary edges (as the renderer's line style draws them)."""
+    f1, f2 = geom.edge_faces[:, 0], geom.edge_faces[:, 1]
+    both = f2 >= 0
+    fr1 = front[f1]
+    fr2 = np.where(both, front[np.maximum(f2, 0)], fr1)
+    want = geom.edge_open | (both & (fr1 != fr2)) | (both & (geom.edge_angle > crease_angle))
+    hidden = geom.closed[f1] & ~fr1 & ~fr2
+    return np.flatnonzero(want & ~hidden)
+
+
+def model_strokes(model: Any, view: Any, host_box: Any = None, *, jitter: float = 0.0,
+                  seed: int = 0, spacing: float = 1.0) -> list[list[tuple[float, float]]]:
+    """The visible lines of a stage model as polylines of canvas pixels: what a person tracing
+    the drawing would put in a session file. Each visible run of a feature edge becomes one
+    stroke; `jitter` (pixels) moves its ends and bends it a little, like a hand would.
+
+    Visibility is tested like the renderer does, at sample points every `spacing` pixels: a
+    sample is visible when no face is drawn at its pixel (or a neighbour) or it is not behind
+    the plane of the face drawn there.
+    """
+    from grammarkit.geometry.render import rasterize
+
+    geom = drawable_geometry(model, host_box)
+    raster = rasterize(geom, view)
+    edges = _feature_edges(geom, raster.front)
+    px, key = view.project(geom.vertices)
+    W, H = view.size
+    finite = key[np.isfinite(key)]
+    tol = 1e-6 * (float(np.ptp(finite)) if finite.size else 1.0) + 1e-12
+    rng = np.random.default_rng([seed, 17])
+    out: list[list[tuple[float, float]]] = []
+    for e in edges:
+        a, b = geom.edges[e]
+        p0, p1, k0, k1 = px[a], px[b], key[a], key[b]
+        if not (np.isfinite(p0).all() and np.isfinite(p1).all()):
+            continue
+        n = max(2, int(np.ceil(np.hypot(*(p1 - p0)) / spacing)) + 1)
+        t = np.linspace(0.0, 1.0, n)
+        pos = p0[None] + (p1 - p0)[None] * t[:, None]
+        sk = k0 + (k1 - k0) * t
+        vis = np.zeros(n, dtype=bool)
+        ix, iy = np.floor(pos[:, 0]).astype(int), np.floor(pos[:, 1]).astype(int)
+        inside = (ix >= 0) & (ix < W) & (iy >= 0) & (iy < H)
+        for dx in (0, -1, 1):
+            for dy in (0, -1, 1):
+                jx, jy = np.clip(ix + dx, 0, W - 1), np.clip(iy + dy, 0, H - 1)
+                f = raster.face[jy, jx]
+                pl = raster.plane[np.maximum(f, 0)]
+                surface = pl[:, 0] * pos[:, 0] + pl[:, 1] * pos[:, 1] + pl[:, 2]
+                vis |= inside & ((f < 0) | (sk <= surface + tol))
+        # visible runs -> strokes
+        runs = np.flatnonzero(np.diff(np.r_[0, vis.astype(int), 0]))
+        for s, e2 in zip(runs[::2], runs[1::2]):
+            if e2 - s < 2:
+                continue
+            pts = pos[s:e2]
+            q = [pts[0], pts[len(pts) // 2], pts[-1]]
+            if jitter > 0:
+                d = q[-1] - q[0]
+                nrm = np.array([-d[1], d[0]]) / max(float(np.hypot(*d)), 1e-9)
+                q = [q[0] + rng.normal(0, jitter, 2), q[1] + nrm * rng.normal(0, jitter * 0.7),
+                     q[2] + rng.normal(0, jitter, 2)]
+            out.append([(round(float(x), 2), round(float(y), 2)) for x, y in q])
+    return out

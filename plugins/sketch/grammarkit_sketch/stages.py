@@ -19,10 +19,9 @@ How the picture is framed:
 Every stage is derived on a *host*: the lot (ground), a block whose top face is the anchor
 (top), or a wall slab whose front face is the anchor (face). The host hides what lies behind it
 but is not drawn: only what the snippet builds is (an edge is drawn when one of its faces
-does not lie on the host block's surface). Object types
-downstream of the snippet (a facade's floors and ledges, a floor's windows) are drawn as thin
-inset panels, the rectangles a person draws to subdivide a facade (the paper's repetition
-strokes, s. 6.2).
+does not lie on the host block's surface). On face stages, the object types downstream of the
+snippet (a facade's floors and ledges, a floor's windows) are drawn as thin inset panels, the
+rectangles a person draws to subdivide a facade (the paper's repetition strokes, s. 6.2).
 """
 from __future__ import annotations
 
@@ -233,8 +232,10 @@ def stage_grammar(library: SnippetLibrary, stage: StageSpec, snippet: SnippetInf
     import grammarkit
 
     t = stage.object_type
+    # Panels only subdivide faces: on a mass they would just retrace its outline.
+    panels = _panel_rules(library, t) if stage.anchor_kind == "face" else []
     text = "\n".join(["grammar sketch_stage", stage.host_text(), f"SketchAnchor --> {t}",
-                      *_panel_rules(library, t), f"use {snippet.name} as {t}", ""])
+                      *panels, f"use {snippet.name} as {t}", ""])
     host = grammarkit.parse(text)
     # the library's snippets (not its defaults: unbound downstream anchors get the panels)
     return host.model_copy(update={"statements": tuple(library.grammar.snippets) + host.statements,
