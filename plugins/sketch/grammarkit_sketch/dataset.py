@@ -173,9 +173,11 @@ def generate(library: SnippetLibrary, stage: StageSpec, n: int, *, seed: int = 0
     results: list = []
     failures = 0
     if workers > 1 and library.path:
+        import multiprocessing
         from concurrent.futures import ProcessPoolExecutor
 
-        with ProcessPoolExecutor(workers) as pool:
+        # spawn, not fork: the parent may hold torch's thread pools, which do not survive a fork
+        with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn")) as pool:
             for got, f in pool.map(_work, jobs):
                 results += got
                 failures += f

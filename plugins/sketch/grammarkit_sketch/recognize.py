@@ -278,38 +278,43 @@ def anchor_outline(stage: StageSpec, size: tuple[int, int]) -> np.ndarray:
 
 # ------------------------------------------------------------------------------------------
 _lock = threading.Lock()
-_recognizers: dict[tuple, Recognizer] = {}
+_models: dict[tuple, SketchModels] = {}  # (resolved path, mtime) -> loaded models
+_recognizers: dict[tuple, Recognizer] = {}  # (id of models, library hash) -> recognizer
 
 
 def get_recognizer(models: Any = None, library: Any = None) -> Recognizer:
     """A (cached) Recognizer: `models` a path or SketchModels (default: the shipped weights),
     `library` a path, text or SnippetLibrary (default: the library the models embed)."""
     from .embedded import embedded_library
+    from .models import SHIPPED
 
     if isinstance(models, SketchModels):
         m = models
     else:
-        key_m = str(Path(models).resolve()) if models is not None else None
-        m = None
+        p = Path(models) if models is not None else SHIPPED
+        try:
+            key = (str(p.resolve()), p.stat().st_mtime_ns)
+        except OSError:
+            key = None
         with _lock:
-            for (km, _kl), rec in _recognizers.items():
-                if km == key_m:
-                    m = rec.models
-                    break
+            m = _models.get(key) if key else None
         if m is None:
             m = load_models(models)
-    if library is None:
-        lib = embedded_library(m)
-    else:
-        lib = load_library(library)
-    key = (m.path and str(Path(m.path).resolve()), lib.hash, id(m))
+            if key:
+                with _lock:
+                    if len(_models) > 8:
+                        _models.clear()
+                    _models[key] = m
+    lib = embedded_library(m) if library is None else load_library(library)
+    rkey = (id(m), lib.hash, lib.path)
     with _lock:
-        rec = _recognizers.get(key)
-        if rec is None:
-            rec = Recognizer(m, lib)
+        rec = _recognizers.get(rkey)
+    if rec is None or rec.models is not m:
+        rec = Recognizer(m, lib)
+        with _lock:
             if len(_recognizers) > 8:
                 _recognizers.clear()
-            _recognizers[key] = rec
+            _recognizers[rkey] = rec
     return rec
 
 

@@ -134,7 +134,9 @@ def train_type(library: SnippetLibrary, stage: StageSpec, cfg: TrainConfig, repo
     metrics: dict[str, Any] = {"samples": len(data), "classes": len(groups)}
 
     classifier_state: dict = {}
+    torch = require_torch()
     if len(groups) > 1:
+        torch.manual_seed(cfg.seed)  # initial weights from the seed: same seed, same networks
         net = build_classifier(len(groups), cfg.width)
         advance = reporter.task(f"{t}: classifier ({count_parameters(net):,} weights, "
                                 f"{len(groups)} classes)", cfg.classifier_epochs)
@@ -160,6 +162,7 @@ def train_type(library: SnippetLibrary, stage: StageSpec, cfg: TrainConfig, repo
         rtr = np.intersect1d(rows, tr)
         rva = np.intersect1d(rows, va)
         target = data.u[:, cols]
+        torch.manual_seed(cfg.seed + si + 1)
         net = build_regressor(len(visible), cfg.width)
         advance = reporter.task(f"{t}: regressor {info.name} ({len(visible)} params)", cfg.regressor_epochs)
         state, rmse = _train_net(net, data.x[rtr], target[rtr], (data.x[rva], target[rva]), "mse",
