@@ -30,6 +30,7 @@ _LAZY = {
     "Model": ("grammarkit.split", "Model"),
     "tiling": ("grammarkit.tiling", None),
     "get_plugin_manager": ("grammarkit.plugins", "get_plugin_manager"),
+    "import_cga": ("grammarkit.cga", "import_cga"),
 }
 
 

@@ -39,6 +39,13 @@ def atomic_output(path: str | Path) -> Iterator[Path]:
     disk) becomes a ShapeError naming `path`, so the CLI reports it instead of a traceback.
     """
     path = Path(path)
+    if path.is_symlink():
+        # write through the link to the file it names: the link stays a link (fmt --in-place
+        # on a symlinked grammar formats the real file), and the error names the user's path
+        shown = path
+        path = Path(os.path.realpath(path))
+        if path.is_dir():
+            raise OutputError(f"{shown}: cannot write: it links to a folder, {path}")
     folder = path.parent if str(path.parent) else Path(".")
     if path.is_dir():
         raise OutputError(f"{path}: cannot write: it is a folder, not a file")

@@ -22,6 +22,7 @@ BUILTIN_COMMANDS = [
     ("grammarkit.cli.tiling", "validate"),
     ("grammarkit.cli.render", "render"),
     ("grammarkit.cli.train", "train"),
+    ("grammarkit.cli.cga", "import_cga_command"),
 ]
 
 

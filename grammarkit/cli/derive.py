@@ -219,8 +219,15 @@ def _run_folder(grammar: Any, file: Path, backend: str, out: Path, n: int, itera
                 registries: Any, console: Any) -> None:
     from ..run.api import run_backend
 
+    import signal
+
     progress, factory = progress_factory(console)
     written: list[str] = []
+
+    def terminate(signum: int, frame: Any) -> None:
+        raise KeyboardInterrupt  # SIGTERM ends the run like Ctrl-C: the current result completes or vanishes
+
+    previous = signal.signal(signal.SIGTERM, terminate)
     try:
         with progress:
             summary = run_backend(grammar, out=out, backend=backend, n=n, seed=seed,
@@ -232,6 +239,8 @@ def _run_folder(grammar: Any, file: Path, backend: str, out: Path, n: int, itera
         click.echo(f"interrupted: {len(written)} new results written to {out}/ (manifest.jsonl lists "
                    "every complete one); run the same command again to continue", err=True)
         raise SystemExit(130) from None
+    finally:
+        signal.signal(signal.SIGTERM, previous)
     if summary.resumed:
         console.print(f"continued an earlier run: {summary.resumed} results were already in {out}/",
                       highlight=False)

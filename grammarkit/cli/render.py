@@ -13,9 +13,11 @@ from ..errors import ShapeError
 
 
 def _parse_size(value: str) -> tuple[int, int]:
-    m = re.fullmatch(r"\s*(\d+)\s*(?:[xX*]\s*(\d+))?\s*", value)
+    # ASCII digits only, and few of them: int() of thousands of digits raises, and 8192 is the cap
+    m = re.fullmatch(r"\s*([0-9]{1,6})\s*(?:[xX*]\s*([0-9]{1,6}))?\s*", value)
     if not m:
-        raise click.BadParameter(f"expected WIDTHxHEIGHT such as 512x512, got {value!r}",
+        shown = value if len(value) <= 40 else value[:37] + "..."
+        raise click.BadParameter(f"expected WIDTHxHEIGHT such as 512x512, got {shown!r}",
                                  param_hint="--size")
     w = int(m.group(1))
     h = int(m.group(2) or w)
@@ -90,6 +92,9 @@ def render(model: Path, output: Path, style: str, size: str, pitch: float, yaw: 
     if output.suffix.lower() not in Image.registered_extensions():
         raise click.BadParameter(f"unknown image format {output.suffix or '(no suffix)'!r}; "
                                  "use .png, .jpg, .webp, ...", param_hint="--output")
+    from ..run.writer import check_outputs
+
+    check_outputs({"--output": output}, inputs=[model])  # never replace the model with its picture
     bg = _parse_color(background, "--background")
     lc = _parse_color(line_color, "--line-color") or (25, 25, 25)
     try:

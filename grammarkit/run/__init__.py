@@ -20,6 +20,7 @@ _LAZY = {
     "encode_result": "api", "preview_png": "api",
     "parse_options": "options", "describe_options": "options", "OptionError": "options",
     "LocalExecutor": "executor", "Executor": "executor", "make_executor": "executor",
+    "default_workers": "executor",
     "OutputFolder": "writer", "write_files": "writer", "check_outputs": "writer",
     "grammar_hash": "writer", "RunMismatch": "writer",
 }

@@ -38,6 +38,7 @@ import threading
 import time
 import traceback
 from collections import deque
+from contextlib import contextmanager
 from typing import Any, Callable, Iterable, Iterator, Protocol, Sequence
 
 __all__ = ["Executor", "LocalExecutor", "Session", "WorkerError", "default_workers", "make_executor"]
@@ -105,6 +106,13 @@ def _portable_error(exc: BaseException) -> BaseException:
 def _worker_main(conn: Any) -> None:  # pragma: no cover - runs in the child process
     _die_with_parent()
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's to handle
+    try:
+        _serve(conn)
+    except (EOFError, OSError):
+        return  # the parent went away (killed, or done with us): end quietly, no traceback
+
+
+def _serve(conn: Any) -> None:  # pragma: no cover - runs in the child process
     states: dict[int, Any] = {}
     conn.send(("ready",))
     while True:
@@ -145,12 +153,30 @@ def _worker_main(conn: Any) -> None:  # pragma: no cover - runs in the child pro
                 return
 
 
+@contextmanager
+def _main_without_phantom_file() -> Iterator[None]:
+    """Spawned children re-import the parent's main script from `__main__.__file__`. Code run
+    from standard input or a notebook has a `__file__` that is no file ('<stdin>'), and the
+    child would die looking for it: hide it while starting (the work never lives in it)."""
+    main = sys.modules.get("__main__")
+    path = getattr(main, "__file__", None)
+    if path is None or os.path.isfile(path):
+        yield
+        return
+    del main.__file__  # type: ignore[union-attr]
+    try:
+        yield
+    finally:
+        main.__file__ = path  # type: ignore[union-attr]
+
+
 class _Worker:
     def __init__(self) -> None:
         ctx = mp.get_context("spawn")  # fork deadlocks in manifold3d's TBB thread pool
         self.conn, child = ctx.Pipe()
         self.proc = ctx.Process(target=_worker_main, args=(child,), daemon=True)
-        self.proc.start()
+        with _main_without_phantom_file():
+            self.proc.start()
         child.close()
         self.ready = False
         self.sessions: set[int] = set()
@@ -231,6 +257,7 @@ class _LocalSession:
         self.log: list[tuple[Callable, tuple]] = []
         self.workers: list[_Worker] = []
         self.closed = False
+        self.local_only = False
 
     # -- state ------------------------------------------------------------------------------
     def update(self, fn: Callable[..., None], *args: Any) -> None:
@@ -246,13 +273,14 @@ class _LocalSession:
         if not pending:
             return
         want = self.executor.workers
+        always = self.executor.parallel == "always"
         spent, done_here = 0.0, 0
         while pending:
-            if want > 1 and not self.workers and done_here and self._worth_it(spent / done_here,
-                                                                              len(pending)):
+            if want > 1 and not self.workers and not self.local_only and (always or (done_here and self._worth_it(
+                    spent / done_here, len(pending)))):
                 self._start_workers(want)
             if self.workers:
-                yield from self._parallel(fn, pending, spent / max(done_here, 1))
+                yield from self._parallel(fn, pending, spent / done_here if done_here else None)
                 return
             _, item = pending.popleft()
             t0 = time.perf_counter()
@@ -268,18 +296,26 @@ class _LocalSession:
         return work * (1.0 - 1.0 / workers) > startup + self.executor.min_parallel_seconds
 
     def _start_workers(self, count: int) -> None:
+        try:  # state that cannot be shipped (a lambda in it, say) is computed here instead
+            pickle.dumps((self.init, self.args, self.log))
+        except Exception:  # noqa: BLE001 - any pickling failure means: stay in this process
+            self.local_only = True
+            return
         self.workers = _take_workers(count)
         for w in self.workers:
             if w.ready:
                 w.conn.send(("init", self.sid, self.init, self.args, list(self.log)))
                 w.sessions.add(self.sid)
 
-    def _parallel(self, fn: Callable, pending: deque, per_item: float) -> Iterator[Any]:
+    def _parallel(self, fn: Callable, pending: deque, per_item: float | None) -> Iterator[Any]:
         """Hand chunks to workers as they become free, run items here while none is ready,
         and yield every result in item order."""
         from multiprocessing.connection import wait
 
-        size = max(1, min(64, int(CHUNK_SECONDS / max(per_item, 1e-6))))
+        if per_item is None:  # nothing timed yet: a few chunks per worker
+            size = max(1, min(64, len(pending) // (4 * len(self.workers))))
+        else:
+            size = max(1, min(64, int(CHUNK_SECONDS / max(per_item, 1e-6))))
         results: dict[int, tuple[bool, Any]] = {}  # item position -> (ok, value)
         order = deque(pos for pos, _ in pending)
         chunk_ids = itertools.count()
@@ -305,7 +341,8 @@ class _LocalSession:
                     yield value
                 if not order:
                     break
-                if not out and pending and not any(w.ready for w in self.workers):
+                if not out and pending and not any(w.ready for w in self.workers) \
+                        and self.executor.parallel == "auto":
                     # workers still starting: do the next item here meanwhile
                     pos, item = pending.popleft()
                     try:
@@ -314,12 +351,24 @@ class _LocalSession:
                         results[pos] = (False, exc)
                     self._poll_ready(timeout=0)
                     continue
+                if not self.workers:  # none could start: the rest runs here, in order
+                    while pending:
+                        pos, item = pending.popleft()
+                        try:
+                            results[pos] = (True, fn(self.state, item))
+                        except Exception as exc:  # noqa: BLE001 - raised in order below
+                            results[pos] = (False, exc)
+                            break
+                    continue
                 conns = list(out) + [w.conn for w in self.workers if not w.ready]
                 for conn in wait(conns, timeout=1.0):
                     w = next(x for x in self.workers if x.conn is conn)
                     try:
                         msg = conn.recv()
                     except (EOFError, OSError):
+                        if not w.ready:
+                            self._failed_start(w)
+                            continue
                         raise WorkerError("a worker process died (out of memory?); "
                                           "try fewer workers") from None
                     self._handle(w, msg, out, results)
@@ -342,8 +391,23 @@ class _LocalSession:
             try:
                 msg = conn.recv()
             except (EOFError, OSError):
-                raise WorkerError("a worker process died while starting") from None
+                self._failed_start(w)
+                continue
             self._handle(w, msg, {}, {})
+
+    def _failed_start(self, w: _Worker) -> None:
+        """A worker died before it was ready (e.g. a main script without the
+        `if __name__ == "__main__":` guard re-ran itself in it): the work goes on without it,
+        here if need be; results are the same either way."""
+        import warnings
+
+        self.workers.remove(w)
+        _release([w], broken=True)
+        if not self.workers:
+            self.local_only = True
+            warnings.warn("grammarkit: worker processes could not start; continuing in this "
+                          "process (a script that starts parallel work needs an "
+                          "`if __name__ == \"__main__\":` guard)", RuntimeWarning, stacklevel=4)
 
     def _handle(self, w: _Worker, msg: tuple, out: dict, results: dict) -> None:
         if msg[0] == "ready":
@@ -387,13 +451,21 @@ class LocalExecutor:
 
     workers: the most processes to use (default: the CPUs this process may run on; 1 runs
              everything in this process).
-    min_parallel_seconds: parallel work must be expected to save at least this much.
+    parallel: "auto" starts workers when the work is expected to repay their start-up;
+             "always" hands every map to workers (tests, benchmarks); "never" stays here.
+    min_parallel_seconds: with "auto", parallel work must be expected to save this much.
     """
 
     name = "local"
 
-    def __init__(self, workers: int | None = None, *, min_parallel_seconds: float = 0.5):
+    def __init__(self, workers: int | None = None, *, parallel: str = "auto",
+                 min_parallel_seconds: float = 0.5):
+        if parallel not in ("auto", "always", "never"):
+            raise ValueError(f"parallel must be 'auto', 'always' or 'never', not {parallel!r}")
         self.workers = default_workers() if workers is None else max(1, int(workers))
+        if parallel == "never":
+            self.workers = 1
+        self.parallel = parallel
         self.min_parallel_seconds = float(min_parallel_seconds)
 
     def session(self, init: Callable[..., Any], *args: Any) -> _LocalSession:

@@ -58,22 +58,16 @@ class _State:
     """What every process deriving items of one run holds (built once per process)."""
 
     def __init__(self, grammar: Any, seed: int, attrs: dict, options: SplitOptions,
-                 fmt: str | None, preview: bool):
+                 exporter: Any, preview: bool):
         self.grammar, self.seed, self.attrs = grammar, seed, attrs
-        self.options, self.fmt, self.preview = options, fmt, preview
+        self.options, self.exporter, self.preview = options, exporter, preview
         self.limits = _limits(options)
         self.name = grammar.name or "model"
-        self.exporter = None
-        if fmt is not None:
-            # a worker process is an edge of the program: it reads its own plugin registry
-            from ..plugins import get_plugin_manager
-
-            self.exporter = get_plugin_manager().registries().exporters[fmt]
 
 
-def _init_state(grammar: Any, seed: int, attrs: dict, options: SplitOptions, fmt: str | None,
+def _init_state(grammar: Any, seed: int, attrs: dict, options: SplitOptions, exporter: Any,
                 preview: bool) -> _State:
-    return _State(grammar, seed, attrs, options, fmt, preview)
+    return _State(grammar, seed, attrs, options, exporter, preview)
 
 
 def _derive_item(state: _State, index: int) -> Result:
@@ -123,8 +117,9 @@ def run(request: Request) -> Iterator[Result]:
                                request.n)
     if request.start:
         advance(request.start)
+    exporter = request.registries.exporters[request.format]  # the run layer checked the format
     with request.executor.session(_init_state, request.grammar, request.seed, attrs, options,
-                                  request.format, request.preview) as session:
+                                  exporter, request.preview) as session:
         for result in session.map(_derive_item, indices):
             request.check_deadline()
             advance(1, file=result.id)

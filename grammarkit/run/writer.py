@@ -117,6 +117,16 @@ def _fsync_dir(folder: Path) -> None:
             os.close(fd)
 
 
+def _files_of(entries: Iterable[dict]) -> list[str]:
+    """The plain file names (model and attachments) that manifest entries list."""
+    names = []
+    for e in entries:
+        for name in [e.get("file"), *(e.get("attachments") or {}).values()]:
+            if isinstance(name, str) and name and "/" not in name and not name.startswith("."):
+                names.append(name)
+    return names
+
+
 @dataclass
 class OutputFolder:
     """A folder of results with `run.json` and `manifest.jsonl` (see the module docstring).
@@ -125,6 +135,9 @@ class OutputFolder:
     run:       what is being asked; must equal the folder's `run.json` to continue a run.
     protected: input files that no output may replace.
     overwrite: start over: delete the files an earlier run listed, then write afresh.
+
+    Nothing is created or changed on disk until the first `add` (a run that fails before
+    its first result leaves the folder as it was).
     """
 
     path: Path
@@ -144,12 +157,26 @@ class OutputFolder:
         if not p.exists() and p.suffix.lower() in MODEL_SUFFIXES:
             raise OutputError(f"{p}: this command writes a folder of results, and the name looks "
                               f"like one model file; give a folder name, e.g. -o {p.with_suffix('')}/")
-        try:
-            p.mkdir(parents=True, exist_ok=True)
-        except OSError as exc:
-            raise OutputError(f"{p}: cannot create folder: {exc.strerror or exc}") from None
-        self._recover()
-        self._open_run()
+        self._check_creatable()
+        self._opened = False
+        if p.is_dir():
+            self._recover()
+        self._read_state()
+
+    def _check_creatable(self) -> None:
+        """Fail now, not after the work, if the folder cannot exist: the nearest existing
+        ancestor must be a folder we may write in. (The folder itself is made with the first
+        result, so a run that fails early leaves no empty folder behind.)"""
+        p = self.path
+        ancestor = p
+        while not ancestor.exists():
+            if ancestor.parent == ancestor:
+                break
+            ancestor = ancestor.parent
+        if not ancestor.is_dir():
+            raise OutputError(f"{p}: cannot create folder: {ancestor} is a file")
+        if not os.access(ancestor, os.W_OK | os.X_OK):
+            raise OutputError(f"{p}: cannot create folder: {ancestor} is not writable")
 
     # -- opening ----------------------------------------------------------------------------
     def _recover(self) -> None:
@@ -175,7 +202,7 @@ class OutputFolder:
 
     def _read_manifest(self) -> list[dict]:
         path = self.path / MANIFEST
-        if not path.exists():
+        if not path.is_file():
             return []
         entries = []
         try:
@@ -192,7 +219,8 @@ class OutputFolder:
             entries.append(entry)
         return entries
 
-    def _open_run(self) -> None:
+    def _read_state(self) -> None:
+        """Read an earlier run's run.json and manifest, if any, and decide where to go on."""
         run_path = self.path / RUN_FILE
         old_run = None
         if run_path.exists():
@@ -201,15 +229,10 @@ class OutputFolder:
             except (OSError, ValueError):
                 old_run = None
         entries = self._read_manifest()
+        self._discard: list[str] = []  # listed files that the new run replaces (deleted on open)
         if self.overwrite:
-            for e in entries:
-                for name in [e.get("file"), *(e.get("attachments") or {}).values()]:
-                    if isinstance(name, str) and "/" not in name:
-                        with contextlib.suppress(OSError):
-                            (self.path / name).unlink()
+            self._discard = _files_of(entries)
             entries, old_run = [], None
-            with contextlib.suppress(OSError):
-                (self.path / MANIFEST).unlink()
         elif (entries or (self.path / MANIFEST).exists()) and old_run is None:
             raise RunMismatch(f"{self.path}: holds a manifest.jsonl without run.json (written by an "
                               "older grammarkit or by hand); use another folder or --overwrite")
@@ -225,14 +248,27 @@ class OutputFolder:
         for i, e in enumerate(entries):
             names = [e.get("file"), *(e.get("attachments") or {}).values()]
             if any(isinstance(nm, str) and not (self.path / nm).exists() for nm in names if nm):
+                self._discard = _files_of(entries[i:])
                 entries = entries[:i]
                 break
         self.entries = entries
         self.resumed = len(entries)
-        # rewrite manifest (drops a torn last line) and run.json before new results arrive
-        write_files({run_path: json.dumps(self.run, indent=1, sort_keys=True) + "\n",
+
+    def _open(self) -> None:
+        """Make the folder; rewrite run.json and the manifest (dropping a torn last line)."""
+        if self._opened:
+            return
+        try:
+            self.path.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise OutputError(f"{self.path}: cannot create folder: {exc.strerror or exc}") from None
+        for name in self._discard:
+            with contextlib.suppress(OSError):
+                (self.path / name).unlink()
+        write_files({self.path / RUN_FILE: json.dumps(self.run, indent=1, sort_keys=True) + "\n",
                      self.path / MANIFEST: "".join(json.dumps(e, sort_keys=True) + "\n"
-                                                   for e in entries)})
+                                                   for e in self.entries)})
+        self._opened = True
 
     # -- writing ----------------------------------------------------------------------------
     @property
@@ -249,6 +285,7 @@ class OutputFolder:
                 if _same_file(target, src):
                     raise OutputError(f"{target}: writing this result would overwrite the input "
                                       f"{src}; choose another output folder")
+        self._open()
         pending = self.path / PENDING
         pending.write_text(json.dumps(sorted(files)), encoding="utf-8")
         listed = False

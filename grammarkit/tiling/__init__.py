@@ -16,6 +16,13 @@ Public API (signatures are stable; the graph sampler builds on them):
     prepare(parts) -> PartGeometry       # per-part bounds/centroids, reusable across contacts()
     surface_centroid(vertices, faces) -> (3,) area-weighted centroid
 
+Shape-graph machinery for back ends that edit shapes (index-based graphs and parts):
+
+    adjacency_from_edges, induced_edges, replace_subgraph, random_connected_subgraph,
+    Cut, cut_layers, match_boundary, kept_region, distance_matrix, histogram_key   # .graphops
+    moved_mesh, bounds_of, PartCache, part_key, contacts_involving, ForbiddenContact,
+    edit_violations, full_check, graph_of                                           # .incremental
+
 See docs/tiling.md.
 """
 from __future__ import annotations
@@ -35,6 +42,14 @@ _EXPORTS = {
     "dock": "dock",
     "local_frame": "frames", "relative_placement": "frames",
     "shape_graph": "graph",
+    "Cut": "graphops", "adjacency_from_edges": "graphops", "cut_layers": "graphops",
+    "distance_matrix": "graphops", "histogram_key": "graphops", "induced_edges": "graphops",
+    "kept_region": "graphops", "match_boundary": "graphops",
+    "random_connected_subgraph": "graphops", "replace_subgraph": "graphops",
+    "ForbiddenContact": "incremental", "PartCache": "incremental", "bounds_of": "incremental",
+    "contacts_involving": "incremental", "edit_violations": "incremental",
+    "full_check": "incremental", "graph_of": "incremental", "moved_mesh": "incremental",
+    "part_key": "incremental",
     "ShapeWarning": "io", "load_examples": "io", "part_prototype": "io", "read_assembly": "io",
     "type_from_name": "io", "write_assembly": "io",
     "learn": "learn",
@@ -81,6 +96,14 @@ if TYPE_CHECKING:  # pragma: no cover - for type checkers and IDEs
     from .dock import dock
     from .frames import local_frame, relative_placement, surface_centroid
     from .graph import shape_graph
+    from .graphops import (
+        Cut, adjacency_from_edges, cut_layers, distance_matrix, histogram_key, induced_edges,
+        kept_region, match_boundary, random_connected_subgraph, replace_subgraph,
+    )
+    from .incremental import (
+        ForbiddenContact, PartCache, bounds_of, contacts_involving, edit_violations, full_check,
+        graph_of, moved_mesh, part_key,
+    )
     from .io import ShapeWarning, load_examples, part_prototype, read_assembly, type_from_name, write_assembly
     from .learn import learn
     from .rules import DockPlacement, Rules, rules_from_grammar
@@ -92,4 +115,9 @@ __all__ = [
     "Violation", "default_tolerance", "dock", "learn", "load_examples", "local_frame", "part_prototype",
     "read_assembly", "relative_placement", "rules_from_grammar", "shape_graph", "type_from_name",
     "validate", "write_assembly",
+    # shape-graph machinery for back ends (graphops, incremental)
+    "Cut", "adjacency_from_edges", "cut_layers", "distance_matrix", "histogram_key", "induced_edges",
+    "kept_region", "match_boundary", "random_connected_subgraph", "replace_subgraph",
+    "ForbiddenContact", "PartCache", "bounds_of", "contacts_involving", "edit_violations",
+    "full_check", "graph_of", "moved_mesh", "part_key",
 ]

@@ -58,6 +58,18 @@ class PartGeometry:
     boxy: np.ndarray  # (n,) bool: the mesh is exactly its bounding box
     _manifolds: dict = field(default_factory=dict)
 
+    # The solids `contacts()` builds lazily (local part index -> manifold3d.Manifold, or None
+    # for a part whose mesh is not a closed manifold). Back ends that measure the same placed
+    # part many times (grammarkit.tiling.incremental.PartCache) share them across calls.
+    def known_solids(self) -> dict[int, object]:
+        """The solids built so far, by local part index (a copy; None: not a closed manifold)."""
+        return dict(self._manifolds)
+
+    def seed_solids(self, solids: dict[int, object]) -> None:
+        """Pre-fill solids by local part index, so `contacts()` does not rebuild them. Each must
+        be the manifold3d solid of that part's mesh (or None if it is not a closed manifold)."""
+        self._manifolds.update(solids)
+
 
 def check_tolerance(tolerance: object, where: str = "tolerance") -> float | None:
     """A user's contact tolerance as a float (None: the default), or a ShapeError: NaN would

@@ -46,3 +46,28 @@ def test_fmt_in_place_keeps_permissions(tmp_path):
     result = CliRunner().invoke(main, ["fmt", "--in-place", str(path)])
     assert result.exit_code == 0, result.output
     assert path.read_text() == "Lot --> extrude(3) Mass.\n" and stat.S_IMODE(path.stat().st_mode) == 0o600
+
+
+def test_writing_through_a_symlink_keeps_the_link(tmp_path):
+    from grammarkit.fileio import atomic_output
+
+    real = tmp_path / "real.grammar"
+    real.write_text("old")
+    link = tmp_path / "link.grammar"
+    link.symlink_to(real)
+    with atomic_output(link) as tmp:
+        tmp.write_text("new")
+    assert link.is_symlink() and real.read_text() == "new"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["link.grammar", "real.grammar"]
+
+
+def test_render_refuses_to_replace_its_model(tmp_path):
+    from click.testing import CliRunner
+
+    from grammarkit.cli import main
+
+    model = tmp_path / "m.png"
+    model.write_bytes(b"not really a model")
+    r = CliRunner().invoke(main, ["render", str(model), "-o", str(model)])
+    assert r.exit_code != 0 and "overwrite the input" in r.output
+    assert model.read_bytes() == b"not really a model"

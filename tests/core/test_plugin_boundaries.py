@@ -8,7 +8,7 @@ ROOT = Path(__file__).resolve().parents[2]
 # What a third-party plugin may import: the package and its documented public modules.
 PUBLIC = {"grammarkit", "grammarkit.tiling", "grammarkit.dsl", "grammarkit.registry", "grammarkit.errors",
           "grammarkit.ir", "grammarkit.hookspecs", "grammarkit.fileio", "grammarkit.jsonable", "grammarkit.plugins", "grammarkit.printer",
-          "grammarkit.split", "grammarkit.geometry.exporters", "grammarkit.geometry.render",
+          "grammarkit.split", "grammarkit.run", "grammarkit.geometry.exporters", "grammarkit.geometry.render",
           "grammarkit.geometry.convert", "grammarkit.geometry.meshio"}
 
 

@@ -1,12 +1,16 @@
-"""Written variants (GLB + manifest.jsonl) and the back end as the plugin manager sees it."""
+"""The graph sampler through the run layer: variants written by the one writer (GLB +
+manifest.jsonl), read back valid, and the back end as the plugin manager sees it."""
 import json
+from pathlib import Path
 
 import pytest
 
-from grammarkit.registry import DeriveRequest
+from grammarkit.dsl import load
+from grammarkit.run import run_backend
 from grammarkit.tiling import read_assembly, shape_graph, validate
-from grammarkit_graph_sampler.plugin import write_variants
-from grammarkit_graph_sampler.sampler import GraphSampler, SamplerOptions
+
+GRAMMAR = Path(__file__).parent / "data" / "minicastle.grammar"
+OPTIONS = {"attempts_per_shape": 64, "min_attempts": 256}
 
 
 def test_backend_is_found_through_its_entry_point():
@@ -16,35 +20,39 @@ def test_backend_is_found_through_its_entry_point():
     spec = pm.backends()["graph-sampler"]
     assert spec.families == frozenset({"tiling"}) and "tiling" in spec.default_for
     assert pm.default_backend("tiling").name == "graph-sampler"
-    assert spec.plugin == "graph-sampler" and callable(spec.derive)
+    assert spec.plugin == "graph-sampler" and callable(spec.run)
+    assert "tolerance" in spec.options.model_fields
     info = {i.name: i for i in pm.plugins()}["graph-sampler"]
     assert info.ok and info.provides["backend"] == ["graph-sampler"]
 
 
 @pytest.fixture(scope="module")
-def written(kit, tmp_path_factory):
-    out = tmp_path_factory.mktemp("variants")
+def written(tmp_path_factory):
+    out = tmp_path_factory.mktemp("variants") / "out"
     calls = []
 
     def progress(description, total):
         calls.append(("bar", description, total))
         return lambda n=1, **fields: calls.append(("advance", n, fields))
 
-    sampler = GraphSampler(rules=kit.rules(), examples=kit.examples(), seed=3, workers=1,
-                           options=SamplerOptions(attempts_per_shape=64, min_attempts=256))
-    summary = write_variants(sampler, DeriveRequest(out=out, n=8, iterations=3, seed=3, progress=progress))
-    return out, summary, calls, kit
+    summary = run_backend(GRAMMAR, out=out, n=5, iterations=3, seed=3, options=OPTIONS, workers=1,
+                          progress=progress)
+    return out, summary, calls
+
+
+def records(out):
+    return [json.loads(line) for line in (out / "manifest.jsonl").read_text().splitlines()]
 
 
 def test_every_written_variant_reads_back_valid_and_watertight(written):
-    out, summary, _, kit = written
-    records = [json.loads(line) for line in (out / "manifest.jsonl").read_text().splitlines()]
-    assert len(records) == summary["variants"] == 8
-    assert sorted(p.name for p in out.glob("*.glb")) == sorted(r["file"] for r in records)
-    rules = kit.rules()
-    for r in records:
+    out, summary, _ = written
+    recs = records(out)
+    assert len(recs) == summary.written == 5 and summary.shortfall is None
+    assert sorted(p.name for p in out.glob("*.glb")) == sorted(r["file"] for r in recs)
+    grammar = load(GRAMMAR)
+    for r in recs:
         asm = read_assembly(out / r["file"])
-        assert validate(rules, asm).ok
+        assert validate(grammar, asm).ok
         assert all(p.mesh.is_watertight for p in asm.parts)
         # manifest: histogram and graph are those of the geometry read back
         assert asm.type_histogram() == r["histogram"]
@@ -54,11 +62,11 @@ def test_every_written_variant_reads_back_valid_and_watertight(written):
 
 
 def test_manifest_records_parents_and_the_operation(written):
-    out, summary, _, _ = written
-    records = [json.loads(line) for line in (out / "manifest.jsonl").read_text().splitlines()]
-    known = {"example:grid22", "example:strip3"}
-    for r in records:
-        assert r["dedupe"] == "histogram" and r["seed"] == 3
+    out, summary, _ = written
+    known = {"example:strip2", "example:strip3"}
+    for i, r in enumerate(records(out)):
+        assert {"id", "index", "seed", "parents", "metrics", "file"} <= set(r)
+        assert r["index"] == i and r["dedupe"] == "histogram" and r["seed"] == 3
         assert set(r["parents"]) <= known  # parents come first (examples or earlier variants)
         op = r["operation"]
         assert [op["donor"], op["recipient"]] == r["parents"]
@@ -67,27 +75,40 @@ def test_manifest_records_parents_and_the_operation(written):
         ids = {n["id"] for n in r["graph"]["nodes"]}
         assert set(op["inserted"].values()) <= ids
         assert all(b["variant"] in ids for b in op["boundary"])
+        assert r["metrics"]["parts"] == len(ids)
         known.add(r["id"])
-    json.dumps(summary)  # JSON-able
-    assert summary["growth"][0] == {"iteration": 0, "shapes": 2, "new": 2}
-    assert summary["growth"][-1]["shapes"] == 2 + summary["variants"]
+    stats = summary.stats
+    json.dumps(summary.to_dict())  # JSON-able
+    assert stats["growth"][0] == {"iteration": 0, "shapes": 2, "new": 2}
+    assert stats["growth"][-1]["shapes"] >= 2 + summary.written
 
 
 def test_progress_reports_attempts_valid_and_new(written):
-    _, summary, calls, _ = written
+    _, summary, calls = written
     bars = [c for c in calls if c[0] == "bar"]
     assert bars and bars[0][1].startswith("iteration 1/3")
     adv = [c for c in calls if c[0] == "advance"]
-    assert sum(c[1] for c in adv) == summary["attempts"]
+    assert sum(c[1] for c in adv) == summary.stats["attempts"]
     assert {"attempts", "valid", "new"} <= set(adv[-1][2])
-    assert adv[-1][2]["total_new"] == summary["variants"]
 
 
-def test_output_path_that_is_a_file_is_an_error(kit, tmp_path):
-    from grammarkit.errors import DerivationError
+def test_an_interrupted_run_continues_to_the_same_files(written, tmp_path):
+    out, _, _ = written
+    part = tmp_path / "part"
+    first = run_backend(GRAMMAR, out=part, n=3, iterations=3, seed=3, options=OPTIONS, workers=1)
+    assert first.written == 3
+    rest = run_backend(GRAMMAR, out=part, n=5, iterations=3, seed=3, options=OPTIONS, workers=1)
+    assert rest.resumed == 3 and rest.written == 2
+    assert (part / "manifest.jsonl").read_text() == (out / "manifest.jsonl").read_text()
+    for f in out.glob("*.glb"):
+        assert (part / f.name).read_bytes() == f.read_bytes()
+
+
+def test_output_path_that_is_a_file_is_an_error(tmp_path):
+    from grammarkit.errors import ShapeError
 
     f = tmp_path / "taken"
     f.write_text("x")
-    sampler = GraphSampler(rules=kit.rules(), examples=kit.examples(), workers=1)
-    with pytest.raises(DerivationError, match="not a folder"):
-        write_variants(sampler, DeriveRequest(out=f, n=1))
+    with pytest.raises(ShapeError, match="is a file"):
+        run_backend(GRAMMAR, out=f, n=1)
+    assert f.read_text() == "x"

@@ -25,8 +25,12 @@ def examples():
 
 
 def run(workers=1, seed=7, n=10, iterations=3, **kw):
-    opts = SamplerOptions(**{**OPTS.__dict__, **kw})
-    s = GraphSampler(rules=castle_rules(), examples=examples(), seed=seed, workers=workers, options=opts)
+    from grammarkit.run.executor import LocalExecutor
+
+    opts = OPTS.model_copy(update=kw)
+    # "always": two workers really run the attempts, however small the job
+    s = GraphSampler(rules=castle_rules(), examples=examples(), seed=seed, options=opts,
+                     executor=LocalExecutor(workers, parallel="always"))
     return s, list(s.run(n, iterations))
 
 
@@ -81,46 +85,19 @@ def test_results_do_not_depend_on_the_number_of_workers(sampled):
     assert fingerprint(two) == fingerprint(one)
 
 
-def test_persistent_workers_serve_runs_one_after_another(sampled):
-    # Workers outlive a run; the next run re-initialises them (other seed, options, pool), so a
-    # later run must not see anything of an earlier one.
-    from grammarkit_graph_sampler import sampler as mod
+def test_workers_serve_runs_one_after_another(sampled):
+    # Workers outlive a run (grammarkit.run.executor keeps them); the next run starts a new
+    # session, so a later run must not see anything of an earlier one.
+    from grammarkit.run import executor as ex
 
     _, one = sampled
     s1, first = run(workers=2, seed=8)
-    procs = [p.pid for p, _ in mod._POOL[:2]]
+    pids = sorted(w.proc.pid for w in ex._POOL)
     s2, again = run(workers=2)
-    assert [p.pid for p, _ in mod._POOL[:2]] == procs  # the same processes, reused
+    assert sorted(w.proc.pid for w in ex._POOL) == pids  # the same processes, reused
     assert fingerprint(again) == fingerprint(one)
     assert [st.row()["outcomes"] for st in s2.stats] == [st.row()["outcomes"] for st in sampled[0].stats]
     assert fingerprint(first) != fingerprint(one)
-
-
-def test_a_run_interrupted_mid_batch_drops_its_workers(sampled, monkeypatch):
-    import multiprocessing.connection
-
-    from grammarkit_graph_sampler import sampler as mod
-
-    s = GraphSampler(rules=castle_rules(), examples=examples(), seed=7, workers=2, options=OPTS)
-    used = [p for p, _ in mod._POOL[:2]]
-
-    real_wait = multiprocessing.connection.wait
-    calls = []
-
-    def interrupted(*args, **kw):  # while a batch is out: the workers' replies stay unread
-        calls.append(1)
-        if len(calls) == 1:
-            raise KeyboardInterrupt
-        return real_wait(*args, **kw)  # (Process.join waits with it too)
-
-    monkeypatch.setattr(multiprocessing.connection, "wait", interrupted)
-    with pytest.raises(KeyboardInterrupt):
-        list(s.run(5, 1))
-    monkeypatch.undo()
-    assert not any(p.is_alive() for p in used)
-    assert not {p.pid for p in used} & {p.pid for p, _ in mod._POOL}
-    _, two = run(workers=2)  # fresh workers, no stale replies: the usual result
-    assert fingerprint(two) == fingerprint(sampled[1])
 
 
 def test_seed_changes_the_output(sampled):
@@ -162,11 +139,15 @@ def test_docking_refuses_collinear_boundaries_and_aligns_rigidly():
 
 
 def test_bad_options_are_clear_errors():
-    with pytest.raises(ValueError, match="unknown graph-sampler option"):
-        SamplerOptions.from_strings({"tolerence": "0.1"})
-    with pytest.raises(ValueError, match="expected"):
-        SamplerOptions.from_strings({"tolerance": "abc"})
-    with pytest.raises(ValueError, match="dedupe"):
-        SamplerOptions.from_strings({"dedupe": "wl"})
-    assert SamplerOptions.from_strings({"dedupe": "isomorphism", "dock-tolerance": "0.02",
-                                        "incremental": "false"}).incremental is False
+    from grammarkit.run import OptionError, parse_options
+
+    def parse(**kw):
+        return parse_options(SamplerOptions, kw, backend="graph-sampler")
+
+    with pytest.raises(OptionError, match="no option 'tolerence'"):
+        parse(tolerence="0.1")
+    with pytest.raises(OptionError, match="tolerance=abc: graph-sampler option 'tolerance' expects a number"):
+        parse(tolerance="abc")
+    with pytest.raises(OptionError, match="dedupe"):
+        parse(dedupe="wl")
+    assert parse(**{"dedupe": "isomorphism", "dock-tolerance": "0.02", "incremental": "false"}).incremental is False

@@ -82,40 +82,58 @@ def test_variations_folder_and_manifest(tmp_path):
     out = tmp_path / "vars"
     r = CliRunner().invoke(main, ["derive", str(g), "-o", str(out), "--variations", "3", "--seed", "1"])
     assert r.exit_code == 0, r.output
-    manifest = json.loads((out / "variations.json").read_text())
-    assert len(manifest["variations"]) == 3
+    manifest = [json.loads(line) for line in (out / "manifest.jsonl").read_text().splitlines()]
+    assert len(manifest) == 3 and [v["index"] for v in manifest] == [0, 1, 2]
     files = sorted(p.name for p in out.glob("*.glb"))
     assert files == ["small_0000.glb", "small_0001.glb", "small_0002.glb"]
-    hs = [v["attrs"]["h"] for v in manifest["variations"]]
+    assert [v["file"] for v in manifest] == files
+    hs = [v["attrs"]["h"] for v in manifest]
     assert all(3 <= h <= 12 and isinstance(h, int) for h in hs)
-    samples = {(v["attrs"]["h"], v["attrs"]["roof"], v["seed"]) for v in manifest["variations"]}
+    samples = {(v["attrs"]["h"], v["attrs"]["roof"], v["seed"]) for v in manifest}
     assert len(samples) == 3
+    assert all(v["metrics"]["triangles"] > 0 for v in manifest)
+    assert json.loads((out / "run.json").read_text())["options"]["variations"] is True
 
 
 class _FakeBackend:
-    """A back end plugin recording the DeriveRequest it gets."""
+    """A back end plugin recording the Request it gets."""
 
     seen: list = []
 
     @staticmethod
-    def derive(grammar, request):
+    def run(request):
+        from grammarkit.run import Result
+
+        _FakeBackend.seen.append(request)
         advance = request.progress("sampling", request.n)
-        for _ in range(request.n):
+        for i in range(request.start, request.n):
             advance(1, ok=1)
-        _FakeBackend.seen.append((grammar.family, request))
-        return {"models": request.n, "out": str(request.out)}
+            yield Result(id=f"fake_{i}", index=i, model=trimesh_box(i), seed=request.seed)
+        return {"models": request.n}
+
+
+def trimesh_box(i):
+    import trimesh
+
+    return trimesh.creation.box(extents=(1 + i, 1, 1))
 
 
 def test_tiling_grammar_goes_to_backend(tmp_path):
+    from pydantic import BaseModel
+
     from grammarkit import hookimpl
     from grammarkit.plugins import get_plugin_manager
-    from grammarkit.registry import BackendSpec
+    from grammarkit.run import BackendSpec
+
+    class FakeOptions(BaseModel):
+        temperature: float = 1.0
 
     class Plugin:
         @staticmethod
         @hookimpl
         def grammarkit_backends():
-            return [BackendSpec("fake-test", "records requests", frozenset({"tiling"}), _FakeBackend.derive)]
+            return [BackendSpec("fake-test", "records requests", frozenset({"tiling"}), _FakeBackend.run,
+                                options=FakeOptions)]
 
     pm = get_plugin_manager()
     pm.register(Plugin, name="fake-backend-test")
@@ -126,12 +144,20 @@ def test_tiling_grammar_goes_to_backend(tmp_path):
                                       "-n", "3", "--iterations", "7", "--seed", "5", "--workers", "2",
                                       "--option", "temperature=0.5"])
         assert r.exit_code == 0, r.output
-        family, req = _FakeBackend.seen[-1]
-        assert family == "tiling" and req.n == 3 and req.iterations == 7 and req.seed == 5
-        assert req.workers == 2 and req.options == {"temperature": "0.5"}
+        req = _FakeBackend.seen[-1]
+        assert req.grammar.family == "tiling" and req.n == 3 and req.iterations == 7 and req.seed == 5
+        assert req.executor.workers == 2 and req.options.temperature == 0.5
         assert '"models": 3' in r.output
+        assert sorted(p.name for p in (tmp_path / "out").glob("*.glb")) == ["fake_0.glb", "fake_1.glb", "fake_2.glb"]
+        r = CliRunner().invoke(main, ["derive", str(g), "-o", str(tmp_path / "o2"), "--backend", "fake-test",
+                                      "--option", "temperature=hot"])
+        assert r.exit_code == 1 and "temperature=hot" in r.output and "expects a number" in r.output
         r = CliRunner().invoke(main, ["derive", str(g), "-o", str(tmp_path / "o2"), "--backend", "nope"])
         assert r.exit_code == 1 and "unknown back end 'nope'" in r.output
+        r = CliRunner().invoke(main, ["derive", str(g), "-o", str(tmp_path / "o2"), "--backend", "fake-test",
+                                      "--set", "h=3"])
+        assert r.exit_code != 0 and "applies to split grammars" in r.output
+        assert not (tmp_path / "o2").exists()
     finally:
         pm.unregister("fake-backend-test")
 
@@ -144,9 +170,13 @@ def test_variations_with_workers_match_single_process(tmp_path):
         r = CliRunner().invoke(main, ["derive", str(g), "-o", str(out), "--variations", "2", "--seed", "9",
                                       "--workers", workers])
         assert r.exit_code == 0, r.output
-        runs[workers] = json.loads((out / "variations.json").read_text())["variations"]
-    strip = lambda vs: [(v["index"], v["seed"], v["attrs"], v["triangles"]) for v in vs]  # noqa: E731
+        runs[workers] = (out / "manifest.jsonl").read_text()
+        files = {p.name: p.read_bytes() for p in out.glob("*.glb")}
+        runs[workers + "files"] = files
+    strip = lambda text: [{k: v for k, v in json.loads(line).items() if k != "metrics"}  # noqa: E731
+                          for line in text.splitlines()]
     assert strip(runs["1"]) == strip(runs["2"])
+    assert runs["1files"] == runs["2files"]
 
 
 def test_output_folders_are_created(tmp_path):

@@ -11,7 +11,7 @@ from typing import Sequence
 
 import networkx as nx
 
-from .graph_ops import histogram_key
+from grammarkit.tiling import histogram_key
 
 MODES = ("histogram", "isomorphism")
 

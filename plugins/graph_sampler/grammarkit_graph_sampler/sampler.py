@@ -5,7 +5,7 @@ One *attempt* (a pure function of the pool of shapes and its own seed):
      be the same shape);
   2. sample a random connected subgraph of the donor by randomised BFS (size drawn from
      [min_subgraph, 3/4 of the donor's parts], as the authors' code sweeps);
-  3. split it into layers (`graph_ops.cut_layers`): the inserted piece and the boundary nodes;
+  3. split it into layers (`grammarkit.tiling.cut_layers`): the inserted piece and the boundary nodes;
   4. find nodes of the recipient matching the boundary nodes by type and by all pairwise
      centroid distances within `tolerance` x part size; first match wins;
   5. docking transform: least-squares rigid alignment (Kabsch) of the donor's boundary
@@ -33,9 +33,9 @@ import numpy as np
 from . import geometry
 from .dedupe import Deduper
 from .options import SamplerOptions
-from .graph_ops import (
-    adjacency_from_edges, cut_layers, distance_matrix, histogram_key, kept_region, match_boundary,
-    random_connected_subgraph,
+from grammarkit.tiling import (
+    adjacency_from_edges, cut_layers, distance_matrix, histogram_key, induced_edges, kept_region,
+    match_boundary, random_connected_subgraph,
 )
 
 OUTCOMES = ("no-cut", "no-match", "too-large", "known", "docking", "invalid", "valid")
@@ -207,8 +207,7 @@ def run_attempt(ctx: _Context, iteration: int, index: int, known: frozenset) -> 
     if opt.incremental:
         # Contacts among kept parts are the recipient's (they did not move); only pairs that
         # involve an inserted part need the geometry.
-        remap = {old: new for new, old in enumerate(kept)}
-        edges = {(remap[u], remap[v]) for u, v in recip.edges if u in remap and v in remap}
+        edges = induced_edges(recip.edges, kept)
         try:
             keys = [geometry.part_key(p, t) for p, t in zip(protos, transforms)]
             edges |= geometry.contacts_involving(meshes, types, range(k, n_new), ctx.contact_tolerance,
@@ -278,7 +277,7 @@ def _session_attempt(ctx: _Context, item: tuple[int, int]) -> "AttemptResult":
 
 
 def default_workers() -> int:
-    from grammarkit.run.executor import default_workers as _default
+    from grammarkit.run import default_workers as _default
 
     return _default()
 
@@ -318,7 +317,7 @@ class GraphSampler:
         self.grammar = grammar
         self.seed = int(seed)
         if executor is None:
-            from grammarkit.run.executor import LocalExecutor
+            from grammarkit.run import LocalExecutor
 
             executor = LocalExecutor(workers)
         self.executor = executor

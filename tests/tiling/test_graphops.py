@@ -1,14 +1,13 @@
-"""Graph-only steps of the sampler on synthetic graphs (no geometry)."""
+"""grammarkit.tiling.graphops: index-based graph steps on synthetic graphs (no geometry)."""
 from typing import Sequence
 
 import networkx as nx
 import numpy as np
 import pytest
 
-from grammarkit_graph_sampler.dedupe import Deduper
-from grammarkit_graph_sampler.graph_ops import (
-    adjacency_from_edges, cut_layers, distance_matrix, histogram_key, kept_region, match_boundary,
-    random_connected_subgraph,
+from grammarkit.tiling import (
+    adjacency_from_edges, cut_layers, distance_matrix, histogram_key, induced_edges, kept_region,
+    match_boundary, random_connected_subgraph, replace_subgraph,
 )
 
 
@@ -47,6 +46,30 @@ def test_cut_layers_on_a_path():
     for v in ins:
         for nb in adj[v]:
             assert nb in ins or nb in cut.outer
+
+
+def test_histogram_key_counts_types():
+    assert histogram_key("ABA") == (("A", 2), ("B", 1))
+    assert histogram_key([]) == ()
+
+
+def test_induced_edges_renumbers_the_kept_nodes():
+    edges = [(0, 1), (1, 2), (2, 3), (3, 0), (1, 3)]
+    assert induced_edges(edges, [3, 1, 2]) == {(0, 1), (1, 2), (0, 2)}
+    assert induced_edges(edges, [0, 2]) == set()
+
+
+def test_replace_subgraph_copies_a_piece_into_the_hole():
+    # host: path 0-1-2-3-4; cut out 2; copy donor path a-b (nodes 0, 1 of a 3-path 0-1-2) in,
+    # linking host 1 to donor 0 and host 3 to donor 1: a path of 6 nodes
+    kept, edges = replace_subgraph(5, [(0, 1), (1, 2), (2, 3), (3, 4)], [2],
+                                   [(0, 1), (1, 2)], [0, 1], [(1, 0), (3, 1)])
+    assert kept == [0, 1, 3, 4]
+    g = nx.Graph(edges)
+    assert sorted(g.nodes) == list(range(6)) and len(edges) == 5
+    assert nx.is_isomorphic(g, nx.path_graph(6))
+    with pytest.raises(ValueError):
+        replace_subgraph(5, [(0, 1)], [2], [(0, 1)], [0], [(2, 0)])  # host node 2 was removed
 
 
 def rot_z(deg):
@@ -115,23 +138,6 @@ def test_match_boundary_is_injective_and_randomised():
 def test_kept_region_does_not_cross_the_inner_layer():
     adj = adjacency_from_edges(7, [(i, i + 1) for i in range(6)])
     assert kept_region(adj, [1, 5], [2, 4]) == [0, 1, 5, 6]
-
-
-def test_dedupe_histogram_versus_isomorphism():
-    path = [(0, 1), (1, 2), (2, 3)]
-    star = [(0, 1), (0, 2), (0, 3)]
-    types = ["A", "A", "A", "A"]
-    h = Deduper("histogram")
-    assert h.add(types, path) and not h.add(types, star)
-    iso = Deduper("isomorphism")
-    assert iso.add(types, path) and iso.add(types, star)
-    relabelled = [(3, 2), (2, 0), (0, 1)]  # a path again
-    assert not iso.add(types, relabelled)
-    # types matter for isomorphism
-    assert iso.add(["B", "A", "A", "A"], path)
-    assert histogram_key("ABA") == (("A", 2), ("B", 1))
-    with pytest.raises(ValueError):
-        Deduper("nope")
 
 
 # The plain recursive search the bit-set `match_boundary` replaced (kept verbatim as the

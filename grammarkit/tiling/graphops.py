@@ -1,31 +1,44 @@
-"""Graph-only steps of Kalojanov et al. 2019, section 4 (no geometry here).
+"""Index-based shape-graph operations shared by the back ends that edit shape graphs.
 
-- `random_connected_subgraph`: randomised breadth-first growth from a random seed node.
-- `cut_layers`: split a sampled node set into the layer that stays with the *other* shape
-  (`outer`: nodes with a neighbour outside the sample), the layer that carries the cut edges
-  on the inserted side (`inner`), and the interior. The boundary edges of the inserted piece
-  `inner + interior` all run from `inner` to `outer`, so `inner + outer` are the "boundary
-  nodes" the paper matches.
-- `match_boundary`: a randomised backtracking search (with forward checking) for nodes of the recipient shape with
-  the same types and all pairwise centroid distances equal within a tolerance (the necessary
-  condition for a rigid docking); it stops at the first match.
+A graph here is an adjacency list over node indices 0..n-1 (`adjacency_from_edges`): the
+hot loops of the graph sampler and the substructure search run on these, and plain lists are
+several times faster than networkx views. Nothing here looks at geometry except
+`match_boundary`, which reads centroid distances given as arrays.
+
+- `adjacency_from_edges(n, edges)`: sorted adjacency lists.
+- `induced_edges(edges, nodes)` / `replace_subgraph(...)`: subgraph cut and replacement:
+  which edges survive among kept nodes, renumbered, and the graph after a piece of another
+  graph is copied into the hole.
+- `random_connected_subgraph`: randomised breadth-first growth from a random seed node
+  (Kalojanov et al. 2019, section 4).
+- `cut_layers`: split a node set into the layer that stays with the *other* shape (`outer`:
+  nodes with a neighbour outside the set), the layer that carries the cut edges on the inserted
+  side (`inner`), and the interior. The boundary edges of the inserted piece `inner + interior`
+  all run from `inner` to `outer`, so `inner + outer` are the "boundary nodes" to match.
+- `match_boundary`: a randomised backtracking search (with forward checking) for nodes of a
+  recipient with the same types and all pairwise centroid distances equal within a tolerance
+  (the necessary condition for a rigid docking); it stops at the first match.
 - `kept_region`: the recipient's nodes reachable from the matched outer layer without
   crossing the matched inner layer (the part of the recipient that survives).
-
-Graphs are adjacency lists over node indices 0..n-1: the hot loop of the sampler runs here,
-and plain lists are several times faster than networkx views.
+- `histogram_key`: the node-type histogram as a hashable key (deduplication).
 """
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Sequence
+from typing import Iterable, Sequence
 
 import numpy as np
+
+__all__ = [
+    "Adjacency", "Cut", "adjacency_from_edges", "cut_layers", "distance_matrix", "histogram_key",
+    "induced_edges", "kept_region", "match_boundary", "random_connected_subgraph", "replace_subgraph",
+]
 
 Adjacency = Sequence[Sequence[int]]
 
 
 def adjacency_from_edges(n: int, edges) -> list[list[int]]:
+    """Sorted neighbour lists of an undirected graph on nodes 0..n-1."""
     adj: list[list[int]] = [[] for _ in range(n)]
     for a, b in edges:
         adj[a].append(b)
@@ -33,6 +46,44 @@ def adjacency_from_edges(n: int, edges) -> list[list[int]]:
     for row in adj:
         row.sort()
     return adj
+
+
+def induced_edges(edges: Iterable[tuple[int, int]], nodes: Sequence[int]) -> set[tuple[int, int]]:
+    """Edges with both ends in `nodes`, renumbered to positions in `nodes` (i < j).
+
+    This is the cut of a subgraph: `nodes` are the nodes that stay, in their new order."""
+    remap = {int(old): new for new, old in enumerate(nodes)}
+    out = set()
+    for u, v in edges:
+        a, b = remap.get(int(u)), remap.get(int(v))
+        if a is not None and b is not None:
+            out.add((a, b) if a < b else (b, a))
+    return out
+
+
+def replace_subgraph(host_n: int, host_edges: Iterable[tuple[int, int]], removed: Iterable[int],
+                     donor_edges: Iterable[tuple[int, int]], inserted: Sequence[int],
+                     links: Iterable[tuple[int, int]]) -> tuple[list[int], list[tuple[int, int]]]:
+    """The host graph with the nodes `removed` cut out and the donor's nodes `inserted` copied in.
+
+    The result numbers the host's kept nodes first (ascending, as `kept` lists them), then the
+    inserted donor nodes in the order given. Its edges: the host's edges among kept nodes, the
+    donor's edges among inserted nodes, and `links` ((host node, donor node) pairs: the cut
+    edges that reconnect the copy with the rest). Returns (kept, edges sorted, i < j).
+    """
+    gone = {int(v) for v in removed}
+    kept = [v for v in range(host_n) if v not in gone]
+    k = len(kept)
+    edges = induced_edges(host_edges, kept)
+    edges |= {(a + k, b + k) for a, b in induced_edges(donor_edges, inserted)}
+    host_pos = {old: new for new, old in enumerate(kept)}
+    donor_pos = {int(old): k + new for new, old in enumerate(inserted)}
+    for h, d in links:
+        if int(h) not in host_pos or int(d) not in donor_pos:
+            raise ValueError(f"link ({h}, {d}): the host node must be kept and the donor node inserted")
+        a, b = host_pos[int(h)], donor_pos[int(d)]
+        edges.add((a, b) if a < b else (b, a))
+    return kept, sorted(edges)
 
 
 def random_connected_subgraph(adj: Adjacency, size: int, rng: np.random.Generator, *,
@@ -85,6 +136,7 @@ class Cut:
 
 
 def cut_layers(adj: Adjacency, nodes: Sequence[int]) -> Cut:
+    """`nodes` split into outer, inner and interior layers (see the module docstring)."""
     inside = set(nodes)
     outer = [v for v in nodes if any(nb not in inside for nb in adj[v])]
     outer_set = set(outer)
@@ -95,6 +147,7 @@ def cut_layers(adj: Adjacency, nodes: Sequence[int]) -> Cut:
 
 
 def distance_matrix(points: np.ndarray) -> np.ndarray:
+    """(n, n) Euclidean distances between the rows of `points`."""
     pts = np.asarray(points, dtype=float)
     diff = pts[:, None, :] - pts[None, :, :]
     return np.sqrt((diff * diff).sum(axis=-1))
@@ -212,6 +265,7 @@ def kept_region(adj: Adjacency, outer: Sequence[int], inner: Sequence[int]) -> l
 
 
 def histogram_key(types: Sequence[str]) -> tuple[tuple[str, int], ...]:
+    """((type, count), ...) sorted by type: equal for graphs with the same type histogram."""
     counts: dict[str, int] = {}
     for t in types:
         counts[t] = counts.get(t, 0) + 1

@@ -1,0 +1,286 @@
+"""CGA expressions -> grammarkit IR expressions.
+
+What maps: numbers, strings, booleans, arithmetic, comparisons, `&&`, `||`, `!`, attrs,
+consts and rule parameters, `scope.*` (through the frame's axis mapping, see frames.py),
+`split.index/total`, `comp.index/total`, the math functions grammarkit has, `rint`
+(grammarkit's `round`), `pow(a, b)` (`a ^ b`), `p(x)` (`rand() < x`) and CGA *functions*
+(`name(params) = expr`), which grammarkit does not have: they are inlined at each call with
+their arguments substituted (parenthesised by the IR, so precedence is kept), which is exact
+for CGA's pure functions; a recursive function cannot be inlined.
+
+What does not map raises `Untranslatable` naming the missing feature; the caller decides
+whether the construct that holds the expression is dropped or approximated.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, Callable
+
+from lark import Token, Tree
+
+from ..ir import Binary, Bool, Call, Num, Ref, Str, Unary
+from ..ir.base import Span
+from . import frames
+from .names import gk_name
+
+# CGA function -> (grammarkit function, min args, max args)
+_FUNCTIONS: dict[str, tuple[str, int, int | None]] = {
+    "rand": ("rand", 0, 2), "min": ("min", 1, None), "max": ("max", 1, None),
+    "floor": ("floor", 1, 1), "ceil": ("ceil", 1, 1), "abs": ("abs", 1, 1),
+    "sqrt": ("sqrt", 1, 1), "sin": ("sin", 1, 1), "cos": ("cos", 1, 1), "tan": ("tan", 1, 1),
+    "rint": ("round", 1, 1), "clamp": ("clamp", 3, 3),
+}
+_BINARY = {"+": "+", "-": "-", "*": "*", "/": "/", "%": "%", "==": "==", "!=": "!=",
+           "<": "<", "<=": "<=", ">": ">", ">=": ">="}
+_INDEX_REFS = {"split.index", "split.total", "comp.index", "comp.total"}
+MAX_INLINE_DEPTH = 16
+
+
+class Untranslatable(Exception):
+    def __init__(self, feature: str, message: str, span: Span | None = None):
+        super().__init__(message)
+        self.feature = feature
+        self.message = message
+        self.span = span
+
+
+def span_of(node: Any, filename: str | None) -> Span | None:
+    if isinstance(node, Token):
+        if node.line is None:
+            return None
+        end_line = node.end_line or node.line
+        end_col = node.end_column or node.column + len(node.value)
+        if end_line != node.line:
+            end_line, end_col = node.line, node.column + len(node.value.split("\n", 1)[0])
+        return Span(file=filename, line=node.line, column=node.column, end_line=end_line,
+                    end_column=end_col)
+    meta = getattr(node, "meta", None)
+    if meta is None or getattr(meta, "empty", True):
+        return None
+    return Span(file=filename, line=meta.line, column=meta.column, end_line=meta.end_line,
+                end_column=meta.end_column)
+
+
+def children(tree: Tree) -> list[Any]:
+    """The children of a tree that are not keyword/punctuation tokens."""
+    return [c for c in tree.children
+            if not (isinstance(c, Token) and c.type in ("CASE", "ELSE", "PERCENT_COLON"))]
+
+
+def call_args(tree: Tree) -> list[Any]:
+    for c in tree.children:
+        if isinstance(c, Tree) and c.data == "args":
+            return list(c.children)
+    return []
+
+
+@dataclass
+class Function:
+    """A CGA function `name(params) = body`, inlined at each call."""
+
+    name: str
+    params: tuple[str, ...]
+    body: Any
+
+
+@dataclass
+class ExprContext:
+    filename: str | None
+    frame: frames.Frame = "Y"
+    params: dict[str, str] = field(default_factory=dict)        # rule parameters
+    values: dict[str, str] = field(default_factory=dict)        # attrs and consts
+    functions: dict[tuple[str, int], Function] = field(default_factory=dict)
+    # Names bound by an inlined function call: name -> IR expression.
+    bound: dict[str, Any] = field(default_factory=dict)
+    inlining: tuple[str, ...] = ()
+    # Called for every CGA function that was inlined (its declaration counts as translated).
+    on_inline: Callable[[str], None] | None = None
+
+    def with_frame(self, frame: frames.Frame) -> "ExprContext":
+        return ExprContext(self.filename, frame, self.params, self.values, self.functions,
+                           self.bound, self.inlining, self.on_inline)
+
+
+def translate_expr(node: Any, ctx: ExprContext) -> Any:
+    """A CGA expression tree -> an IR expression; raises Untranslatable."""
+    span = span_of(node, ctx.filename)
+    if isinstance(node, Token):  # a bare token only appears for names in a few places
+        return _ref(node.value, span, ctx)
+    kind = node.data
+    kids = node.children
+    if kind == "number":
+        return Num(value=float(kids[0].value), span=span)
+    if kind == "string":
+        return Str(value=_unquote(kids[0].value), span=span)
+    if kind == "true":
+        return Bool(value=True, span=span)
+    if kind == "false":
+        return Bool(value=False, span=span)
+    if kind == "ref":
+        return _ref(kids[0].value, span, ctx)
+    if kind == "func_call":
+        return _call(kids[0].value, call_args(node), span, ctx)
+    if kind == "func_block_call":
+        raise Untranslatable(f"fn:{kids[0].value}{{}}", f"{kids[0].value}(...) {{ ... }} as a value "
+                             "(per-edge values) is not supported", span)
+    if kind == "binop":
+        left, op, right = kids
+        return Binary(op=_BINARY[op.value], left=translate_expr(left, ctx),
+                      right=translate_expr(right, ctx), span=span)
+    if kind in ("or_op", "and_op"):
+        left, right = kids
+        return Binary(op="||" if kind == "or_op" else "&&", left=translate_expr(left, ctx),
+                      right=translate_expr(right, ctx), span=span)
+    if kind == "neg":
+        operand = translate_expr(kids[-1], ctx)
+        if isinstance(operand, Num):
+            return Num(value=-operand.value, span=span)
+        return Unary(op="-", operand=operand, span=span)
+    if kind == "pos":
+        return translate_expr(kids[-1], ctx)
+    if kind == "not_op":
+        return Unary(op="!", operand=translate_expr(kids[-1], ctx), span=span)
+    if kind == "rel":
+        raise Untranslatable("expr:relative", "a relative value ' outside a split size or "
+                             "s()/t() argument is not supported", span)
+    if kind == "floating":
+        raise Untranslatable("expr:floating", "a floating value ~ outside a split size is not "
+                             "supported", span)
+    if kind in ("array", "index"):
+        raise Untranslatable("expr:array", "arrays are not supported", span)
+    if kind == "case_expr":
+        raise Untranslatable("expr:case", "a case expression as a value is not supported", span)
+    if kind == "stoch_expr":
+        raise Untranslatable("expr:stochastic", "a stochastic expression as a value is not "
+                             "supported", span)
+    raise Untranslatable(f"expr:{kind}", f"expression {kind} is not supported", span)
+
+
+def _unquote(text: str) -> str:
+    body = text[1:-1]
+    out, i = [], 0
+    while i < len(body):
+        c = body[i]
+        if c == "\\" and i + 1 < len(body):
+            nxt = body[i + 1]
+            out.append({"n": "\n", "t": "\t", "r": "\r"}.get(nxt, nxt))
+            i += 2
+            continue
+        out.append(c)
+        i += 1
+    return "".join(out)
+
+
+def unquote(text: str) -> str:
+    return _unquote(text)
+
+
+def _ref(name: str, span: Span | None, ctx: ExprContext) -> Any:
+    if name in ctx.bound:
+        return ctx.bound[name]
+    if name in ctx.params:
+        return Ref(name=ctx.params[name], span=span)
+    if name in ctx.values:
+        return Ref(name=ctx.values[name], span=span)
+    if (name, 0) in ctx.functions:
+        return _inline(ctx.functions[(name, 0)], [], span, ctx)
+    mapped = frames.scope_name(ctx.frame, name)
+    if mapped is not None:
+        return Ref(name=mapped, span=span)
+    if name in _INDEX_REFS:
+        return Ref(name=name, span=span)
+    head = name.split(".", 1)[0]
+    if head in ("geometry", "scope", "comp", "split", "initialShape", "material", "seedian",
+                "world", "object", "pivot", "trim", "convert"):
+        raise Untranslatable(f"ref:{name}", f"{name} is not supported", span)
+    raise Untranslatable("ref:unknown", f"unknown name {name!r} (an attr of an imported file?)",
+                         span)
+
+
+def _call(name: str, args: list[Any], span: Span | None, ctx: ExprContext) -> Any:
+    key = (name, len(args))
+    if key in ctx.functions:
+        return _inline(ctx.functions[key], args, span, ctx)
+    if name in _FUNCTIONS:
+        gk, lo, hi = _FUNCTIONS[name]
+        if len(args) < lo or (hi is not None and len(args) > hi):
+            raise Untranslatable(f"fn:{name}", f"{name}() with {len(args)} arguments", span)
+        return Call(func=gk, args=tuple(translate_expr(a, ctx) for a in args), span=span)
+    if name == "pow" and len(args) == 2:
+        return Binary(op="^", left=translate_expr(args[0], ctx), right=translate_expr(args[1], ctx),
+                      span=span)
+    if name == "p" and len(args) == 1:
+        return Binary(op="<", left=Call(func="rand", span=span), right=translate_expr(args[0], ctx),
+                      span=span)
+    if name in ("float", "bool") and len(args) == 1:
+        inner = translate_expr(args[0], ctx)
+        if isinstance(inner, Str):
+            raise Untranslatable(f"fn:{name}", f"{name}() of a string is not supported", span)
+        return inner
+    raise Untranslatable(f"fn:{name}", f"function {name}() is not supported", span)
+
+
+def _inline(fn: Function, args: list[Any], span: Span | None, ctx: ExprContext) -> Any:
+    if fn.name in ctx.inlining:
+        raise Untranslatable("fn:recursive", f"recursive function {fn.name}() cannot be inlined", span)
+    if len(ctx.inlining) >= MAX_INLINE_DEPTH:
+        raise Untranslatable("fn:deep", f"functions nested more than {MAX_INLINE_DEPTH} deep", span)
+    values = [translate_expr(a, ctx) for a in args]
+    inner = ExprContext(ctx.filename, ctx.frame, {}, ctx.values, ctx.functions,
+                        dict(zip(fn.params, values)), ctx.inlining + (fn.name,), ctx.on_inline)
+    out = translate_expr(fn.body, inner)
+    if ctx.on_inline is not None:
+        ctx.on_inline(fn.name)
+    return out
+
+
+# -- static values (for choosing a fallback) --------------------------------------------------
+
+def static_value(e: Any, env: dict[str, Any], depth: int = 0) -> Any:
+    """The value of an IR expression from constants and `env` (attr defaults), or None."""
+    if depth > 64:
+        return None
+    if isinstance(e, (Num, Str, Bool)):
+        return e.value
+    if isinstance(e, Ref):
+        v = env.get(e.name)
+        return static_value(v, env, depth + 1) if v is not None else None
+    if isinstance(e, Unary):
+        v = static_value(e.operand, env, depth + 1)
+        if v is None:
+            return None
+        if e.op == "-" and isinstance(v, (int, float)) and not isinstance(v, bool):
+            return -v
+        if e.op == "!" and isinstance(v, bool):
+            return not v
+        return v if e.op == "+" else None
+    if isinstance(e, Binary):
+        a = static_value(e.left, env, depth + 1)
+        b = static_value(e.right, env, depth + 1)
+        if a is None or b is None:
+            return None
+        try:
+            return _BIN_EVAL[e.op](a, b)
+        except (TypeError, ZeroDivisionError, ValueError, OverflowError):
+            return None
+    if isinstance(e, Call) and e.func in ("min", "max") and e.args:
+        vals = [static_value(a, env, depth + 1) for a in e.args]
+        if any(v is None for v in vals):
+            return None
+        try:
+            return min(vals) if e.func == "min" else max(vals)
+        except TypeError:
+            return None
+    return None
+
+
+_BIN_EVAL: dict[str, Callable[[Any, Any], Any]] = {
+    "+": lambda a, b: a + b, "-": lambda a, b: a - b, "*": lambda a, b: a * b,
+    "/": lambda a, b: a / b, "%": lambda a, b: a % b, "^": lambda a, b: a ** b,
+    "==": lambda a, b: a == b, "!=": lambda a, b: a != b, "<": lambda a, b: a < b,
+    "<=": lambda a, b: a <= b, ">": lambda a, b: a > b, ">=": lambda a, b: a >= b,
+    "&&": lambda a, b: bool(a) and bool(b), "||": lambda a, b: bool(a) or bool(b),
+}
+
+__all__ = ["ExprContext", "Function", "Untranslatable", "translate_expr", "static_value", "span_of",
+           "children", "call_args", "unquote", "gk_name"]

@@ -1,0 +1,987 @@
+"""A parsed CGA file -> grammarkit IR, recording what happened to every construct.
+
+The translation is syntax-directed and frame-aware: each rule is translated for the kind of
+shape it receives (frames.py), starting from the start rule with the lot (`Y`), and a rule
+reached with both kinds is emitted twice (`Name` and `Name_z`/`Name_y`). The output is IR
+only; text comes from grammarkit's printer (importer.py).
+
+CGA semantics kept on purpose:
+- an operation with a `{ }` block that is not the last item of its sequence leaves the
+  current shape in place for the items after it (CGA keeps the shape), so it becomes a
+  push `[ op {...} ]` in grammarkit;
+- a name without a rule is a leaf (`Name.`), as in CGA;
+- `offset(d) comp(f) { inside: A | border: B }` (CGA's way to use an offset's parts) is
+  grammarkit's `offset(d) { inside: A | border: B }`; `offset(d, border)` keeps the border.
+"""
+from __future__ import annotations
+
+import os
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from lark import Token, Tree
+
+from ..errors import Diagnostic
+from ..ir import (
+    Arg, Attr, Binary, Bool, Branch, Case, CaseArm, Choice, ChoiceArm, Const, Grammar, Nil, Num,
+    OpCall, Push, Ref, Repeat, Rule, Seq, Str, Successor, Terminal, Unary,
+)
+from ..ir.base import Span
+from . import frames
+from .expressions import (
+    ExprContext, Function, Untranslatable, call_args, children, span_of, static_value,
+    translate_expr, unquote,
+)
+from .names import gk_name
+from .report import Construct, ImportReport
+
+_HEAD = re.compile(r"\s*([A-Za-z_][A-Za-z0-9_.]*)\s*(?:\(([^()]*)\))?\s*(?:-->|=)\s*\Z", re.S)
+
+# UI annotations of attrs and rules: no geometric meaning (listed as ignored in the report).
+_UI_ANNOTATIONS = {"@Order", "@Group", "@Description", "@Hidden", "@Color", "@Distance",
+                   "@File", "@Directory", "@Angle", "@Percent", "@Handle", "@InPlace",
+                   "@Enabled", "@Location", "@ValueRange", "@Macro"}
+
+# CGA operations grammarkit has no counterpart for yet. They are dropped with a warning whose
+# feature is `op:<name>`; listed here only to word the message.
+_TEXTURING = {"setupProjection", "projectUV", "texture", "tileUV", "translateUV", "rotateUV",
+              "scaleUV", "normalizeUV", "deleteUV", "setNormals", "softenNormals"}
+_METADATA = {"report", "print", "label"}
+
+
+@dataclass
+class RuleDef:
+    name: str
+    params: tuple[str, ...]
+    body: Tree
+    span: Span | None
+    start: bool = False
+    annotations: list = field(default_factory=list)
+
+
+@dataclass
+class ValueDef:
+    kind: str            # "attr" | "const"
+    name: str
+    value: Any
+    span: Span | None
+    annotations: list
+
+
+@dataclass
+class _RuleCtx:
+    key: tuple[str, int]
+    gk: str
+    params: dict[str, str]
+    counting: bool
+
+
+class Translator:
+    def __init__(self, tree: Tree, filename: str | None, source: str, *,
+                 asset_dirs: tuple[Path, ...] = (), missing_assets: str = "keep",
+                 operations: frozenset[str] = frozenset()):
+        self.tree = tree
+        self.filename = filename
+        self.source = source
+        self.report = ImportReport(filename)
+        self.diagnostics: list[Diagnostic] = []
+        self.asset_dirs = asset_dirs
+        self.missing_assets = missing_assets
+        self.operations = operations
+        self.values: list[ValueDef] = []
+        self.functions: dict[tuple[str, int], Function] = {}
+        self.function_spans: dict[tuple[str, int], Span | None] = {}
+        self.rules: dict[tuple[str, int], RuleDef] = {}
+        self.rule_arities: dict[str, set[int]] = {}
+        self.imports: dict[str, Span | None] = {}
+        self.value_names: dict[str, str] = {}
+        self.inlined: set[str] = set()
+        self._rule_names: dict[tuple[tuple[str, int], str], str] = {}
+        self._used_names: set[str] = set()
+        self._pending: list[tuple[tuple[str, int], str]] = []
+        self._seen_assets: set[str] = set()
+
+    # -- reporting ------------------------------------------------------------------------------
+    def _record(self, kind: str, name: str, status: str, span: Span | None, *,
+                feature: str | None = None, message: str | None = None, counting: bool = True) -> None:
+        if not counting:
+            return
+        self.report.add(Construct(kind, name, status, span, feature, message))
+        if status != "translated":
+            verb = "approximated" if status == "approximated" else "not translated"
+            self.diagnostics.append(Diagnostic(
+                "warning", f"{verb}: {message}", span, code=f"cga-{status}",
+                hint=f"missing feature: {feature}" if feature else None))
+
+    def _span(self, node: Any) -> Span | None:
+        return span_of(node, self.filename)
+
+    # -- declarations ---------------------------------------------------------------------------
+    def collect(self) -> None:
+        for node in self.tree.children:
+            if node.data == "version":
+                self.report.ignored["version"] += 1
+                continue
+            annotations = [c for c in node.children if isinstance(c, Tree) and c.data == "annotation"]
+            decl = node.children[-1]
+            if decl.data == "import_stmt":
+                self._collect_import(decl, annotations)
+                continue
+            kind = decl.data
+            head_tok = decl.children[1] if kind in ("attr_decl", "const_decl") else decl.children[0]
+            m = _HEAD.match(head_tok.value)
+            name = m.group(1)
+            params = _params(m.group(2))
+            span = self._span(head_tok)
+            if kind == "rule_decl":
+                start = any(a.children[0].value == "@StartRule" for a in annotations)
+                key = (name, len(params))
+                if key in self.rules:
+                    self.diagnostics.append(Diagnostic(
+                        "warning", f"rule {name} with {len(params)} parameter(s) is defined twice; "
+                        "the first definition is used", span, code="cga-duplicate"))
+                    continue
+                self.rules[key] = RuleDef(name, params, decl.children[1], span, start, annotations)
+                self.rule_arities.setdefault(name, set()).add(len(params))
+            elif m.group(2) is not None or (kind == "func_decl"):
+                # `f(x) = ...` and `f = ...` (no attr/const) are functions, evaluated at each use.
+                self.functions[(name, len(params))] = Function(name, params, decl.children[-1])
+                self.function_spans[(name, len(params))] = span
+                for a in annotations:
+                    self.report.ignored[a.children[0].value] += 1
+            else:
+                self.values.append(ValueDef("attr" if kind == "attr_decl" else "const", name,
+                                            decl.children[-1], span, annotations))
+
+    def _collect_import(self, decl: Tree, annotations: list) -> None:
+        kids = [c for c in decl.children if isinstance(c, Token)]
+        alias = kids[0].value if kids[0].type == "NAME" else None
+        path = unquote(kids[-1].value)
+        span = self._span(decl)
+        if alias:
+            self.imports[alias] = span
+        for a in annotations:
+            self.report.ignored[a.children[0].value] += 1
+        self._record("import", alias or path, "dropped", span, feature="import",
+                     message=f"import of {path!r}: import the file separately; calls into it "
+                     "become leaves")
+
+    # -- names ----------------------------------------------------------------------------------
+    def _claim(self, base: str) -> str:
+        name = base
+        k = 2
+        while name in self._used_names:
+            name = f"{base}_{k}"
+            k += 1
+        self._used_names.add(name)
+        return name
+
+    def _rule_name(self, key: tuple[str, int], frame: str) -> str:
+        if (key, frame) in self._rule_names:
+            return self._rule_names[(key, frame)]
+        name, arity = key
+        base = gk_name(name)
+        if base in self.operations:
+            base += "_"
+        if len(self.rule_arities.get(name, ())) > 1 and arity != min(self.rule_arities[name]):
+            base = f"{base}_{arity}"
+        if any(k == key for k, _ in self._rule_names):
+            base = f"{base}_{frame.lower()}"
+        gk = self._claim(base)
+        self._rule_names[(key, frame)] = gk
+        self._pending.append((key, frame))
+        return gk
+
+    # -- the whole file ---------------------------------------------------------------------------
+    def translate(self) -> Grammar:
+        self.collect()
+        for v in self.values:
+            self.value_names[v.name] = self._claim(gk_name(v.name))
+        statements: list[Any] = [self._value(v) for v in self.values]
+        if not self.rules:
+            self.diagnostics.append(Diagnostic("error", "the CGA file has no rules", Span(
+                file=self.filename, line=1, column=1), code="cga-no-rules"))
+        starts = [k for k, r in self.rules.items() if r.start] or list(self.rules)[:1]
+        rules_out: list[Rule] = []
+        translated_keys: set[tuple[str, int]] = set()
+        for key in starts:
+            self._rule_name(key, "Y")
+        done: set[tuple[tuple[str, int], str]] = set()
+        while True:
+            while self._pending:
+                key, frame = self._pending.pop(0)
+                if (key, frame) in done:
+                    continue
+                done.add((key, frame))
+                rules_out.append(self._rule(key, frame, counting=key not in translated_keys))
+                translated_keys.add(key)
+            unreached = [k for k in self.rules if k not in translated_keys]
+            if not unreached:
+                break
+            self._rule_name(unreached[0], "Y")
+        statements.extend(rules_out)
+        self._functions_report()
+        name = gk_name(Path(self.filename).stem) if self.filename else "cga"
+        return Grammar(name=name, statements=tuple(statements),
+                       comments=(f" Imported from CGA by `grammarkit import-cga`"
+                                 f"{': ' + os.path.basename(self.filename) if self.filename else ''}",),
+                       span=Span(file=self.filename, line=1, column=1))
+
+    def _functions_report(self) -> None:
+        for key, fn in self.functions.items():
+            span = self.function_spans.get(key)
+            if fn.name in self.inlined:
+                self._record("function", fn.name, "translated", span)
+                continue
+            ctx = self._ctx("Y", {})
+            ctx.bound = {p: Ref(name="x") for p in fn.params}
+            try:
+                translate_expr(fn.body, ctx)
+                self._record("function", fn.name, "translated", span)
+            except Untranslatable as exc:
+                self._record("function", fn.name, "dropped", span, feature=exc.feature,
+                             message=f"function {fn.name}(): {exc.message}")
+
+    def _ctx(self, frame: str, params: dict[str, str]) -> ExprContext:
+        return ExprContext(self.filename, frame, params, self.value_names, self.functions,
+                           on_inline=self.inlined.add)
+
+    # -- attrs and consts -------------------------------------------------------------------------
+    def _value(self, v: ValueDef) -> Any:
+        gk = self.value_names[v.name]
+        ctx = self._ctx("Y", {})
+        status, feature, message = "translated", None, None
+        try:
+            value = translate_expr(v.value, ctx)
+        except Untranslatable as exc:
+            value, how = self._fallback_value(v.value, ctx)
+            feature = exc.feature
+            if how is not None:
+                status, message = "approximated", f"{v.kind} {v.name}: {exc.message}; {how}"
+            else:
+                status = "dropped"
+                value = Num(value=0) if not _looks_like_string(v.value) else Str(value="")
+                message = (f"{v.kind} {v.name}: {exc.message}; defined as "
+                           f"{'0' if isinstance(value, Num) else chr(34) * 2} instead")
+        self._record(v.kind, v.name, status, v.span, feature=feature, message=message)
+        if v.kind == "const":
+            for a in v.annotations:
+                self.report.ignored[a.children[0].value] += 1
+            return Const(name=gk, value=value, span=v.span)
+        rng, enum = self._annotations(v, value)
+        return Attr(name=gk, value=value, range=rng, enum=enum, span=v.span)
+
+    def _fallback_value(self, tree: Any, ctx: ExprContext) -> tuple[Any, str | None]:
+        """A value for an attr/const whose CGA value grammarkit cannot express."""
+        if not isinstance(tree, Tree):
+            return None, None
+        kids = children(tree)
+        if tree.data == "case_expr":
+            env = self._static_env()
+            conds, vals, other = kids[0:-1:2], kids[1:-1:2], kids[-1]
+            for cond, val in zip(conds, vals):
+                try:
+                    c = static_value(translate_expr(cond, ctx), env)
+                except Untranslatable:
+                    c = None
+                if c is None:
+                    break
+                if c is True:
+                    try:
+                        return translate_expr(val, ctx), "the arm that holds for the default attr values is used"
+                    except Untranslatable:
+                        return None, None
+            else:
+                try:
+                    return translate_expr(other, ctx), "the else arm (the value for the default attrs) is used"
+                except Untranslatable:
+                    return None, None
+            try:
+                return translate_expr(other, ctx), "the else arm is used"
+            except Untranslatable:
+                return None, None
+        if tree.data == "stoch_expr":
+            pcts, vals = kids[0:-1:2], kids[1:-1:2]
+            best, best_p = kids[-1], None
+            for p, val in zip(pcts, vals):
+                try:
+                    pv = static_value(translate_expr(p, ctx), self._static_env())
+                except Untranslatable:
+                    pv = None
+                if isinstance(pv, (int, float)) and (best_p is None or pv > best_p):
+                    best, best_p = val, pv
+            try:
+                return translate_expr(best, ctx), "its most likely value is used"
+            except Untranslatable:
+                return None, None
+        return None, None
+
+    def _static_env(self) -> dict[str, Any]:
+        env: dict[str, Any] = {}
+        ctx = self._ctx("Y", {})
+        for v in self.values:
+            try:
+                env[self.value_names[v.name]] = translate_expr(v.value, ctx)
+            except Untranslatable:
+                pass
+        return env
+
+    def _annotations(self, v: ValueDef, value: Any) -> tuple[Any, Any]:
+        rng = enum = None
+        default = static_value(value, self._static_env())
+        for a in v.annotations:
+            aname = a.children[0].value
+            span = self._span(a)
+            args = a.children[1].children if len(a.children) > 1 else []
+            named = {c.children[0].value: c.children[1] for c in args if c.data == "ann_named"}
+            positional = [c.children[0] for c in args if c.data == "ann_positional"]
+            if aname == "@StartRule":
+                continue
+            if aname not in ("@Range", "@Enum"):
+                self.report.ignored[aname] += 1
+                continue
+            try:
+                ctx = self._ctx("Y", {})
+                if aname == "@Range" and "min" in named and "max" in named:
+                    rng = (translate_expr(named["min"], ctx), translate_expr(named["max"], ctx))
+                elif aname == "@Range" and len(positional) == 2 and all(
+                        isinstance(translate_expr(p, ctx), Num) for p in positional):
+                    rng = tuple(translate_expr(p, ctx) for p in positional)
+                elif positional:
+                    enum = tuple(translate_expr(p, ctx) for p in positional)
+                else:
+                    raise Untranslatable(f"annotation:{aname}", f"{aname} without values "
+                                         f"({', '.join(named) or 'no arguments'})", span)
+                for e in (rng or ()) + (enum or ()):
+                    if not isinstance(e, (Num, Str, Bool)):
+                        raise Untranslatable(f"annotation:{aname}", f"{aname} with non-constant values",
+                                             span)
+            except Untranslatable as exc:
+                rng = enum = None
+                self._record("annotation", aname, "dropped", span, feature=exc.feature,
+                             message=exc.message)
+                continue
+            status, message = "translated", None
+            if rng is not None and isinstance(default, (int, float)) and not isinstance(default, bool):
+                lo, hi = rng[0].value, rng[1].value
+                if lo > hi:
+                    lo, hi = hi, lo
+                if not lo <= default <= hi:
+                    status = "approximated"
+                    message = (f"@Range of attr {v.name} does not contain its default {default:g} "
+                               "(CGA allows it with restricted=false); the range is widened")
+                    lo, hi = min(lo, default), max(hi, default)
+                rng = (Num(value=lo), Num(value=hi))
+            if enum is not None and default is not None and default not in [e.value for e in enum]:
+                status = "approximated"
+                message = f"the default of attr {v.name} is not among its values; it is added"
+                enum = enum + (_literal(default),)
+            self._record("annotation", aname, status, span, feature="annotation:default-outside"
+                         if status != "translated" else None, message=message)
+        return rng, enum
+
+    # -- rules --------------------------------------------------------------------------------------
+    def _rule(self, key: tuple[str, int], frame: str, counting: bool) -> Rule:
+        r = self.rules[key]
+        gk = self._rule_names[(key, frame)]
+        params = {p: gk_name(p) for p in r.params}
+        for a in r.annotations:
+            if a.children[0].value != "@StartRule":
+                if counting:
+                    self.report.ignored[a.children[0].value] += 1
+            else:
+                self._record("annotation", "@StartRule", "translated", self._span(a),
+                             counting=counting)
+        self._record("rule", r.name, "translated", r.span, counting=counting)
+        rctx = _RuleCtx(key, gk, params, counting)
+        items = self._body(r.body.children, frame, rctx)
+        if not items:
+            items = [Terminal(name=gk, span=r.span)]
+        return Rule(name=gk, params=tuple(params.values()), body=Seq(items=tuple(items)), span=r.span)
+
+    def _body(self, nodes: list, frame: str, rctx: _RuleCtx) -> list:
+        """A rule body / arm / entry (items, then maybe a case or stochastic tail)."""
+        out: list = []
+        i = 0
+        while i < len(nodes):
+            node = nodes[i]
+            if node.data == "tail":
+                out.extend(self._tail(node.children[0], frame, rctx))
+                i += 1
+                continue
+            if node.data == "call" and node.children[0].value == "offset" and len(call_args(node)) == 2:
+                consumed = self._offset_part(node, nodes[i + 1:], frame, rctx, out)
+                if consumed:
+                    return out
+                i += 1
+                continue
+            items = self._item(node, frame, rctx, out)
+            is_last = i == len(nodes) - 1
+            for it in items:
+                if isinstance(it, OpCall) and it.block is not None and not is_last:
+                    it = Push(body=Seq(items=(it,)), span=it.span)
+                out.append(it)
+            i += 1
+        return out
+
+    def _tail(self, block: Tree, frame: str, rctx: _RuleCtx) -> list:
+        span = self._span(block)
+        arms = [c for c in block.children if c.data in ("case_arm", "stoch_arm")]
+        else_arm = next(c for c in block.children if c.data == "else_arm")
+        other = self._arm_body(else_arm.children[-1], frame, rctx, span)
+        ctx = self._ctx(frame, rctx.params)
+        if block.data == "case_block":
+            out_arms = []
+            for arm in arms:
+                cond_tree = arm.children[1]
+                try:
+                    cond = translate_expr(cond_tree, ctx)
+                except Untranslatable as exc:
+                    self._record("case-arm", "case", "dropped", self._span(arm), feature=exc.feature,
+                                 message=f"case arm: its condition uses {exc.message}; the arm is "
+                                 "left out", counting=rctx.counting)
+                    self._arm_body(arm.children[-1], frame, rctx, span)  # count its constructs
+                    continue
+                out_arms.append(CaseArm(cond=cond, body=self._arm_body(arm.children[-1], frame,
+                                                                        rctx, span)))
+            self._record("case", "case", "translated", span, counting=rctx.counting)
+            if not out_arms:
+                return list(other.items)
+            return [Case(arms=tuple(out_arms), otherwise=other, span=span)]
+        out_arms = []
+        for arm in arms:
+            pct_tok = arm.children[0]
+            body = self._arm_body(arm.children[-1], frame, rctx, span)
+            if pct_tok.type == "NUMBER":
+                pct: Any = Num(value=float(pct_tok.value))
+            elif pct_tok.value in self.value_names:
+                pct = Ref(name=self.value_names[pct_tok.value])
+            else:
+                self._record("choice-arm", "%", "dropped", self._span(pct_tok), feature="expr:percent",
+                             message=f"a percentage {pct_tok.value}% that is not a number or attr",
+                             counting=rctx.counting)
+                continue
+            out_arms.append(ChoiceArm(percent=pct, body=body))
+        self._record("choice", "%", "translated", span, counting=rctx.counting)
+        if not out_arms:
+            return list(other.items)
+        return [Choice(arms=tuple(out_arms), otherwise=other, span=span)]
+
+    def _arm_body(self, node: Tree, frame: str, rctx: _RuleCtx, span: Span | None) -> Seq:
+        items = self._body(node.children, frame, rctx)
+        if not items:
+            items = [Terminal(name=rctx.gk, span=span)]
+        return Seq(items=tuple(items))
+
+    # -- items --------------------------------------------------------------------------------------
+    def _item(self, node: Tree, frame: str, rctx: _RuleCtx, out: list) -> list:
+        kind = node.data
+        span = self._span(node)
+        counting = rctx.counting
+        if kind == "nil":
+            self._record("nil", "NIL", "translated", span, counting=counting)
+            return [Nil(span=span)]
+        if kind == "noop":
+            self._record("noop", ".", "translated", span, counting=counting)
+            return []
+        if kind == "terminal":
+            name = node.children[0].value
+            self._record("terminal", name, "translated", span, counting=counting)
+            return [Terminal(name=gk_name(name), span=span)]
+        if kind == "push":
+            body = self._body(node.children[0].children, frame, rctx)
+            self._record("push", "[]", "translated", span, counting=counting)
+            return [Push(body=Seq(items=tuple(body)), span=span)] if body else []
+        name = node.children[0].value
+        args = call_args(node)
+        if kind == "name":
+            if (name, 0) in self.rules:
+                self._record("successor", name, "translated", span, counting=counting)
+                return [Successor(name=self._rule_name((name, 0), frame), span=span)]
+            if name in _BARE_OPS:
+                return self._op(name, [], None, False, node, frame, rctx, out)
+            prefix = name.split(".", 1)[0]
+            if "." in name and prefix in self.imports:
+                self._record("successor", name, "dropped", span, feature="import",
+                             message=f"{name} is a rule of the imported file {prefix!r}",
+                             counting=counting)
+                return [Terminal(name=gk_name(name), span=span)]
+            self._record("leaf", name, "translated", span, counting=counting)
+            return [Terminal(name=gk_name(name), span=span)]
+        if kind == "call" and name in self.rule_arities:
+            key = (name, len(args))
+            if key not in self.rules:
+                self._record("successor", name, "dropped", span, feature="rule-arity",
+                             message=f"{name}() has no rule with {len(args)} argument(s)",
+                             counting=counting)
+                return []
+            ctx = self._ctx(frame, rctx.params)
+            try:
+                values = tuple(translate_expr(a, ctx) for a in args)
+            except Untranslatable as exc:
+                self._record("successor", name, "dropped", span, feature=exc.feature,
+                             message=f"{name}(...): an argument uses {exc.message}",
+                             counting=counting)
+                return []
+            self._record("successor", name, "translated", span, counting=counting)
+            return [Successor(name=self._rule_name(key, frame), args=values, span=span)]
+        if kind == "call" and "." in name and name.split(".", 1)[0] in self.imports:
+            self._record("successor", name, "dropped", span, feature="import",
+                         message=f"{name}(...) is a rule of an imported file", counting=counting)
+            return []
+        block = node.children[-2] if kind == "block_call" and isinstance(node.children[-1], Token) \
+            else (node.children[-1] if kind == "block_call" else None)
+        star = kind == "block_call" and isinstance(node.children[-1], Token)
+        return self._op(name, args, block, star, node, frame, rctx, out)
+
+    def _op(self, name: str, args: list, block: Tree | None, star: bool, node: Tree, frame: str,
+            rctx: _RuleCtx, out: list) -> list:
+        span = self._span(node)
+        handler = _HANDLERS.get(name)
+        ctx = self._ctx(frame, rctx.params)
+        if handler is None:
+            if name in _TEXTURING:
+                why = "texturing and UVs are not supported"
+            elif name in _METADATA:
+                why = "reports, prints and labels are not collected"
+            elif name[:1].isupper():
+                why = ("no rule of this name and arity in this file (a rule that an importing "
+                       "file defines?)")
+            else:
+                why = "grammarkit has no such operation"
+            # Still translate the block's bodies so that their constructs are counted.
+            if block is not None and rctx.counting:
+                self._count_block(block, frame, rctx)
+            feature = "rule:undefined" if name[:1].isupper() else f"op:{name}"
+            self._record("op", name, "dropped", span, feature=feature,
+                         message=f"{name}(): {why}", counting=rctx.counting)
+            return []
+        try:
+            items, approx = handler(self, args, block, star, frame, rctx, ctx, span, out)
+        except Untranslatable as exc:
+            if block is not None and rctx.counting:
+                self._count_block(block, frame, rctx)
+            self._record("op", name, "dropped", span, feature=exc.feature,
+                         message=f"{name}(): {exc.message}", counting=rctx.counting)
+            return []
+        if approx is not None:
+            feature, message = approx
+            self._record("op", name, "approximated", span, feature=feature,
+                         message=f"{name}(): {message}", counting=rctx.counting)
+        else:
+            self._record("op", name, "translated", span, counting=rctx.counting)
+        return items
+
+    def _count_block(self, block: Tree, frame: str, rctx: _RuleCtx) -> None:
+        for entry in block.children:
+            if entry.data in ("entry", "merged_entry"):
+                self._body(entry.children[-1].children, frame, rctx)
+            elif entry.data in ("repeat_entry", "group_entry"):
+                self._count_block(entry.children[0], frame, rctx)
+
+    def _offset_part(self, node: Tree, rest: list, frame: str, rctx: _RuleCtx, out: list) -> bool:
+        """`offset(d, inside|border)`: keep one part; returns True if it consumed `rest`."""
+        span = self._span(node)
+        d_tree, sel_tree = call_args(node)
+        ctx = self._ctx(frame, rctx.params)
+        part = sel_tree.children[0].value if isinstance(sel_tree, Tree) and sel_tree.data == "ref" else None
+        try:
+            d = translate_expr(d_tree, ctx)
+            if part not in ("inside", "border"):
+                raise Untranslatable("op:offset", f"offset part {part!r} is not supported", span)
+        except Untranslatable as exc:
+            self._record("op", "offset", "dropped", span, feature=exc.feature,
+                         message=f"offset(): {exc.message}", counting=rctx.counting)
+            return False
+        self._record("op", "offset", "translated", span, counting=rctx.counting)
+        if part == "inside":
+            out.append(OpCall(name="offset", args=(Arg(value=d),), span=span))
+            return False
+        body = self._body(rest, frame, rctx) or [Terminal(name=rctx.gk, span=span)]
+        out.append(OpCall(name="offset", args=(Arg(value=d),), block=(
+            Branch(key=Ref(name="border"), body=Seq(items=tuple(body))),), span=span))
+        return True
+
+    # -- blocks ---------------------------------------------------------------------------------------
+    def split_entries(self, block: Tree, frame: str, rctx: _RuleCtx, ctx: ExprContext) -> list:
+        out: list = []
+        for entry in block.children:
+            span = self._span(entry)
+            if entry.data == "repeat_entry":
+                out.append(Repeat(items=tuple(self.split_entries(entry.children[0], frame, rctx, ctx)),
+                                  span=span))
+                continue
+            if entry.data == "group_entry":
+                self._record("split-group", "{}", "approximated", span, feature="split:group",
+                             message="a nested { } without * is read as its entries, once",
+                             counting=rctx.counting)
+                out.extend(self.split_entries(entry.children[0], frame, rctx, ctx))
+                continue
+            if entry.data in ("bare_entry", "merged_entry"):
+                raise Untranslatable("split:entry", "a split entry without a size", span)
+            mode, key_tree = _hoist_size(entry.children[0].children[0])
+            key = translate_expr(key_tree, ctx)
+            body = self._body(entry.children[-1].children, frame, rctx) or [
+                Terminal(name=rctx.gk, span=span)]
+            out.append(Branch(mode=mode, key=key, body=Seq(items=tuple(body)), span=span))
+        return out
+
+    def comp_entries(self, block: Tree, frame: str, rctx: _RuleCtx, mode: str) -> list:
+        out: list = []
+        for entry in block.children:
+            span = self._span(entry)
+            if entry.data not in ("entry", "merged_entry"):
+                self._count_block(Tree("block", [entry]), frame, rctx) if entry.data != "bare_entry" else None
+                self._record("selector", "?", "dropped", span, feature="comp:entry",
+                             message="a comp entry without a selector", counting=rctx.counting)
+                continue
+            key_tree = entry.children[0].children[0]
+            sel = key_tree.children[0].value if isinstance(key_tree, Tree) and key_tree.data in (
+                "ref", "number") else None
+            if mode == "offset-parts":
+                mapped = (sel,) if sel in ("inside", "border") else None
+                body_frame = frame
+            else:
+                mapped = frames.comp_selectors(frame, sel) if sel else None
+                body_frame = "Z"
+            body = self._body(entry.children[-1].children, body_frame, rctx) or [
+                Terminal(name=rctx.gk, span=span)]
+            if mapped is None:
+                self._record("selector", str(sel), "dropped", span, feature=f"comp-selector:{sel}",
+                             message=f"comp selector {sel!r} is not supported", counting=rctx.counting)
+                continue
+            if entry.data == "merged_entry":
+                self._record("selector", f"{sel}=", "approximated", span, feature="comp:merge",
+                             message=f"'{sel} =' (the selected faces as one shape) sends each face "
+                             "on its own", counting=rctx.counting)
+            else:
+                self._record("selector", sel, "translated", span, counting=rctx.counting)
+            for gsel in mapped:
+                out.append(Branch(key=Ref(name=gsel), body=Seq(items=tuple(body)), span=span))
+        return out
+
+    # -- assets -----------------------------------------------------------------------------------------
+    def asset(self, path: str, span: Span | None) -> bool:
+        """Record an asset; True if it was found."""
+        found = None
+        candidates = []
+        rel = path.lstrip("/")
+        base = Path(self.filename).parent if self.filename else Path(".")
+        candidates.append(base / path)
+        for d in (base, base.parent, *self.asset_dirs):
+            candidates.extend([d / rel, d / "assets" / rel])
+        for c in candidates:
+            if c.is_file():
+                found = c
+                break
+        if path not in self._seen_assets:
+            self._seen_assets.add(path)
+            self.report.assets.append({"path": path, "found": found is not None,
+                                       "resolved": str(found) if found else None,
+                                       "line": span.line if span else None})
+        return found is not None
+
+
+def _params(text: str | None) -> tuple[str, ...]:
+    if not text or not text.strip():
+        return ()
+    return tuple(p.strip().split()[-1] for p in text.split(",") if p.strip())
+
+
+def _looks_like_string(tree: Any) -> bool:
+    return isinstance(tree, Tree) and any(
+        isinstance(t, Token) and t.type == "STRING" for t in tree.scan_values(lambda v: True))
+
+
+def _literal(value: Any) -> Any:
+    if isinstance(value, bool):
+        return Bool(value=value)
+    if isinstance(value, (int, float)):
+        return Num(value=float(value))
+    return Str(value=str(value))
+
+
+def _hoist_size(tree: Any) -> tuple[str, Any]:
+    """`~a / n` parses as `(~a) / n`; CGA means `~(a / n)`: move the mark to the whole key."""
+    if isinstance(tree, Tree):
+        if tree.data == "rel":
+            return "rel", tree.children[-1]
+        if tree.data == "floating":
+            return "float", tree.children[-1]
+        if tree.data in ("binop", "or_op", "and_op"):
+            mode, left = _hoist_size(tree.children[0])
+            if mode != "abs":
+                return mode, Tree(tree.data, [left, *tree.children[1:]], meta=tree.meta)
+    return "abs", tree
+
+
+# -- operation handlers ---------------------------------------------------------------------------
+# handler(translator, args, block, star, frame, rule ctx, expr ctx, span, out)
+#   -> (items, None) or (items, (feature, message)) for an approximation; raises Untranslatable.
+
+def _axis_name(tree: Any) -> str | None:
+    if isinstance(tree, Tree) and tree.data == "ref":
+        return tree.children[0].value
+    return None
+
+
+def _need(args: list, lo: int, hi: int, name: str, span: Span | None) -> None:
+    if not lo <= len(args) <= hi:
+        raise Untranslatable(f"op:{name}/{len(args)}", f"{name}() with {len(args)} arguments is not "
+                             "supported", span)
+
+
+def _h_extrude(t, args, block, star, frame, rctx, ctx, span, out):
+    if len(args) == 1:
+        return [OpCall(name="extrude", args=(Arg(value=translate_expr(args[0], ctx)),), span=span)], None
+    if len(args) == 2:
+        how = _axis_name(args[0]) or "an axis"
+        h = translate_expr(args[1], ctx)
+        return [OpCall(name="extrude", args=(Arg(value=h),), span=span)], (
+            "extrude:axis", f"extrusion along {how} is made along the face normal")
+    raise Untranslatable("op:extrude/" + str(len(args)), "extrude() with these arguments", span)
+
+
+def _h_split(t, args, block, star, frame, rctx, ctx, span, out):
+    if block is None:
+        raise Untranslatable("op:split", "split() without a block", span)
+    a = _axis_name(args[0]) if args else None
+    if a not in ("x", "y", "z"):
+        raise Untranslatable("split:axis", f"split axis {a!r}", span)
+    gk_axis, reverse = frames.axis(frame, a)
+    items = t.split_entries(block, frame, rctx, ctx)
+    if star:
+        items = [Repeat(items=tuple(items), span=span)]
+    if reverse:
+        items = _reversed(items)
+    call = OpCall(name="split", args=(Arg(value=Ref(name=gk_axis)),), block=tuple(items), span=span)
+    if len(args) > 1:
+        return [call], ("split:adjust", "split options after the axis (adjustment, unit space) are "
+                        "ignored")
+    return [call], None
+
+
+def _reversed(items: list) -> list:
+    out = []
+    for it in reversed(items):
+        if isinstance(it, Repeat):
+            it = it.model_copy(update={"items": tuple(_reversed(list(it.items)))})
+        out.append(it)
+    return out
+
+
+def _h_comp(t, args, block, star, frame, rctx, ctx, span, out):
+    mode = _axis_name(args[0]) if args else None
+    if block is None:
+        raise Untranslatable("op:comp", "comp() without a block", span)
+    selectors = {e.children[0].children[0].children[0].value for e in block.children
+                 if e.data in ("entry", "merged_entry") and isinstance(e.children[0].children[0], Tree)
+                 and e.children[0].children[0].data == "ref"}
+    prev = out[-1] if out else None
+    if mode == "f" and selectors and selectors <= {"inside", "border"} and isinstance(prev, OpCall) \
+            and prev.name == "offset" and prev.block is None:
+        entries = t.comp_entries(block, frame, rctx, "offset-parts")
+        out.pop()
+        return [prev.model_copy(update={"block": tuple(entries)})], None
+    if mode != "f":
+        raise Untranslatable(f"op:comp({mode})", f"comp({mode}) is not supported (only comp(f))", span)
+    entries = t.comp_entries(block, frame, rctx, "faces")
+    if not entries:
+        raise Untranslatable("comp:no-selector", "none of its selectors is supported", span)
+    return [OpCall(name="comp", args=(Arg(value=Ref(name="f")),), block=tuple(entries), span=span)], None
+
+
+def _h_offset(t, args, block, star, frame, rctx, ctx, span, out):
+    _need(args, 1, 1, "offset", span)
+    d = translate_expr(args[0], ctx)
+    if block is not None:
+        entries = t.comp_entries(block, frame, rctx, "offset-parts")
+        return [OpCall(name="offset", args=(Arg(value=d),), block=tuple(entries), span=span)], None
+    return [OpCall(name="offset", args=(Arg(value=d),), span=span)], None
+
+
+def _roof(gk: str, max_args: int):
+    def handler(t, args, block, star, frame, rctx, ctx, span, out):
+        if args and isinstance(args[0], Tree) and args[0].data == "ref" and args[0].children[0].value in (
+                "byHeight", "byAngle"):
+            if args[0].children[0].value == "byHeight":
+                raise Untranslatable(f"{gk}:byHeight", f"{gk}(byHeight, ...) is not supported", span)
+            args = args[1:]
+        if not args:
+            raise Untranslatable(f"op:{gk}", f"{gk}() without an angle", span)
+        angle = translate_expr(args[0], ctx)
+        call_args_: list = [Arg(value=angle)]
+        if len(args) >= 2 and gk != "roofPyramid" and gk != "roofShed":
+            call_args_.append(Arg(name="overhang", value=translate_expr(args[1], ctx)))
+        call = OpCall(name=gk, args=tuple(call_args_), span=span)
+        extra = len(args) - (1 if gk in ("roofPyramid", "roofShed") else 2)
+        if extra > 0:
+            what = {"roofGable": "the second overhang, even and index arguments are ignored",
+                    "roofHip": "the even argument is ignored",
+                    "roofShed": "the edge index is ignored (the roof rises towards +y)",
+                    "roofPyramid": "extra arguments are ignored"}[gk]
+            return [call], (f"{gk}:options", what)
+        return [call], None
+    return handler
+
+
+def _rel_or_abs(tree: Any, size_ref: str, ctx: ExprContext) -> Any:
+    """An s()/t() argument: `'v` is v times the scope size along that axis."""
+    if isinstance(tree, Tree) and tree.data == "rel":
+        v = translate_expr(tree.children[-1], ctx)
+        if isinstance(v, Num) and v.value == 1:
+            return Ref(name=size_ref)
+        return Binary(op="*", left=v, right=Ref(name=size_ref))
+    return translate_expr(tree, ctx)
+
+
+def _is_rel_one(tree: Any) -> bool:
+    return (isinstance(tree, Tree) and tree.data == "rel" and isinstance(tree.children[-1], Tree)
+            and tree.children[-1].data == "number" and float(tree.children[-1].children[0].value) == 1)
+
+
+def _h_s(t, args, block, star, frame, rctx, ctx, span, out):
+    _need(args, 3, 3, "s", span)
+    cx, cy, cz = (_rel_or_abs(a, frames.scope_name(frame, "scope.s" + c), ctx)
+                  for a, c in zip(args, "xyz"))
+    if frame == "Z":
+        return [OpCall(name="s", args=(Arg(value=cx), Arg(value=cy), Arg(value=cz)), span=span)], None
+    # Frame Y: CGA keeps its scope origin, at the back (z = 0 is grammarkit's y = sy); shift
+    # grammarkit's origin so the back stays where it is when the depth changes.
+    items = []
+    if not _is_rel_one(args[2]):
+        items.append(OpCall(name="t", args=(Arg(value=Num(value=0)), Arg(value=Binary(
+            op="-", left=Ref(name="scope.sy"), right=cz)), Arg(value=Num(value=0))), span=span))
+    items.append(OpCall(name="s", args=(Arg(value=cx), Arg(value=cz), Arg(value=cy)), span=span))
+    return items, None
+
+
+def _h_t(t, args, block, star, frame, rctx, ctx, span, out):
+    _need(args, 3, 3, "t", span)
+    cx, cy, cz = (_rel_or_abs(a, frames.scope_name(frame, "scope.s" + c), ctx)
+                  for a, c in zip(args, "xyz"))
+    if frame == "Y":
+        neg = cz.model_copy(update={"value": -cz.value}) if isinstance(cz, Num) else Unary(op="-", operand=cz)
+        cx, cy, cz = cx, neg, cy
+    return [OpCall(name="t", args=(Arg(value=cx), Arg(value=cy), Arg(value=cz)), span=span)], None
+
+
+def _h_r(t, args, block, star, frame, rctx, ctx, span, out):
+    approx = None
+    if len(args) == 4:
+        approx = ("r:pivot", f"rotation about {_axis_name(args[0]) or 'a pivot'} is made about the "
+                  "scope origin")
+        args = args[1:]
+    _need(args, 3, 3, "r", span)
+    rx, ry, rz = (translate_expr(a, ctx) for a in args)
+    if frame == "Z":
+        return [OpCall(name="r", args=(Arg(value=rx), Arg(value=ry), Arg(value=rz)), span=span)], approx
+    # Frame Y: CGA rotates about x, then its y (grammarkit z), then its z (grammarkit -y).
+    zero = Num(value=0)
+    steps = []
+    for gk_axis, value in (("x", rx), ("z", ry), ("y", rz)):
+        if isinstance(value, Num) and value.value == 0:
+            continue
+        if gk_axis == "y":
+            value = Num(value=-value.value) if isinstance(value, Num) else Unary(op="-", operand=value)
+        vec = [zero, zero, zero]
+        vec["xyz".index(gk_axis)] = value
+        steps.append(OpCall(name="r", args=tuple(Arg(value=v) for v in vec), span=span))
+    return steps, approx
+
+
+def _h_center(t, args, block, star, frame, rctx, ctx, span, out):
+    _need(args, 1, 1, "center", span)
+    axes = _axis_name(args[0])
+    mapped = frames.center_axes(frame, axes) if axes else None
+    if mapped is None:
+        raise Untranslatable("center:axes", f"center({axes})", span)
+    return [OpCall(name="center", args=(Arg(value=Ref(name=mapped)),), span=span)], None
+
+
+def _hex(v: float) -> str:
+    return f"{max(0, min(255, round(v * 255))):02x}"
+
+
+def _h_color(t, args, block, star, frame, rctx, ctx, span, out):
+    values = [translate_expr(a, ctx) for a in args]
+    if len(values) == 1:
+        v = values[0]
+        if isinstance(v, Str):
+            text = v.value.strip()
+            if re.fullmatch(r"#[0-9A-Fa-f]{3}", text):
+                text = "#" + "".join(c * 2 for c in text[1:])
+            if not re.fullmatch(r"#[0-9A-Fa-f]{6}", text):
+                raise Untranslatable("color:format", f"colour {text!r} is not #rrggbb", span)
+            return [OpCall(name="color", args=(Arg(value=Str(value=text.lower())),), span=span)], None
+        return [OpCall(name="color", args=(Arg(value=v),), span=span)], None
+    if len(values) in (3, 4) and all(isinstance(v, Num) for v in values):
+        text = "#" + "".join(_hex(v.value) for v in values[:3])
+        call = OpCall(name="color", args=(Arg(value=Str(value=text)),), span=span)
+        return [call], (("color:alpha", "the opacity is ignored") if len(values) == 4 else None)
+    raise Untranslatable("color:rgb-expr", "color(r, g, b) from expressions (not constants)", span)
+
+
+def _h_set(t, args, block, star, frame, rctx, ctx, span, out):
+    target = _axis_name(args[0]) if args else None
+    if target == "material.name" and len(args) == 2:
+        return [OpCall(name="material", args=(Arg(value=translate_expr(args[1], ctx)),), span=span)], None
+    if target in ("material.color.rgb",) and len(args) == 2:
+        return _h_color(t, args[1:], block, star, frame, rctx, ctx, span, out)
+    if target and target.startswith("material."):
+        raise Untranslatable("op:set(material.*)", f"set({target}, ...): texturing and material "
+                             "properties are not supported", span)
+    raise Untranslatable("op:set", f"set({target}, ...): setting attrs during the derivation is "
+                         "not supported", span)
+
+
+def _h_i(t, args, block, star, frame, rctx, ctx, span, out):
+    if not args:
+        raise Untranslatable("op:i", "i() without a file", span)
+    path = translate_expr(args[0], ctx)
+    if not isinstance(path, Str):
+        raise Untranslatable("i:expression", "i() of a computed file name", span)
+    if path.value.startswith("builtin:"):
+        raise Untranslatable("i:builtin", f"built-in primitive {path.value!r}", span)
+    found = t.asset(path.value, span)
+    if not found and t.missing_assets == "drop":
+        raise Untranslatable("asset:missing", f"asset {path.value!r} was not found (the i() is "
+                             "left out; --missing-assets keep keeps it)", span)
+    call = OpCall(name="i", args=(Arg(value=path),), span=span)
+    if len(args) > 1:
+        return [call], ("i:options", "the up axis and insert mode arguments are ignored")
+    return [call], None
+
+
+def _h_nil_op(t, args, block, star, frame, rctx, ctx, span, out):
+    return [Nil(span=span)], None
+
+
+def _h_primitive_cube(t, args, block, star, frame, rctx, ctx, span, out):
+    prev = out[-1] if out else None
+    if isinstance(prev, OpCall) and prev.name == "s" and not args:
+        return [], ("op:primitiveCube", "the cube is the scope box that s() with a depth already "
+                    "makes of a face")
+    raise Untranslatable("op:primitiveCube", "built-in primitives are not supported", span)
+
+
+def _h_taper(t, args, block, star, frame, rctx, ctx, span, out):
+    _need(args, 1, 1, "taper", span)
+    return [OpCall(name="taper", args=(Arg(value=translate_expr(args[0], ctx)),), span=span)], None
+
+
+_HANDLERS = {
+    "extrude": _h_extrude, "split": _h_split, "comp": _h_comp, "offset": _h_offset,
+    "roofGable": _roof("roofGable", 5), "roofHip": _roof("roofHip", 3),
+    "roofPyramid": _roof("roofPyramid", 1), "roofShed": _roof("roofShed", 2),
+    "s": _h_s, "t": _h_t, "r": _h_r, "center": _h_center, "color": _h_color, "set": _h_set,
+    "i": _h_i, "primitiveCube": _h_primitive_cube,
+}
+# Operations CGA writes without parentheses.
+_BARE_OPS = {"reverseNormals", "cleanupGeometry", "deleteHoles", "resetGeometry", "resetMaterial",
+             "convexify", "innerRectangle", "alignScopeToAxes", "alignScopeToGeometry",
+             "primitiveCube", "primitiveQuad", "setPivot", "trim"}
+
+__all__ = ["Translator"]

@@ -1,0 +1,59 @@
+"""`grammarkit import-cga`: translate a CityEngine CGA rule file into a .grammar file."""
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+
+import click
+
+
+@click.command("import-cga")
+@click.argument("file", type=click.Path(dir_okay=False, path_type=Path))
+@click.option("-o", "--output", type=click.Path(dir_okay=False, path_type=Path), default=None,
+              help="the .grammar file to write (default: FILE with the suffix .grammar)")
+@click.option("--report", "report_path", type=click.Path(dir_okay=False, path_type=Path), default=None,
+              help="write the per-construct report (JSON) here")
+@click.option("--force", is_flag=True,
+              help="write the grammar even if it does not pass `grammarkit check`")
+@click.option("--missing-assets", type=click.Choice(["keep", "drop"]), default="keep", show_default=True,
+              help="what to do with i() of an asset that is not found")
+@click.option("--asset-dir", "asset_dirs", multiple=True,
+              type=click.Path(file_okay=False, path_type=Path),
+              help="another folder to look for assets in (repeatable)")
+@click.option("--quiet", "-q", is_flag=True, help="print errors and the summary only, no warnings")
+def import_cga_command(file: Path, output: Path | None, report_path: Path | None, force: bool,
+                       missing_assets: str, asset_dirs: tuple[Path, ...], quiet: bool) -> None:
+    """Translate the CGA rule FILE into grammarkit's language.
+
+    Every CGA construct that is approximated or left out is reported as
+    `file:line:col: warning: ...` with the CGA line. The grammar is written only if it passes
+    `grammarkit check` (or with --force); exit status 1 if nothing was written.
+    """
+    from ..cga import translate_cga
+    from ..fileio import atomic_output
+
+    out = output or file.with_suffix(".grammar")
+    result = translate_cga(file, output=out, asset_dirs=asset_dirs, missing_assets=missing_assets)
+    for d in result.diagnostics:
+        if quiet and d.severity != "error":
+            continue
+        click.echo(d.format(result.source), err=True)
+    for line in result.report.check_errors[:5]:
+        click.echo(line, err=True)
+    rep = result.report
+    missing = [a["path"] for a in rep.assets if not a["found"]]
+    if missing:
+        click.echo(f"assets not found ({len(missing)}): {', '.join(missing)}", err=True)
+    summary = (f"{rep.total} constructs: {rep.translated} translated, {rep.warned} warned "
+               f"({rep.count('approximated')} approximated, {rep.count('dropped')} dropped)")
+    if report_path is not None:
+        with atomic_output(report_path) as tmp:
+            tmp.write_text(json.dumps(rep.to_json(), indent=2) + "\n", encoding="utf-8")
+    if result.text is None or (not result.ok and not force):
+        click.echo(f"{summary}; nothing written", err=True)
+        sys.exit(1)
+    with atomic_output(out) as tmp:
+        tmp.write_text(result.text, encoding="utf-8", newline="\n")
+    note = "" if result.ok else " (with --force: it does not pass `grammarkit check`)"
+    click.echo(f"{summary}; wrote {out}{note}", err=True)

@@ -1,0 +1,211 @@
+"""Incremental contacts and rule checks for back ends that edit shapes part by part.
+
+A back end that replaces a piece of a shape (the graph sampler, the substructure search) knows
+which parts moved: the others keep their contacts. The helpers here measure only what changed,
+with the same narrow phase (`grammarkit.tiling.contacts.contacts`) that `shape_graph` uses, so
+the result equals a full recompute at the same tolerance.
+
+Shapes are index-based: a list of world-space meshes, a parallel list of part types, and
+edges as (i, j) index pairs with i < j.
+
+- `moved_mesh(mesh, matrix)`, `bounds_of(meshes)`: cheap geometry helpers (no trimesh caches).
+- `PartCache` and `part_key`: per-part contact data (bounds, centroid, box flag, manifold3d
+  solid) shared across calls, keyed by the part's geometry (a source part and a placement).
+- `contacts_involving(...)`: the contacts with at least one endpoint among given parts, with an
+  optional early `ForbiddenContact` when a touching type pair is one no dock allows.
+- `edit_violations(...)`: the rules a partial edit breaks: the whole graph's type pairs,
+  neighbourhoods and global constraints, and docking placements of the edited contacts only.
+- `full_check(...)`: the non-incremental reference (whole shape graph, full validation).
+- `graph_of(...)`: a networkx graph with the attributes `shape_graph` gives, from index data.
+"""
+from __future__ import annotations
+
+from dataclasses import replace
+from typing import Iterable, Sequence
+
+import networkx as nx
+import numpy as np
+import trimesh
+
+from .assembly import Assembly, Part
+from .contacts import PartGeometry, contacts, prepare
+
+__all__ = [
+    "ForbiddenContact", "PartCache", "bounds_of", "contacts_involving", "full_check", "graph_of",
+    "edit_violations", "moved_mesh", "part_key",
+]
+
+
+def moved_mesh(mesh: trimesh.Trimesh, matrix: np.ndarray) -> trimesh.Trimesh:
+    """`mesh` moved by the 4x4 `matrix` (the same object for the identity; faces shared)."""
+    if np.array_equal(matrix, np.eye(4)):
+        return mesh
+    verts = np.asarray(mesh.vertices, dtype=np.float64) @ matrix[:3, :3].T + matrix[:3, 3]
+    return trimesh.Trimesh(vertices=verts, faces=np.asarray(mesh.faces), process=False)
+
+
+def bounds_of(meshes: Sequence[trimesh.Trimesh]) -> tuple[np.ndarray, np.ndarray]:
+    """(n, 3) minima and maxima of the meshes' vertices (no trimesh cache lookups: hot path)."""
+    lo = np.array([np.asarray(m.vertices).min(axis=0) for m in meshes]).reshape(-1, 3)
+    hi = np.array([np.asarray(m.vertices).max(axis=0) for m in meshes]).reshape(-1, 3)
+    return lo, hi
+
+
+def _parts(meshes: Sequence[trimesh.Trimesh], types: Sequence[str], idx: Iterable[int]) -> list[Part]:
+    return [Part(str(k), types[k], meshes[k]) for k in idx]
+
+
+class PartCache:
+    """Per-part contact data (bounds, centroid, box flag, manifold3d solid) keyed by the part's
+    geometry, e.g. `part_key(source index, placement matrix)`.
+
+    When every part of every shape is a source part moved rigidly, the same placed part recurs
+    across edits, and `contacts` would rebuild its data (and its solid, the costly part) on
+    every call. Values are those `prepare` and the lazy solid builder give for that mesh alone
+    (per-part results do not depend on the other parts), so contacts are unchanged. Bounded:
+    cleared when it would hold more than `limit` parts.
+    """
+
+    def __init__(self, limit: int = 4000):
+        self.limit = limit
+        self.rows: dict = {}  # key -> (lo, hi, centroid, boxy)
+        self.solids: dict = {}  # key -> manifold3d.Manifold or None (not a closed manifold)
+
+    def geometry(self, parts: Sequence[Part], keys: Sequence) -> PartGeometry:
+        """A PartGeometry of `parts` (keys[k] identifies parts[k]), with known solids seeded."""
+        missing = [k for k, key in enumerate(keys) if key not in self.rows]
+        if missing:
+            if len(self.rows) + len(missing) > self.limit:
+                self.rows.clear()
+                self.solids.clear()
+                missing = [k for k, key in enumerate(keys) if key not in self.rows]
+            g = prepare([parts[k] for k in missing])
+            for j, k in enumerate(missing):
+                self.rows[keys[k]] = (g.lo[j], g.hi[j], g.centroid[j], bool(g.boxy[j]))
+        rows = [self.rows[key] for key in keys]
+        geom = PartGeometry(np.array([r[0] for r in rows]), np.array([r[1] for r in rows]),
+                            np.array([r[2] for r in rows]), np.array([r[3] for r in rows], dtype=bool))
+        geom.seed_solids({k: self.solids[key] for k, key in enumerate(keys) if key in self.solids})
+        return geom
+
+    def harvest(self, geom: PartGeometry, keys: Sequence) -> None:
+        """Keep the solids `contacts` built into `geom` (local index k is `keys[k]`)."""
+        for k, solid in geom.known_solids().items():
+            self.solids.setdefault(keys[k], solid)
+
+
+def part_key(source: int, matrix: np.ndarray) -> tuple:
+    """A `PartCache` key: a source part index and its exact placement matrix."""
+    return (int(source), np.ascontiguousarray(matrix, dtype=np.float64).tobytes())
+
+
+class ForbiddenContact(Exception):
+    """An edited part touches a part whose type it may not touch: the shape is invalid."""
+
+
+def contacts_involving(meshes: Sequence[trimesh.Trimesh], types: Sequence[str], new: Iterable[int],
+                       tolerance: float, lo: np.ndarray, hi: np.ndarray,
+                       rule_set=None, keys: Sequence | None = None,
+                       cache: PartCache | None = None) -> set[tuple[int, int]]:
+    """Contacts (i, j), i < j, with at least one endpoint in `new`; `lo`/`hi`: bounds_of(meshes).
+
+    With `cache` and `keys` (a `part_key` per mesh), per-part data comes from the cache.
+
+    With `rule_set` (a `Rules`), candidate pairs of types no dock allows are measured first, and
+    the first such contact raises `ForbiddenContact` (validation would report exactly that
+    pair, so the verdict is the same; the remaining pairs are not measured).
+    """
+    new = np.asarray(sorted(new), dtype=np.int64)
+    if len(new) == 0:
+        return set()
+    # broad phase: boxes of the edited parts against all boxes, grown by the tolerance
+    sep = np.maximum(lo[new][:, None, :] - hi[None, :, :], lo[None, :, :] - hi[new][:, None, :])
+    near = sep.max(axis=2) <= tolerance
+    ii, jj = np.nonzero(near)
+    a, b = new[ii], jj
+    keep = a != b
+    a, b = a[keep], b[keep]
+    pairs = np.unique(np.stack([np.minimum(a, b), np.maximum(a, b)], axis=1), axis=0)
+    if len(pairs) == 0:
+        return set()
+    groups = [pairs]
+    if rule_set is not None and getattr(rule_set, "pairs", None) is not None:
+        bad = np.array([not rule_set.allows_pair(types[x], types[y]) for x, y in pairs.tolist()])
+        groups = [pairs[bad], pairs[~bad]]
+    out: set[tuple[int, int]] = set()
+    for g, group in enumerate(groups):
+        if len(group) == 0:
+            continue
+        subset = np.unique(group)
+        local = {int(x): k for k, x in enumerate(subset)}
+        lp = np.array([[local[x], local[y]] for x, y in group.tolist()], dtype=np.int64)
+        parts = _parts(meshes, types, subset)
+        if cache is not None and keys is not None:
+            sub_keys = [keys[int(x)] for x in subset]
+            geom = cache.geometry(parts, sub_keys)
+            found = contacts(parts, tolerance, geom=geom, pairs=lp)
+            cache.harvest(geom, sub_keys)
+        else:
+            found = contacts(parts, tolerance, pairs=lp)
+        if found and len(groups) == 2 and g == 0:
+            c = found[0]
+            x, y = int(subset[c.a]), int(subset[c.b])
+            raise ForbiddenContact(f"part {x} ({types[x]}) touches {y} ({types[y]}), but no dock "
+                                   f"allows {types[x]} -- {types[y]}")
+        out |= {(int(subset[c.a]), int(subset[c.b])) for c in found}
+    return out
+
+
+def full_check(rule_set, meshes: Sequence[trimesh.Trimesh], types: Sequence[str],
+               tolerance: float) -> tuple[set[tuple[int, int]], list[str]]:
+    """The non-incremental path (a reference and benchmark baseline): `shape_graph` of the whole
+    shape, then the full `validate` on it (every contact's docking placement checked).
+    Returns (edges, problems as text)."""
+    from .graph import shape_graph
+    from .validate import validate
+
+    assembly = Assembly(_parts(meshes, types, range(len(meshes))), name="variant")
+    g = shape_graph(assembly, tolerance=tolerance)
+    edges = {(min(int(u), int(v)), max(int(u), int(v))) for u, v in g.edges()}
+    report = validate(rule_set, assembly, graph=g, max_violations=1)
+    return edges, [v.format() for v in report.violations]
+
+
+def graph_of(types: Sequence[str], edges, centroids, tolerance: float, lo: np.ndarray,
+             hi: np.ndarray) -> nx.Graph:
+    """A graph with the node/graph attributes `shape_graph` gives (ids = node indices as text)."""
+    g = nx.Graph(tolerance=float(tolerance))
+    for i, t in enumerate(types):
+        g.add_node(str(i), type=t, index=i, centroid=centroids[i], lo=lo[i], hi=hi[i])
+    g.add_edges_from((str(u), str(v)) for u, v in edges)
+    return g
+
+
+def edit_violations(rule_set, types: Sequence[str], edges, meshes, centroids, tolerance: float,
+               new: Iterable[int], lo: np.ndarray | None = None,
+               hi: np.ndarray | None = None, max_violations: int = 1) -> list[str]:
+    """Rules an edited shape breaks, by `grammarkit.tiling.validate` on its graph `edges`.
+
+    With `new` (the edited nodes), the docking-placement check runs on the contacts that
+    involve an edited part only: a placement depends on the two parts alone, and the other
+    contacts are unchanged. Type pairs, neighbourhoods and global constraints are checked on
+    the whole graph. Returns the problems as text (empty: valid).
+    """
+    from .validate import validate
+
+    assembly = Assembly(_parts(meshes, types, range(len(meshes))), name="variant")
+    if lo is None or hi is None:
+        lo, hi = bounds_of(meshes)
+    g = graph_of(types, edges, centroids, tolerance, lo, hi)
+    report = validate(rule_set, assembly, graph=g, docks=False, max_violations=max_violations)
+    if not report.ok:
+        return [v.format() for v in report.violations]
+    if getattr(rule_set, "docks", None):
+        new_ids = {str(i) for i in new}
+        touched = [(u, v) for u, v in g.edges() if u in new_ids or v in new_ids]
+        if touched:
+            only_docks = replace(rule_set, neighbor_multisets={}, neighbor_counts={}, constraints=())
+            report = validate(only_docks, assembly, graph=g.edge_subgraph(touched), docks=True,
+                              max_violations=max_violations)
+            return [v.format() for v in report.violations]
+    return []

@@ -1,0 +1,226 @@
+"""CGA constructs -> grammarkit IR: each supported construct, the axis mapping, warnings."""
+from __future__ import annotations
+
+import pytest
+
+import grammarkit
+from grammarkit.cga import import_cga, translate_cga
+from grammarkit.ir import Attr, Branch, Case, Choice, Const, Num, OpCall, Push, Ref, Repeat, Rule, Successor
+
+LOT = [(0.0, 0.0), (20.0, 0.0), (20.0, 16.0), (0.0, 16.0)]
+
+
+def imported(text: str, **kw):
+    result = translate_cga(text, filename="t.cga", **kw)
+    assert result.ok, [d.format(text) for d in result.diagnostics]
+    return result
+
+
+def rule(result, name: str) -> Rule:
+    return next(r for r in result.grammar.rules if r.name == name)
+
+
+def ops(seq, name):
+    return [it for it in seq.items if isinstance(it, OpCall) and it.name == name]
+
+
+def test_attrs_ranges_enums_consts():
+    r = imported('''
+@Range(min=2, max=10) attr h = 5
+@Range(0, 8) attr o = 3
+@Enum("a", "b") attr style = "a"
+@Range("x", "y") attr old_enum = "x"
+@Order(1) @Group("G") attr plain = 1
+const k = h * 2 + o
+Lot --> extrude(k) X.
+''')
+    attrs = {a.name: a for a in r.grammar.attrs}
+    assert attrs["h"].range == (Num(value=2), Num(value=10))
+    assert attrs["o"].range == (Num(value=0), Num(value=8))
+    assert [e.value for e in attrs["style"].enum] == ["a", "b"]
+    assert [e.value for e in attrs["old_enum"].enum] == ["x", "y"]
+    assert attrs["plain"].range is None and attrs["plain"].enum is None
+    assert isinstance(r.grammar.consts[0], Const)
+    assert r.report.ignored["@Order"] == 1 and r.report.ignored["@Group"] == 1
+
+
+def test_default_outside_range_is_widened_with_a_warning():
+    r = imported("@Range(min=28, max=150) attr H = 10\nLot --> extrude(H) X.\n")
+    assert r.grammar.attrs[0].range == (Num(value=10), Num(value=150))
+    warnings = [d for d in r.diagnostics if d.severity == "warning"]
+    assert warnings and warnings[0].span.line == 1 and "widened" in warnings[0].message
+
+
+def test_rule_parameters_case_and_stochastic():
+    r = imported('''
+Lot --> extrude(10) A(3)
+A(n) --> case n > 2: B(n - 1) case n == 2: C. else: NIL
+B(m) --> 30%: X. 20%: Y. else: Z.
+''')
+    a = rule(r, "A")
+    assert a.params == ("n",)
+    case = a.body.items[0]
+    assert isinstance(case, Case) and len(case.arms) == 2 and case.otherwise is not None
+    choice = rule(r, "B").body.items[0]
+    assert isinstance(choice, Choice) and [arm.percent.value for arm in choice.arms] == [30, 20]
+
+
+def test_split_sizes_and_repeats():
+    r = imported('''
+Lot --> extrude(10) comp(f) { front: F }
+F --> split(x) { 1: A | { ~2: B | 0.3: C }* | '0.1: D | ~scope.sx / 4: E }
+G --> split(y) { ~3: Floor }*
+''')
+    block = ops(rule(r, "F").body, "split")[0].block
+    assert [type(b).__name__ for b in block] == ["Branch", "Repeat", "Branch", "Branch"]
+    assert block[0].mode == "abs" and block[2].mode == "rel"
+    assert block[1].items[0].mode == "float" and block[1].items[1].mode == "abs"
+    # `~scope.sx / 4` is floating (scope.sx / 4), as in CGA
+    assert block[3].mode == "float" and block[3].key.op == "/"
+    whole = ops(rule(r, "G").body, "split")[0].block
+    assert len(whole) == 1 and isinstance(whole[0], Repeat)
+
+
+def test_axis_mapping_on_volumes_and_faces():
+    r = imported('''
+Lot --> extrude(12) Mass
+Mass --> [ split(y) { 3: Ground | ~1: Upper } ] split(z) { 2: Back | ~1: Front } 
+Face --> split(y) { 1: A | ~1: B }
+Lot2 --> comp(f) { side: Face }
+''')
+    mass = rule(r, "Mass")
+    push, depth = mass.body.items
+    assert isinstance(push, Push)
+    up = push.body.items[0]
+    assert up.args[0].value == Ref(name="z")                       # CGA y (up) -> z
+    assert depth.args[0].value == Ref(name="y")                    # CGA z (street) -> y ...
+    assert [b.body.items[0].name for b in depth.block] == ["Front", "Back"]   # ... reversed
+
+
+def test_face_frame_is_identity_and_rules_are_specialised_per_frame():
+    r = imported('''
+Lot --> extrude(10) comp(f) { front: Tile | top: Roof } Tile
+Tile --> split(y) { ~1: W. }
+Roof --> roofHip(30, 0.5)
+''')
+    names = {rr.name for rr in r.grammar.rules}
+    assert {"Tile", "Tile_y"} <= names
+    face = ops(rule(r, "Tile").body, "split")[0]
+    volume = ops(rule(r, "Tile_y").body, "split")[0]
+    assert face.args[0].value == Ref(name="y") and volume.args[0].value == Ref(name="z")
+    roof = ops(rule(r, "Roof").body, "roofHip")[0]
+    assert roof.args[1].name == "overhang"
+
+
+def test_comp_selectors_on_an_extruded_face_follow_cga_axes():
+    r = imported('''
+Lot --> extrude(10) comp(f) { front: Bal }
+Bal --> extrude(1) comp(f) { front: F. | top: T. | side: S. }
+''')
+    block = ops(rule(r, "Bal").body, "comp")[0].block
+    keys = [b.key.name for b in block]
+    assert keys[:2] == ["top", "back"]                  # CGA front (+z) / top (+y) of a face volume
+    assert set(keys[2:]) == {"top", "bottom", "left", "right"}
+
+
+def test_relative_s_t_and_transforms():
+    r = imported('''
+Lot --> extrude(10) comp(f) { front: F }
+F --> s('1, '0.5, 0.2) t(0, 0, -0.3) r(0, 0, 15) center(x) i("missing.obj")
+''')
+    f = rule(r, "F").body.items
+    s = f[0]
+    assert s.args[0].value == Ref(name="scope.sx")
+    assert s.args[1].value.op == "*" and s.args[1].value.right == Ref(name="scope.sy")
+    assert [it.name for it in f] == ["s", "t", "r", "center", "i"]
+    assert r.report.assets == [{"path": "missing.obj", "found": False, "resolved": None, "line": 3}]
+
+
+def test_s_on_a_volume_keeps_cga_origin_at_the_back():
+    r = imported("Lot --> extrude(10) s('1, '1, 4) X.\n")
+    t, s = rule(r, "Lot").body.items[1:3]
+    assert t.name == "t" and s.name == "s"
+    assert s.args[1].value == Num(value=4)          # CGA depth (z) is grammarkit's sy
+    model = grammarkit.derive(r.grammar, lot=LOT)
+    lo, hi = model.mesh.bounds
+    assert hi[1] == pytest.approx(16, abs=0.01) and lo[1] == pytest.approx(12, abs=0.01)
+
+
+def test_functions_are_inlined_and_colors_converted():
+    r = imported('''
+attr base = 3
+half(x) = x / 2
+tall = base * 4
+Lot --> extrude(half(tall) + 1) color(1, 0.5, 0) X.
+''')
+    ex = rule(r, "Lot").body.items[0]
+    assert ex.args[0].value.op == "+"
+    color = rule(r, "Lot").body.items[1]
+    assert color.args[0].value.value == "#ff8000"
+    fn = [c for c in r.report.constructs if c.kind == "function"]
+    assert all(c.status == "translated" for c in fn) and len(fn) == 2
+
+
+def test_offset_then_comp_inside_border_is_one_offset():
+    r = imported("Lot --> offset(-2) comp(f) { inside: extrude(5) In. | border: Border. }\n")
+    off = rule(r, "Lot").body.items[0]
+    assert off.name == "offset" and [b.key.name for b in off.block] == ["inside", "border"]
+
+
+def test_block_before_more_items_keeps_the_shape():
+    r = imported("Lot --> extrude(9) comp(f) { front: F }\nF --> split(y) { ~3: Fl. }* Ledge\n")
+    items = rule(r, "F").body.items
+    assert isinstance(items[0], Push) and items[0].body.items[0].name == "split"
+
+
+def test_untranslatable_constructs_warn_with_location_and_feature():
+    text = ("Lot -->\n  setupProjection(0, scope.xy, 2, 2)\n  extrude(geometry.area() * 0.1)\n"
+            "  report(\"h\", 3)\n  X.\n")
+    result = translate_cga(text, filename="w.cga")
+    assert result.ok
+    warnings = [d for d in result.diagnostics if d.severity == "warning"]
+    assert [(d.span.line, d.span.column) for d in warnings] == [(2, 3), (3, 3), (4, 3)]
+    assert {c.feature for c in result.report.constructs if c.status != "translated"} == {
+        "op:setupProjection", "fn:geometry.area", "op:report"}
+    formatted = warnings[0].format(text)
+    assert formatted.startswith("w.cga:2:3: warning: not translated: setupProjection()")
+    assert "    ^" in formatted
+
+
+def test_counts_are_consistent():
+    r = imported("attr a = 1\nLot --> extrude(3) print(1) X.\n")
+    rep = r.report
+    assert rep.total == rep.translated + rep.warned
+    assert rep.to_json()["constructs"]["dropped"] == 1
+
+
+def test_public_api_and_lazy_name():
+    grammar, diags = grammarkit.import_cga("Lot --> extrude(4) X.\n")
+    assert grammar is not None and not diags
+    assert grammarkit.check(grammarkit.print_grammar(grammar)) == []
+
+
+def test_cga_and_grammarkit_derive_the_same_building():
+    cga = '''
+attr H = 12
+Lot --> extrude(H) comp(f) { top: Roof | side: Facade }
+Roof --> roofHip(30) R.
+Facade --> split(y) { ~3: Floor }*
+Floor --> split(x) { 1: W. | { ~3: Win | 0.5: W. }* }
+Win --> split(y) { 1: W. | 1.5: extrude(0.2) Frame. | ~1: W. }
+'''
+    hand = '''
+attr H = 12
+Lot --> extrude(H) comp(f) { top: Roof | side: Facade }
+Roof --> roofHip(30) R.
+Facade --> split(y) { { ~3: Floor }* }
+Floor --> split(x) { 1: W. | { ~3: Win | 0.5: W. }* }
+Win --> split(y) { 1: W. | 1.5: extrude(0.2) Frame. | ~1: W. }
+'''
+    g, diags = import_cga(cga)
+    assert g is not None and not diags
+    a = grammarkit.derive(g, lot=LOT)
+    b = grammarkit.derive(grammarkit.parse(hand), lot=LOT)
+    assert a.mesh.volume == pytest.approx(b.mesh.volume, rel=1e-9)
+    assert (a.mesh.bounds == b.mesh.bounds).all()
+    assert a.mesh.is_watertight

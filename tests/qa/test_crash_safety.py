@@ -1,0 +1,102 @@
+"""Crash safety of folder runs: a run killed at any moment (SIGKILL, SIGTERM, Ctrl-C) leaves a
+manifest that lists exactly the model files on disk, and the same command run again finishes
+the run with the same files as an uninterrupted run."""
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[2]
+PARIS = ROOT / "grammars" / "paris.grammar"
+CASTLE = ROOT / "grammars" / "tiling" / "castle" / "castle.grammar"
+CLI = [sys.executable, "-m", "grammarkit"]
+
+
+def derive(out: Path, *args: str) -> subprocess.Popen:
+    return subprocess.Popen([*CLI, "derive", *map(str, args), "-o", str(out)],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+
+
+def listed(out: Path) -> list[dict]:
+    path = out / "manifest.jsonl"
+    return [json.loads(x) for x in path.read_text().splitlines()] if path.exists() else []
+
+
+def models_on_disk(out: Path) -> set[str]:
+    return {p.name for p in out.glob("*.glb")}
+
+
+def consistent(out: Path) -> None:
+    names = {e["file"] for e in listed(out)}
+    on_disk = models_on_disk(out)
+    pending = (out / ".pending.json").exists()
+    # a SIGKILL between a rename and its manifest line may leave one unlisted file, recorded
+    # in .pending.json; the next run removes it (checked after the re-run below)
+    extra = on_disk - names
+    assert not extra or pending, (extra, names)
+    assert names <= on_disk
+
+
+@pytest.fixture(scope="module")
+def uninterrupted(tmp_path_factory):
+    out = tmp_path_factory.mktemp("whole") / "out"
+    p = derive(out, PARIS, "--variations", "12", "--seed", "4", "--workers", "2")
+    assert p.wait(timeout=600) == 0, p.stderr.read()
+    return out
+
+
+@pytest.mark.parametrize("sig,delay", [(signal.SIGKILL, 2.5), (signal.SIGKILL, 4.0),
+                                       (signal.SIGTERM, 3.0), (signal.SIGINT, 3.0)])
+def test_killed_run_is_consistent_and_resumes_to_the_same_files(uninterrupted, tmp_path, sig, delay):
+    out = tmp_path / "out"
+    p = derive(out, PARIS, "--variations", "12", "--seed", "4", "--workers", "2")
+    deadline = time.time() + delay
+    while time.time() < deadline and p.poll() is None:
+        time.sleep(0.05)
+    if p.poll() is None:
+        p.send_signal(sig)
+    code = p.wait(timeout=60)
+    err = p.stderr.read()
+    assert "Traceback" not in err, err
+    if sig in (signal.SIGTERM, signal.SIGINT) and code != 0:
+        assert code == 130 and "run the same command again" in err
+    if out.exists():
+        consistent(out)
+    again = derive(out, PARIS, "--variations", "12", "--seed", "4", "--workers", "2")
+    assert again.wait(timeout=600) == 0, again.stderr.read()
+    assert not (out / ".pending.json").exists()
+    assert not [q for q in out.iterdir() if q.name.endswith(".tmp")]
+    strip = lambda es: [{k: v for k, v in e.items() if k != "metrics"} for e in es]  # noqa: E731
+    assert strip(listed(out)) == strip(listed(uninterrupted))
+    assert models_on_disk(out) == models_on_disk(uninterrupted)
+    for name in models_on_disk(uninterrupted):
+        assert (out / name).read_bytes() == (uninterrupted / name).read_bytes()
+
+
+def test_killed_sampler_run_resumes_cleanly(tmp_path):
+    args = (CASTLE, "-n", "30", "--iterations", "3", "--seed", "7", "--workers", "1")
+    whole = tmp_path / "whole"
+    p = derive(whole, *args)
+    assert p.wait(timeout=600) == 0, p.stderr.read()
+    out = tmp_path / "out"
+    p = derive(out, *args)
+    while p.poll() is None and len(listed(out)) < 5:
+        time.sleep(0.02)
+    p.send_signal(signal.SIGKILL)
+    p.wait(timeout=30)
+    consistent(out)
+    again = derive(out, *args)
+    assert again.wait(timeout=600) == 0, again.stderr.read()
+    assert [e["id"] for e in listed(out)] == [e["id"] for e in listed(whole)]
+    for name in models_on_disk(whole):
+        assert (out / name).read_bytes() == (whole / name).read_bytes()
+    other = derive(out, CASTLE, "-n", "30", "--iterations", "3", "--seed", "8")
+    assert other.wait(timeout=120) == 1
+    assert "another run" in other.stderr.read()
