@@ -1,7 +1,6 @@
 """The plugin as grammarkit sees it, and `grammarkit train sketch` end to end (tiny sizes)."""
 from __future__ import annotations
 
-import json
 import subprocess
 import sys
 

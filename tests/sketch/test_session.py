@@ -46,7 +46,9 @@ def test_stages_are_framed_on_the_recognised_building(session):
     w, d = roof.stage.anchor_size  # the tower's top face: the lot less the set-back on each side
     assert w == pytest.approx(16 - 2 * top["setback"], abs=0.01) and d == pytest.approx(12 - 2 * top["setback"], abs=0.01)
     floor = session.canvas("Floor")
-    assert floor.stage.anchor_size[1] == pytest.approx(4.5, abs=1.2)  # a storey of the facade
+    floor_h = session.stages["Facade"].recognition.values["floor_h"]
+    assert floor.stage.anchor_size[0] == pytest.approx(16.0)  # a storey of the front facade ...
+    assert floor.stage.anchor_size[1] == pytest.approx(floor_h, abs=0.5)  # ... a typical one
     assert "Floor face" in floor.anchor
 
 

@@ -27,7 +27,7 @@ from typing import Any, Callable, Iterable, Sequence
 import numpy as np
 
 from .drawing import DrawStyle, draw, test_style, training_style
-from .image import RES, to_input
+from .image import RES, level, resize, to_input
 from .library import SnippetLibrary
 from .stages import StageDeriver, StageSpec
 
@@ -79,11 +79,22 @@ def render_input(stage: StageSpec, model: Any, style: DrawStyle, size: tuple[int
 
 
 def quick_size(stage: StageSpec) -> tuple[int, int]:
-    """A canvas just large enough for the network input (shorter side RES): refinement renders
-    a proposal at this size without supersampling, ~8x cheaper than a training render."""
+    """The canvas of the refinement score: shorter side RES pixels (an elongated canvas keeps
+    its long side's detail, which the square network input squeezes). Proposals are drawn at
+    this size without supersampling, ~8x cheaper than a training render."""
+    if stage.framing == "fit":
+        return (RES, RES)
     w, h = stage.canvas_size()
     k = RES / min(w, h)
     return max(RES, int(round(w * k))), max(RES, int(round(h * k)))
+
+
+def score_image(ink: np.ndarray, stage: StageSpec) -> np.ndarray:
+    """The image the refinement score compares: the sketch (or a proposal's drawing) at the
+    score canvas size (anchor framing) or normalised like the network input (fit framing)."""
+    if stage.framing == "fit":
+        return to_input(ink, "fit")
+    return level(resize(ink, quick_size(stage)))
 
 
 # ------------------------------------------------------------------------------------------

@@ -99,7 +99,7 @@ def check_aspect(ink: np.ndarray, canvas: tuple[int, int], what: str) -> None:
                           "e.g. the one `grammarkit recognize --canvas` writes")
 
 
-def _resize(ink: np.ndarray, size: tuple[int, int]) -> np.ndarray:
+def resize(ink: np.ndarray, size: tuple[int, int]) -> np.ndarray:
     from PIL import Image
 
     img = Image.fromarray(np.clip(ink * 255.0, 0, 255).astype(np.uint8), "L")
@@ -110,7 +110,7 @@ def _resize(ink: np.ndarray, size: tuple[int, int]) -> np.ndarray:
     return np.asarray(img.resize(size, resample), dtype=np.float32) / 255.0
 
 
-def _level(x: np.ndarray) -> np.ndarray:
+def level(x: np.ndarray) -> np.ndarray:
     """Lines thinner than a pixel after resizing come out grey: scale the ink so the typical
     line is black again (robust to a few dark specks), whatever the pen width was."""
     lit = x[x > INK_THRESHOLD]
@@ -158,8 +158,8 @@ def to_input(ink: np.ndarray, framing: str, res: int = RES) -> np.ndarray:
                             fillcolor=0)
         x = np.asarray(out, dtype=np.float32) / 255.0
     else:
-        x = _resize(ink, (res, res))
-    return _level(x)
+        x = resize(ink, (res, res))
+    return level(x)
 
 
 def distance_map(x: np.ndarray) -> np.ndarray:

@@ -22,9 +22,9 @@ import numpy as np
 
 from grammarkit.errors import GrammarkitError
 
-from .dataset import render_input, stage_view
+from .dataset import quick_size, render_input, score_image, stage_view
 from .drawing import draw
-from .image import check_aspect, distance_map, fit_transform, load_ink, to_input
+from .image import check_aspect, distance_map, fit_transform, level, load_ink, resize, to_input
 from .library import SnippetLibrary, load_library
 from .models import ModelFileError, SketchModels, TypeModel, load_models
 from .nets import require_torch
@@ -131,8 +131,10 @@ class Recognizer:
 
     def recognize_input(self, x: np.ndarray, object_type: str, *, stage: StageSpec | None = None,
                         refine_steps: int = 0, method: str = "greedy", snippet: str | None = None,
-                        seed: int = 0, t_load: float = 0.0) -> Recognition:
-        """Recognise a network input (RES x RES ink); see `recognize`."""
+                        seed: int = 0, t_load: float = 0.0, target: np.ndarray | None = None) -> Recognition:
+        """Recognise a network input (RES x RES ink); see `recognize`. `target` is the sketch's
+        score image (dataset.score_image); without it the input stands in (resized to the score
+        canvas, which loses the long side's detail of an elongated canvas)."""
         if method not in METHODS:
             raise GrammarkitError(f"unknown refinement method {method!r}; expected one of "
                                   f"{', '.join(METHODS)}", None, code="sketch-bad-method")
@@ -158,7 +160,9 @@ class Recognizer:
         t2 = time.perf_counter()
         info = self.library.snippets[chosen]
         values = info.defaults()
-        scorer = Scorer(self.deriver(stage), info, names, dict(values), distance_map(x))
+        if target is None:
+            target = x if stage.framing == "fit" else level(resize(x, quick_size(stage)))
+        scorer = Scorer(self.deriver(stage), info, names, dict(values), distance_map(target))
         net_score = scorer(u)
         t3 = time.perf_counter()
         u_ref, score = u, net_score
@@ -177,14 +181,24 @@ class Recognizer:
                            timings, stage)
 
     def recognize(self, image: Any, object_type: str, *, stage: StageSpec | None = None, **kw: Any) -> Recognition:
+        """Recognise a sketch image (path, PIL image or array) of one object type."""
         t0 = time.perf_counter()
+        ink = load_ink(image)
+        name = str(image) if isinstance(image, (str, Path)) else "sketch"
+        return self.recognize_ink(ink, object_type, stage=stage, what=name, t0=t0, **kw)
+
+    def recognize_ink(self, ink: np.ndarray, object_type: str, *, stage: StageSpec | None = None,
+                      what: str = "sketch", t0: float | None = None, **kw: Any) -> Recognition:
+        """Recognise an ink map (H x W, 1 = line) drawn on the stage's canvas."""
+        t0 = time.perf_counter() if t0 is None else t0
         tm = self.models.type_model(object_type)
         stage = stage or tm.stage
-        ink = load_ink(image)
         if stage.framing == "anchor":
-            check_aspect(ink, stage.canvas_size(), str(image) if isinstance(image, (str, Path)) else "sketch")
+            check_aspect(ink, stage.canvas_size(), what)
         x = to_input(ink, stage.framing)
-        return self.recognize_input(x, object_type, stage=stage, t_load=time.perf_counter() - t0, **kw)
+        target = score_image(ink, stage)
+        return self.recognize_input(x, object_type, stage=stage, t_load=time.perf_counter() - t0,
+                                    target=target, **kw)
 
     # -- pictures --------------------------------------------------------------------------
     def model_of(self, r: Recognition, stage: StageSpec | None = None) -> Any:

@@ -5,9 +5,11 @@ style through the stage camera, and scored against the sketch with the paper's e
 
     s = exp(-||D(I_prop) - D(I_sketch)||_F / sqrt(H W)),
 
-D the Euclidean distance transform to the nearest line pixel, at the 128x128 network input.
-Dividing the Frobenius norm by sqrt(HW) makes it the RMS difference in input pixels, so the
-score is independent of the resolution (1 for a perfect match, 0.37 for 1 px RMS).
+D the Euclidean distance transform to the nearest line pixel. Both images are at the score
+canvas size (dataset.quick_size: the stage canvas with its shorter side 128 pixels; for the
+fit-framed mass, the 128x128 network input). Dividing the Frobenius norm by sqrt(HW) makes it
+the RMS difference in pixels, so the score does not depend on the resolution (1 for a perfect
+match, 0.37 for 1 px RMS).
 
 Two searches, both measured in benchmarks/bench_sketch.py:
 - `metropolis`: the paper's Metropolis-Hastings: a Gaussian proposal around the current state,
@@ -25,7 +27,8 @@ from typing import Callable, Sequence
 
 import numpy as np
 
-from .dataset import quick_size, render_input
+from .dataset import quick_size, score_image, stage_view
+from .drawing import draw
 from .drawing import DrawStyle
 from .image import distance_map
 from .library import SnippetInfo
@@ -65,6 +68,7 @@ class Scorer:
         return out
 
     def render(self, u: np.ndarray) -> np.ndarray | None:
+        """The proposal's score image (None if the values cannot be derived)."""
         from grammarkit.errors import GrammarkitError
 
         try:
@@ -72,7 +76,9 @@ class Scorer:
         except GrammarkitError:
             return None
         stage = self.deriver.stage
-        return render_input(stage, model, EXACT_STYLE, quick_size(stage), supersample=1)
+        size = quick_size(stage)
+        ink = draw(model, stage_view(stage, model, size), EXACT_STYLE, stage.host_box(), supersample=1)
+        return score_image(ink, stage)
 
     def __call__(self, u: np.ndarray) -> float:
         key = tuple(np.round(np.clip(u, 0.0, 1.0), 6))

@@ -39,7 +39,6 @@ import numpy as np
 from grammarkit.errors import GrammarkitError
 
 from .drawing import draw, strokes_to_ink
-from .image import SketchError, check_aspect, to_input
 from .recognize import Recognition, Recognizer, get_recognizer
 from .refine import EXACT_STYLE
 from .stages import StageSpec
@@ -92,6 +91,7 @@ class Session:
             raise SessionError(f"lot must be two positive sizes in metres, got {lot!r}", None)
         self.line_width = float(line_width)
         self.stages: dict[str, StageResult] = {}
+        self._anchors: dict[tuple, tuple] = {}
 
     # -- the generated grammar ---------------------------------------------------------------
     def choices(self, skip: str | None = None) -> dict[str, tuple[str, dict]]:
@@ -167,6 +167,10 @@ class Session:
         kind = self.library.anchor_kinds[t]
         if kind == "ground":
             return self.lot, "the lot"
+        key = (t, tuple(sorted((k, v[0], tuple(sorted(v[1].items()))) for k, v in self.choices(skip=t).items())),
+               self.lot)
+        if key in self._anchors:
+            return self._anchors[key]
         model = derive(self.grammar(Path.cwd(), skip=t), seed=0)
         leaves = [p for p in model.parts if p.name == t and p.kind == "face"]
         if not leaves:
@@ -175,13 +179,18 @@ class Session:
                                f"sketch an earlier stage whose snippet offers {t} faces", None,
                                code="sketch-no-anchor")
 
-        def rank(p: Any) -> tuple:
-            nrm = np.asarray(p.axes[2], float)
-            facing = float(-nrm[1])  # faces looking at the stage cameras (front, -y) first
-            return (round(facing, 3), round(p.size[0] * p.size[1], 3))
-
-        best = max(leaves, key=rank)
-        return (float(best.size[0]), float(best.size[1])), f"{t} face {best.id} ({best.size[0]:.2f} x {best.size[1]:.2f} m)"
+        # the anchors facing the stage cameras (the front, -y) and, among those, the most common
+        # size: a typical storey rather than a taller ground floor
+        facing = [round(float(-np.asarray(p.axes[2], float)[1]), 3) for p in leaves]
+        front = [p for p, f in zip(leaves, facing) if f == max(facing)]
+        sizes: dict[tuple, list] = {}
+        for p in front:
+            sizes.setdefault((round(p.size[0], 2), round(p.size[1], 2)), []).append(p)
+        best = max(sizes.values(), key=lambda ps: (len(ps), ps[0].size[0] * ps[0].size[1]))[0]
+        out = ((float(best.size[0]), float(best.size[1])),
+               f"{t} face {best.id} ({best.size[0]:.2f} x {best.size[1]:.2f} m)")
+        self._anchors[key] = out
+        return out
 
     def canvas(self, object_type: str, longest: int | None = None) -> StageCanvas:
         """The canvas a type is drawn on now (it depends on the earlier stages)."""
@@ -212,11 +221,8 @@ class Session:
         ink = strokes_to_ink(lines, size, line_width or self.line_width)
         if not (ink > 0.25).any():
             raise SessionError(f"stage {t}: no strokes to recognise", None, code="sketch-blank")
-        if sc.stage.framing == "anchor":
-            check_aspect(ink, sc.size, f"stage {t}")
-        x = to_input(ink, sc.stage.framing)
-        r = self.recognizer.recognize_input(x, t, stage=sc.stage, refine_steps=refine, method=method,
-                                            snippet=snippet, seed=seed)
+        r = self.recognizer.recognize_ink(ink, t, stage=sc.stage, what=f"stage {t}", refine_steps=refine,
+                                          method=method, snippet=snippet, seed=seed)
         self.stages[t] = StageResult(t, r, size, [list(map(list, ln)) for ln in lines])
         return r
 

@@ -25,7 +25,6 @@ rectangles a person draws to subdivide a facade (the paper's repetition strokes,
 """
 from __future__ import annotations
 
-import math
 from dataclasses import asdict, dataclass, replace
 from typing import Any, Mapping
 
