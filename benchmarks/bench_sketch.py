@@ -13,7 +13,8 @@ these seed 1000+), in the training style ("sketchy": new pens) and in styles nev
    (Nishida's code) and of Metropolis-Hastings (the paper), on `--refine-n` sketches per
    snippet. "equiv." RMSE measures the distance to the set of values that derive the same
    geometry (a floor height only shows through the number of floors). Times: median per
-   recognition over `--runs` passes (CNN only = classify + regress + the match score render).
+   recognition (cnn = image to network input, classify, regress; score = drawing the result
+   and scoring it; greedy / MH = the whole recognition with refinement).
 2. robustness: accuracy and CNN-only RMSE per drawing style never trained on; drop vs sketchy.
 3. baseline: the paper's Figure 15 comparison on a few sketches per snippet: MCMC alone (100
    Metropolis-Hastings steps from the middle of the ranges, the de-facto inverse procedural
@@ -39,7 +40,6 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
-CACHE = Path(os.environ.get("GRAMMARKIT_SKETCH_CACHE", Path.home() / ".cache" / "grammarkit" / "sketch"))
 ROBUST = ("jitter", "missing", "overdrawn", "thick", "perspective", "plain")
 
 
@@ -50,11 +50,47 @@ def load_avg() -> str:
         return "unknown"
 
 
-def test_set(library, stage, n, kind, seed=1000):
-    from grammarkit_sketch.dataset import generate
+class TestSet:
+    """Held-out sketches of one type as full canvases (ink maps), recognised through the same
+    path as a user's image: `Recognizer.recognize_ink`."""
 
-    return generate(library, stage, n, seed=seed, style="sketchy", test_kind=kind,
-                    cache=CACHE)
+    def __init__(self, library, stage, n, kind, seed=1000):
+        from grammarkit.errors import GrammarkitError
+        from grammarkit_sketch.dataset import stage_view
+        from grammarkit_sketch.drawing import draw, test_style
+        from grammarkit_sketch.stages import StageDeriver
+
+        deriver = StageDeriver(library, stage)
+        self.items = []  # (snippet, u, ink)
+        t_index = library.types.index(stage.object_type)
+        for si, info in enumerate(library.snippets_of(stage.object_type)):
+            for i in range(n):
+                rng = np.random.default_rng([seed, t_index, si, i])
+                for _ in range(20):
+                    u = rng.random(len(info.params))
+                    try:
+                        model = deriver.derive(info.name, {p.name: p.value(x) for p, x in zip(info.params, u)})
+                    except GrammarkitError:
+                        continue
+                    style = test_style(kind, rng)
+                    ink = draw(model, stage_view(stage, model, stage.canvas_size(), style), style,
+                               stage.host_box())
+                    if (ink > 0.5).sum() >= 8:
+                        self.items.append((info.name, u, ink))
+                        break
+
+    def __len__(self):
+        return len(self.items)
+
+
+_SETS: dict = {}
+
+
+def test_set(library, stage, n, kind, seed=1000):
+    key = (stage.object_type, n, kind, seed)
+    if key not in _SETS:
+        _SETS[key] = TestSet(library, stage, n, kind, seed)
+    return _SETS[key]
 
 
 def rmse(errors):
@@ -92,7 +128,7 @@ def section_accuracy(rec, args, out):
     print("\n1. Held-out sketches (training style, new pens and parameters): "
           f"{args.n} per snippet; refinement on {args.refine_n} per snippet, {args.steps} steps")
     hdr = (f"{'type':<8}{'n':>5}{'acc':>7}{'acc(name)':>10}{'RMSE cnn':>10}{'equiv.':>8}"
-           f"{'greedy':>8}{'equiv.':>8}{'MH':>8}{'equiv.':>8}{'cnn ms':>8}{'+greedy ms':>11}{'+MH ms':>8}")
+           f"{'greedy':>8}{'equiv.':>8}{'MH':>8}{'equiv.':>8}{'cnn ms':>8}{'score ms':>9}{'greedy ms':>10}{'MH ms':>8}")
     print(hdr)
     print("-" * len(hdr))
     rows = {}
@@ -104,36 +140,34 @@ def section_accuracy(rec, args, out):
         data = test_set(lib, stage, args.n, "sketchy")
         correct = exact = 0
         err_cnn, err_g, err_m, eq_cnn, eq_g, eq_m = [], [], [], [], [], []
-        t_cnn, t_g, t_m = [], [], []
+        t_cnn, t_score, t_g, t_m = [], [], [], []
         per_snippet = {}
-        for i in range(len(data)):
-            x = data.inputs(i)
-            name = data.snippets[data.snippet[i]]
+        for i, (name, u_true, ink) in enumerate(data.items):
             info = lib.snippets[name]
-            u_true = data.u[i, :len(info.params)]
-            r = rec.recognize_input(x, t)
+            r = rec.recognize_ink(ink, t)
             group = [r.snippet] + [m for c in r.top[:1] for m in c.same_drawing]
             correct += name in group
             exact += name == r.snippet
-            rs = rec.recognize_input(x, t, snippet=name)  # parameters with the true snippet
+            rs = rec.recognize_ink(ink, t, snippet=name)  # parameters with the true snippet
             if rs.estimated:
                 err_cnn.append(errors_of(rs, info, u_true))
             k = per_snippet.get(name, 0)
             per_snippet[name] = k + 1
-            times = []
+            times, scores = [], []
             for _ in range(args.runs if i < 3 else 1):
-                t0 = time.perf_counter()
-                rec.recognize_input(x, t)
-                times.append(time.perf_counter() - t0)
-            t_cnn.append(statistics.median(times))
+                tm_ = rec.recognize_ink(ink, t).timings
+                times.append(tm_["load"] + tm_["classify"] + tm_["regress"])
+                scores.append(tm_["score"])
+            t_cnn.append(statistics.median(times) / 1e3)
+            t_score.append(statistics.median(scores) / 1e3)
             if k < args.refine_n and rs.estimated:
                 eq_cnn.append(equiv_errors(rec, stage, info, u_true, rs))
                 t0 = time.perf_counter()
-                rg = rec.recognize_input(x, t, snippet=name, refine_steps=args.steps, method="greedy")
+                rg = rec.recognize_ink(ink, t, snippet=name, refine_steps=args.steps, method="greedy")
                 t_g.append(time.perf_counter() - t0)
                 t0 = time.perf_counter()
-                rm = rec.recognize_input(x, t, snippet=name, refine_steps=args.steps, method="metropolis",
-                                         seed=i)
+                rm = rec.recognize_ink(ink, t, snippet=name, refine_steps=args.steps, method="metropolis",
+                                       seed=i)
                 t_m.append(time.perf_counter() - t0)
                 err_g.append(errors_of(rg, info, u_true))
                 err_m.append(errors_of(rm, info, u_true))
@@ -142,12 +176,12 @@ def section_accuracy(rec, args, out):
         n = len(data)
         row = dict(n=n, acc=correct / n, acc_name=exact / n, rmse_cnn=rmse(err_cnn), eq_cnn=rmse(eq_cnn),
                    rmse_greedy=rmse(err_g), eq_greedy=rmse(eq_g), rmse_mh=rmse(err_m), eq_mh=rmse(eq_m),
-                   ms_cnn=1e3 * statistics.median(t_cnn), ms_greedy=1e3 * statistics.median(t_g) if t_g else float("nan"),
+                   ms_cnn=1e3 * statistics.median(t_cnn), ms_score=1e3 * statistics.median(t_score), ms_greedy=1e3 * statistics.median(t_g) if t_g else float("nan"),
                    ms_mh=1e3 * statistics.median(t_m) if t_m else float("nan"))
         rows[t] = row
         print(f"{t:<8}{n:>5}{row['acc']:>7.3f}{row['acc_name']:>10.3f}{row['rmse_cnn']:>10.3f}{row['eq_cnn']:>8.3f}"
               f"{row['rmse_greedy']:>8.3f}{row['eq_greedy']:>8.3f}{row['rmse_mh']:>8.3f}{row['eq_mh']:>8.3f}"
-              f"{row['ms_cnn']:>8.1f}{row['ms_greedy']:>11.0f}{row['ms_mh']:>8.0f}", flush=True)
+              f"{row['ms_cnn']:>8.1f}{row['ms_score']:>9.1f}{row['ms_greedy']:>10.0f}{row['ms_mh']:>8.0f}", flush=True)
     print("paper (Table 2, GPU): accuracy 0.99 mass, 0.98 roof, 0.98 window, 0.95 ledge; RMSE after "
           "MCMC 0.03 / 0.06 / 0.09 / 0.08; 25 ms classification, ~305-329 ms with refinement")
     print(f"torch threads: {torch.get_num_threads()}")
@@ -172,15 +206,13 @@ def section_robustness(rec, args, out):
         for s in styles:
             data = test_set(lib, tm.stage, n, s, seed=2000)
             correct, errs = 0, []
-            for i in range(len(data)):
-                x = data.inputs(i)
-                name = data.snippets[data.snippet[i]]
+            for name, u_true, ink in data.items:
                 info = lib.snippets[name]
-                r = rec.recognize_input(x, t)
+                r = rec.recognize_ink(ink, t)
                 correct += name in [r.snippet, *r.top[0].same_drawing]
-                rs = rec.recognize_input(x, t, snippet=name)
+                rs = rec.recognize_ink(ink, t, snippet=name)
                 if rs.estimated:
-                    errs.append(errors_of(rs, info, data.u[i, :len(info.params)]))
+                    errs.append(errors_of(rs, info, u_true))
             cells[s] = (correct / len(data), rmse(errs))
         base = cells["sketchy"]
         line = f"{t:<8}"
@@ -196,8 +228,9 @@ def section_robustness(rec, args, out):
 
 
 def section_baseline(rec, args, out):
-    from grammarkit_sketch.refine import Scorer, metropolis
+    from grammarkit_sketch.dataset import score_image
     from grammarkit_sketch.image import distance_map
+    from grammarkit_sketch.refine import Scorer, metropolis
 
     lib = rec.library
     k = max(1, args.refine_n // 2)
@@ -209,8 +242,7 @@ def section_baseline(rec, args, out):
             continue
         data = test_set(lib, tm.stage, args.n, "sketchy")
         seen: dict[str, int] = {}
-        for i in range(len(data)):
-            name = data.snippets[data.snippet[i]]
+        for i, (name, u_true, ink) in enumerate(data.items):
             if seen.get(name, 0) >= k:
                 continue
             seen[name] = seen.get(name, 0) + 1
@@ -218,18 +250,17 @@ def section_baseline(rec, args, out):
             reg = tm.regressors.get(name)
             if reg is None or not reg.params:
                 continue
-            x = data.inputs(i)
-            u_true = data.u[i, :len(info.params)]
             cols = [info.param_names.index(p) for p in reg.params]
             t0 = time.perf_counter()
-            scorer = Scorer(rec.deriver(tm.stage), info, reg.params, info.defaults(), distance_map(x))
+            scorer = Scorer(rec.deriver(tm.stage), info, reg.params, info.defaults(),
+                            distance_map(score_image(ink, tm.stage)))
             u, _ = metropolis(scorer, np.full(len(cols), 0.5), 100, seed=i)
             rows["mcmc100"][1].append(time.perf_counter() - t0)
             rows["mcmc100"][0].append(u - u_true[cols])
             for key, steps, method in (("cnn", 0, "greedy"), ("cnn+greedy", args.steps, "greedy"),
                                        ("cnn+mh", args.steps, "metropolis")):
                 t0 = time.perf_counter()
-                r = rec.recognize_input(x, t, snippet=name, refine_steps=steps, method=method, seed=i)
+                r = rec.recognize_ink(ink, t, snippet=name, refine_steps=steps, method=method, seed=i)
                 rows[key][1].append(time.perf_counter() - t0)
                 rows[key][0].append(errors_of(r, info, u_true))
     base_e, base_t = rmse(rows["mcmc100"][0]), statistics.median(rows["mcmc100"][1])
@@ -263,9 +294,8 @@ def section_table3(rec, args, out):
             data = test_set(lib, rec.models.types[t].stage, args.n, kind)
             for r_ in (rec, plain):
                 c = 0
-                for i in range(len(data)):
-                    name = data.snippets[data.snippet[i]]
-                    r = r_.recognize_input(data.inputs(i), t)
+                for name, _u, ink in data.items:
+                    r = r_.recognize_ink(ink, t)
                     c += name in [r.snippet, *r.top[0].same_drawing]
                 res.append(c / len(data))
         rows[t] = res
@@ -278,9 +308,9 @@ def section_table3(rec, args, out):
 def section_roundtrip(rec, args, out):
     from PIL import Image
 
-    from grammarkit_sketch.dataset import stage_view
+    from grammarkit_sketch.dataset import score_image, stage_view
     from grammarkit_sketch.drawing import draw, test_style
-    from grammarkit_sketch.image import distance_map, load_ink, to_input
+    from grammarkit_sketch.image import distance_map, load_ink
     from grammarkit_sketch.refine import Scorer
 
     lib = rec.library
@@ -305,10 +335,10 @@ def section_roundtrip(rec, args, out):
         refined_ms.append(1e3 * (time.perf_counter() - t0))
         same += r.snippet == info.name or info.name in r.top[0].same_drawing
         scores.append(r.score)
-        x = to_input(load_ink(img), stage.framing)
+        target = score_image(load_ink(img), stage)
         reg = tm.regressors.get(info.name)
         names = reg.params if reg else []
-        true_scorer = Scorer(rec.deriver(stage), info, names, dict(values), distance_map(x))
+        true_scorer = Scorer(rec.deriver(stage), info, names, dict(values), distance_map(target))
         truth.append(true_scorer(np.array([info.params[info.param_names.index(p)].normalise(values[p])
                                            for p in names])))
     s, tr = np.array(scores), np.array(truth)

@@ -117,35 +117,22 @@ def _sample_one(deriver: StageDeriver, info: Any, rng: np.random.Generator, styl
     return None
 
 
-_DERIVERS: dict[str, StageDeriver] = {}  # per process: a worker keeps its compiled grammars
-
-
-def _deriver(library_src: Any, stage_dict: dict) -> StageDeriver:
+def _init_state(library_src: Any, stage_dict: dict) -> StageDeriver:
+    """Executor session state: the library and the stage grammar compiled once per process."""
     from .library import load_library
 
-    key = json.dumps([str(library_src) if not isinstance(library_src, SnippetLibrary) else id(library_src),
-                      stage_dict], sort_keys=True)
-    got = _DERIVERS.get(key)
+    return StageDeriver(load_library(library_src), StageSpec.from_dict(stage_dict))
+
+
+def _render_task(deriver: StageDeriver, task: tuple) -> tuple:
+    """One sample: (snippet index, sample index, input image or None, parameters or None)."""
+    ti, si, name, i, seed, style_kind, test_kind = task
+    rng = np.random.default_rng([seed, ti, si, i])
+    got = _sample_one(deriver, deriver.library.snippets[name], rng, style_kind, test_kind)
     if got is None:
-        if len(_DERIVERS) > 16:
-            _DERIVERS.clear()
-        got = _DERIVERS[key] = StageDeriver(load_library(library_src), StageSpec.from_dict(stage_dict))
-    return got
-
-
-def _work(args: tuple) -> tuple[list, int]:
-    library_src, stage_dict, tasks, style_kind, test_kind, seed = args
-    deriver = _deriver(library_src, stage_dict)
-    library = deriver.library
-    out, failures = [], 0
-    for ti, si, name, i in tasks:
-        rng = np.random.default_rng([seed, ti, si, i])
-        got = _sample_one(deriver, library.snippets[name], rng, style_kind, test_kind)
-        if got is None:
-            failures += 1
-            continue
-        out.append((si, i, got[0], got[1]))
-    return out, failures
+        return si, i, None, None
+    img = np.clip(np.round(got[0] * 255.0), 0, 255).astype(np.uint8)
+    return si, i, img, got[1]
 
 
 def cache_key(library: SnippetLibrary, stage: StageSpec, n: int, seed: int, style: str,
@@ -177,37 +164,30 @@ def generate(library: SnippetLibrary, stage: StageSpec, n: int, *, seed: int = 0
                 return got
             except (OSError, KeyError, ValueError):
                 pass  # unreadable cache entry: regenerate it
-    tasks = [(ti, si, name, i) for si, name in enumerate(names) for i in range(n)]
-    src = library.path if (workers > 1 and library.path) else library
-    chunks = [tasks[k:k + 64] for k in range(0, len(tasks), 64)]
-    jobs = [(src, stage.to_dict(), c, style, test_kind, seed) for c in chunks]
+    tasks = [(ti, si, name, i, seed, style, test_kind) for si, name in enumerate(names) for i in range(n)]
+    # The project's executor: results come back in task order whatever the number of workers
+    # (and workers start only when the work repays their start-up).
+    from grammarkit.run import LocalExecutor
+
+    src = library.path if library.path else library.grammar
     results: list = []
     failures = 0
-    if workers > 1 and library.path:
-        import multiprocessing
-        from concurrent.futures import ProcessPoolExecutor
-
-        # spawn, not fork: the parent may hold torch's thread pools, which do not survive a fork
-        with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn")) as pool:
-            for got, f in pool.map(_work, jobs):
-                results += got
-                failures += f
+    with LocalExecutor(max(1, int(workers))) as ex:
+        with ex.session(_init_state, src, stage.to_dict()) as session:
+            for si, i, img, u in session.map(_render_task, tasks):
+                if img is None:
+                    failures += 1
+                else:
+                    results.append((si, i, img, u))
                 if progress:
-                    progress(len(got) + f)
-    else:
-        for job in jobs:
-            got, f = _work(job)
-            results += got
-            failures += f
-            if progress:
-                progress(len(got) + f)
+                    progress(1)
     results.sort(key=lambda r: (r[0], r[1]))
     P = max((len(s.params) for s in infos), default=0)
     x = np.zeros((len(results), RES, RES), dtype=np.uint8)
     sn = np.zeros(len(results), dtype=np.int16)
     u = np.full((len(results), max(P, 1)), np.nan, dtype=np.float32)
     for k, (si, _i, img, uu) in enumerate(results):
-        x[k] = np.clip(np.round(img * 255.0), 0, 255).astype(np.uint8)
+        x[k] = img
         sn[k] = si
         u[k, :len(uu)] = uu
     out = SampleSet(t, names, x, sn, u, failures)
