@@ -12,7 +12,7 @@ from grammarkit.cli import main
 from .conftest import LIBRARY, ROOT
 
 pytestmark = pytest.mark.usefixtures("torch_or_skip")
-EXAMPLE = ROOT / "plugins" / "sketch" / "examples" / "session.json"
+EXAMPLE = ROOT / "docs" / "images" / "sketch_session.json"
 
 
 def draw_stage(session, t, snippet, values, seed=0):

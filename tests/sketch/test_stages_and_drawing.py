@@ -108,3 +108,15 @@ def test_model_strokes_trace_the_visible_lines(library, stages):
     drawn = render_input(st, model, EXACT)
     # the traced strokes and the rendered drawing cover the same lines
     assert ((traced > 0.5) & (drawn > 0.5)).sum() > 0.6 * (drawn > 0.5).sum()
+
+
+def test_equivalence_interval_of_a_repeat_driven_parameter(library, stages):
+    from grammarkit_sketch.dataset import equivalence_interval
+
+    d = StageDeriver(library, stages["Facade"])
+    # an 18 m facade splits into round(18 / floor_h) floors: 5 floors for 3.27 < floor_h < 4.0
+    lo, hi = equivalence_interval(d, "facade_grid", {"floor_h": 3.6}, "floor_h", 3.0, 4.5)
+    assert lo == pytest.approx(18 / 5.5, abs=0.01) and hi == pytest.approx(18 / 4.5, abs=0.01)
+    d = StageDeriver(library, stages["Roof"])
+    lo, hi = equivalence_interval(d, "roof_hip", {"roof_deg": 30.0, "roof_over": 0.3}, "roof_deg", 15, 50)
+    assert lo == hi == 30.0  # every angle draws differently

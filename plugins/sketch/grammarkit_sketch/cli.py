@@ -169,6 +169,8 @@ def sketch_session_command(session: Path, output: Path, library: Path | None, mo
 @click.option("--style", type=click.Choice(("sketchy", "plain")), default="sketchy", show_default=True,
               help="Training drawings: hand-drawn-looking (the paper's) or exact lines (Table 3).")
 @click.option("--types", default=None, help="Comma-separated object types to train (default: all).")
+@click.option("--classifiers-only", is_flag=True,
+              help="Train the snippet classifiers only (e.g. to compare training styles).")
 @click.option("--cache", type=click.Path(file_okay=False, path_type=Path), default=None,
               help="Folder caching the rendered training sets (default: ~/.cache/grammarkit/sketch).")
 @click.option("--no-cache", is_flag=True, help="Render the training sets without reading or writing the cache.")
@@ -177,7 +179,8 @@ def sketch_session_command(session: Path, output: Path, library: Path | None, mo
               help="Processes rendering the training sets (results do not depend on it).")
 @click.option("--seed", type=int, default=0, show_default=True)
 def train_sketch_command(library: Path, output: Path, samples: int, classifier_epochs: int,
-                         regressor_epochs: int, style: str, types: str | None, cache: Path | None,
+                         regressor_epochs: int, style: str, types: str | None, classifiers_only: bool,
+                         cache: Path | None,
                          no_cache: bool, threads: int, workers: int, seed: int) -> None:
     """Train the sketch recognizer of a snippet library: one classifier per object type and one
     parameter regressor per snippet, on renders of snippets with parameters sampled in their
@@ -192,6 +195,7 @@ def train_sketch_command(library: Path, output: Path, samples: int, classifier_e
     cfg = TrainConfig(samples=samples, classifier_epochs=classifier_epochs,
                       regressor_epochs=regressor_epochs, style=style, seed=seed, threads=threads,
                       workers=workers, types=[t.strip() for t in types.split(",") if t.strip()] if types else None,
+                      regressors=not classifiers_only,
                       cache=None if no_cache else (cache or DEFAULT_CACHE))
     reporter = RichReporter(console)
     with reporter.progress:

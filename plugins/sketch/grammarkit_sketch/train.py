@@ -36,6 +36,7 @@ class TrainConfig:
     threads: int = 1
     workers: int = 1  # processes rendering the training set
     types: list[str] | None = None  # object types to train (default: all)
+    regressors: bool = True  # False: classifiers only (e.g. to compare training styles)
     cache: Path | None = DEFAULT_CACHE
     stages: dict[str, StageSpec] = field(default_factory=dict)  # overrides of default_stage
 
@@ -43,7 +44,7 @@ class TrainConfig:
         return {"samples": self.samples, "val_share": self.val_share,
                 "classifier_epochs": self.classifier_epochs, "regressor_epochs": self.regressor_epochs,
                 "batch": self.batch, "lr": self.lr, "width": self.width, "style": self.style,
-                "seed": self.seed}
+                "seed": self.seed, "regressors": self.regressors}
 
 
 class Reporter:
@@ -149,7 +150,7 @@ def train_type(library: SnippetLibrary, stage: StageSpec, cfg: TrainConfig, repo
 
     regressors: dict[str, RegressorModel] = {}
     for si, info in enumerate(infos):
-        if not info.params:
+        if not info.params or not cfg.regressors:
             continue
         visible, hidden = visible_params(library, stage, info.name, seed=cfg.seed)
         if hidden:

@@ -1,7 +1,7 @@
 """Write an example session.json: the strokes a person would draw, stage by stage, to sketch a
 target building (the visible lines of each target snippet, traced with a shaky hand).
 
-    python plugins/sketch/scripts/make_example_session.py -o plugins/sketch/examples/session.json
+    python plugins/sketch/scripts/make_example_session.py [-o docs/images/sketch_session.json]
 
 Each stage's canvas depends on what the earlier stages were recognised as (the roof canvas is
 framed on the recognised mass's top face), so the script runs the session as it goes, exactly
@@ -25,7 +25,8 @@ TARGET = [  # (object type, snippet, parameter values)
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("-o", "--output", type=Path, required=True)
+    ap.add_argument("-o", "--output", type=Path,
+                    default=Path(__file__).resolve().parents[3] / "docs" / "images" / "sketch_session.json")
     ap.add_argument("--models", default=None)
     ap.add_argument("--library", default=None)
     ap.add_argument("--longest", type=int, default=512, help="longest canvas side, pixels")

@@ -71,6 +71,7 @@ def main() -> None:
     style = test_style("sketchy", np.random.default_rng(3))
     ink = draw(model, stage_view(stage, model, stage.canvas_size(), style), style, stage.host_box())
     sketch = grey(ink)
+    save_image(sketch, out / "sketch_roof.png")  # the sketch the docs' examples recognise
     r = rec.recognize(sketch, "Roof", refine_steps=10)
     d = distance_map(to_input(load_ink(sketch), stage.framing))
     dt = Image.fromarray((255 * (1 - np.clip(d / 24.0, 0, 1))).astype(np.uint8), "L").resize(sketch.size)
@@ -115,7 +116,7 @@ def main() -> None:
     # -- the example session -------------------------------------------------------------------
     from grammarkit_sketch.session import Session
 
-    example = ROOT / "plugins" / "sketch" / "examples" / "session.json"
+    example = out / "sketch_session.json"
     s = Session.from_file(example, library=ROOT / "grammars" / "library.grammar")
     pics = []
     for t in s.library.types:
