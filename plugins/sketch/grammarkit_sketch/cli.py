@@ -20,6 +20,13 @@ def _echo_json(data: Any) -> None:
     click.echo(json.dumps(to_jsonable(data), indent=2))
 
 
+def _one_thread() -> None:
+    """The networks are small: one thread is as fast and does not fight other processes."""
+    from .nets import require_torch
+
+    require_torch().set_num_threads(1)
+
+
 def _range(info: Any, name: str) -> str:
     p = next(p for p in info.params if p.name == name)
     return f"[{p.lo:g}, {p.hi:g}]"
@@ -81,6 +88,7 @@ def recognize_command(sketch: Path | None, object_type: str, library: Path | Non
     """
     from .recognize import get_recognizer
 
+    _one_thread()
     rec = get_recognizer(models, library)
     t = rec.library.check_type(object_type)
     if canvas is not None:
@@ -132,6 +140,7 @@ def sketch_session_command(session: Path, output: Path, library: Path | None, mo
 
     from .session import Session
 
+    _one_thread()
     s = Session.from_file(session, models=models, library=library, refine=refine_steps, method=method,
                           canvases=canvases)
     text = s.grammar_text(output.resolve().parent, source=session.name)

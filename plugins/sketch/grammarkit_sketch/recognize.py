@@ -98,12 +98,15 @@ class Recognizer:
         models.check_library(library)
         self.models = models
         self.library = library
-        self._derivers: dict[tuple, StageDeriver] = {}
+        self._derivers: dict[StageSpec, StageDeriver] = {}
 
     def deriver(self, stage: StageSpec) -> StageDeriver:
-        key = tuple(sorted(stage.to_dict().items(), key=lambda kv: kv[0]).__repr__())
+        """The stage's deriver (a session's stages differ from the trained ones in their anchor)."""
+        key = stage  # a frozen dataclass: hashable
         got = self._derivers.get(key)
         if got is None:
+            if len(self._derivers) > 32:
+                self._derivers.clear()
             got = self._derivers[key] = StageDeriver(self.library, stage)
         return got
 
