@@ -55,7 +55,7 @@ def _train(tmp_path, name, *extra):
 def test_train_writes_a_loadable_deterministic_models_file(tmp_path, torch_or_skip):
     torch = torch_or_skip
     from grammarkit_sketch.models import load_models
-    from grammarkit_sketch.recognize import get_recognizer
+    from grammarkit_sketch.recognizer import get_recognizer
 
     a, output = _train(tmp_path, "a.models")
     assert "Window: 4 classes" in output and "wrote" in output

@@ -47,8 +47,9 @@ def test_stages_are_framed_on_the_recognised_building(session):
     assert w == pytest.approx(16 - 2 * top["setback"], abs=0.01) and d == pytest.approx(12 - 2 * top["setback"], abs=0.01)
     floor = session.canvas("Floor")
     floor_h = session.stages["Facade"].recognition.values["floor_h"]
-    assert floor.stage.anchor_size[0] == pytest.approx(16.0)  # a storey of the front facade ...
-    assert floor.stage.anchor_size[1] == pytest.approx(floor_h, abs=0.5)  # ... a typical one
+    # the most common storey of the front: here the tower's (the lot less the set-backs) ...
+    assert floor.stage.anchor_size[0] == pytest.approx(16 - 2 * top["setback"], abs=0.01)
+    assert floor.stage.anchor_size[1] == pytest.approx(floor_h, abs=0.5)  # ... of a typical height
     assert "Floor face" in floor.anchor
 
 

@@ -18,12 +18,12 @@ from importlib import import_module
 from typing import Any
 
 _LAZY = {
-    "recognize": "recognize", "Recognition": "recognize", "Recognizer": "recognize",
-    "Candidate": "recognize", "get_recognizer": "recognize",
+    "recognize": "recognizer", "Recognition": "recognizer", "Recognizer": "recognizer",
+    "Candidate": "recognizer", "get_recognizer": "recognizer",
     "Session": "session", "StageCanvas": "session",
     "load_library": "library", "SnippetLibrary": "library",
     "load_models": "models", "save_models": "models", "SketchModels": "models",
-    "train": "train", "TrainConfig": "train",
+    "train": "training", "TrainConfig": "training",
     "StageSpec": "stages", "default_stage": "stages",
 }
 __all__ = sorted(_LAZY)

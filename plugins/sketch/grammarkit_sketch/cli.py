@@ -86,7 +86,7 @@ def recognize_command(sketch: Path | None, object_type: str, library: Path | Non
     Prints the top 3 snippets with probabilities, the parameter values, the match score and
     a `use` line with `--set` values that reproduce it (Nishida et al. 2016).
     """
-    from .recognize import get_recognizer
+    from .recognizer import get_recognizer
 
     _one_thread()
     rec = get_recognizer(models, library)
@@ -198,7 +198,7 @@ def train_sketch_command(library: Path, output: Path, samples: int, classifier_e
 
     from .dataset import DEFAULT_CACHE
     from .models import save_models
-    from .train import TrainConfig, train
+    from .training import TrainConfig, train
 
     console = Console(stderr=True)
     cfg = TrainConfig(samples=samples, classifier_epochs=classifier_epochs,

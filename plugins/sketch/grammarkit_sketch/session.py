@@ -15,7 +15,8 @@ session.json (see docs/sketch.md)::
     {"format": "grammarkit-sketch-session", "version": 1,
      "name": "my_building",                      # optional grammar name
      "lot": [16, 12],                            # optional lot width, depth (m)
-     "line_width": 2,                            # optional pen width for the strokes (px)
+     "line_width": 4,                            # optional pen width for the strokes (px;
+                                                 #   default 2 per 256 px of the canvas)
      "refine": 10, "method": "greedy",           # optional refinement of every stage
      "stages": [
         {"type": "Mass", "canvas": [512, 512], "strokes": [[[x, y], [x, y], ...], ...]},
@@ -39,7 +40,7 @@ import numpy as np
 from grammarkit.errors import GrammarkitError
 
 from .drawing import draw, strokes_to_ink
-from .recognize import Recognition, Recognizer, get_recognizer
+from .recognizer import Recognition, Recognizer, get_recognizer
 from .refine import EXACT_STYLE
 from .stages import StageSpec
 
@@ -79,7 +80,7 @@ class Session:
     """An interactive sketching session; see the module docstring."""
 
     def __init__(self, *, models: Any = None, library: Any = None, lot: Sequence[float] | None = None,
-                 name: str = "building", line_width: float = 2.0):
+                 name: str = "building", line_width: float | None = None):
         self.recognizer: Recognizer = get_recognizer(models, library)
         self.library = self.recognizer.library
         self.models = self.recognizer.models
@@ -89,7 +90,7 @@ class Session:
         self.lot = tuple(float(v) for v in (lot or default_lot))
         if len(self.lot) != 2 or not all(0 < v < 1e4 for v in self.lot):
             raise SessionError(f"lot must be two positive sizes in metres, got {lot!r}", None)
-        self.line_width = float(line_width)
+        self.line_width = None if line_width is None else float(line_width)
         self.stages: dict[str, StageResult] = {}
         self._anchors: dict[tuple, tuple] = {}
 
@@ -218,7 +219,9 @@ class Session:
         if len(size) != 2 or min(size) < 16:
             raise SessionError(f"stage {t}: canvas must be [width, height] in pixels, got {canvas!r}", None)
         lines = _check_strokes(strokes, size, t)
-        ink = strokes_to_ink(lines, size, line_width or self.line_width)
+        # the pen: as given, else 2 px per 256 px of the canvas (the training drawings' scale)
+        pen = line_width or self.line_width or 2.0 * min(size) / 256.0
+        ink = strokes_to_ink(lines, size, pen)
         if not (ink > 0.25).any():
             raise SessionError(f"stage {t}: no strokes to recognise", None, code="sketch-blank")
         r = self.recognizer.recognize_ink(ink, t, stage=sc.stage, what=f"stage {t}", refine_steps=refine,
@@ -231,7 +234,7 @@ class Session:
         snippet (red)."""
         from PIL import Image
 
-        from .recognize import anchor_outline
+        from .recognizer import anchor_outline
 
         t = self.library.check_type(object_type)
         res = self.stages.get(t)
@@ -240,7 +243,8 @@ class Session:
         k = size / max(w, h)
         W, H = int(round(w * k)), int(round(h * k))
         rgb = np.ones((H, W, 3), dtype=np.float32)
-        rgb -= anchor_outline(stage, (W, H))[..., None] * 0.2
+        if stage.framing == "anchor":  # (a fit-framed mass may be drawn anywhere: no outline)
+            rgb -= anchor_outline(stage, (W, H))[..., None] * 0.2
         if res is not None:
             sx, sy = W / res.canvas[0], H / res.canvas[1]
             lines = [[(x * sx, y * sy) for x, y in ln] for ln in res.strokes]
@@ -261,7 +265,8 @@ class Session:
         p = Path(path)
         data = read_session_file(p)
         session = cls(models=models, library=library, lot=data.get("lot"),
-                      name=data.get("name") or p.stem, line_width=float(data.get("line_width", 2.0)))
+                      name=data.get("name") or p.stem,
+                      line_width=float(data["line_width"]) if data.get("line_width") else None)
         order = {t: i for i, t in enumerate(session.library.types)}
         stages = []
         for i, st in enumerate(data["stages"]):

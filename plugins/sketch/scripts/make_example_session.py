@@ -54,7 +54,7 @@ def main() -> None:
         stages.append({"type": t, "canvas": list(canvas.size), "strokes": strokes,
                        "drawn_from": {"snippet": snippet, "values": values}})
     data = {"format": SESSION_FORMAT, "version": SESSION_VERSION, "name": "sketched_building",
-            "lot": list(session.lot), "line_width": 2, "refine": 0, "stages": stages}
+            "lot": list(session.lot), "refine": 0, "stages": stages}
     with atomic_output(args.output) as tmp:
         tmp.write_text(json.dumps(data, indent=1) + "\n", encoding="utf-8")
     print(f"wrote {args.output}")

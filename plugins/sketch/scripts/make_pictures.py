@@ -58,7 +58,7 @@ def main() -> None:
     from grammarkit_sketch.dataset import stage_view
     from grammarkit_sketch.drawing import draw, test_style, training_style
     from grammarkit_sketch.image import distance_map, load_ink, to_input
-    from grammarkit_sketch.recognize import get_recognizer
+    from grammarkit_sketch.recognizer import get_recognizer
     from grammarkit_sketch.stages import StageDeriver
 
     rec = get_recognizer(None, ROOT / "grammars" / "library.grammar")

@@ -18,9 +18,9 @@ import sys
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[3]
-SAMPLES = 1200
+SAMPLES = 1000
 CLASSIFIER_EPOCHS = 8
-REGRESSOR_EPOCHS = 30
+REGRESSOR_EPOCHS = 35
 
 
 def main() -> int:
