@@ -18,9 +18,9 @@ import sys
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[3]
-SAMPLES = 1000
+SAMPLES = 500
 CLASSIFIER_EPOCHS = 8
-REGRESSOR_EPOCHS = 35
+REGRESSOR_EPOCHS = 15
 
 
 def main() -> int:
