@@ -112,3 +112,22 @@ def test_unknown_type_lists_the_trained_ones(small):
     with pytest.raises(GrammarkitError, match="no trained model for object type 'Roof'; models exist for: Ledge"):
         small.type_model("Roof")
     assert small.type_model("ledge") is small.types["Ledge"]
+
+
+def test_files_of_separate_types_merge_into_one(small, library, stages):
+    from dataclasses import replace
+
+    from grammarkit_sketch.models import ModelFileError, TypeModel, merge_models
+    from grammarkit_sketch.nets import build_classifier
+
+    window = TypeModel(stages["Window"], [["window_simple"], ["window_framed"]], build_classifier(2).state_dict(), {})
+    other = replace(small, types={"Window": window}, meta={**small.meta, "seconds": 2.0})
+    merged = merge_models([replace(small, meta={**small.meta, "seconds": 1.0}), other])
+    assert list(merged.types) == ["Ledge", "Window"] and merged.library_hash == library.hash
+    assert merged.meta["seconds"] == 3.0
+    with pytest.raises(ModelFileError, match="two of the files"):
+        merge_models([small, small])
+    with pytest.raises(ModelFileError, match="another library"):
+        merge_models([small, replace(other, library_hash="0" * 64)])
+    with pytest.raises(ModelFileError, match="other settings"):
+        merge_models([small, replace(other, meta={"config": {"samples": 3}})])

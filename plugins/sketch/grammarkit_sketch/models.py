@@ -182,3 +182,28 @@ def load_models(path: str | Path | None = None, library: SnippetLibrary | None =
     if library is not None:
         models.check_library(library)
     return models
+
+
+def merge_models(parts: list[SketchModels]) -> SketchModels:
+    """One models file from files trained on the same library for different object types
+    (e.g. one process per type). Per-type training depends only on the type, the settings and
+    the seed, so the merge equals a single run over all the types."""
+    if not parts:
+        raise ModelFileError("nothing to merge", None, code="sketch-bad-models")
+    first = parts[0]
+    types: dict[str, TypeModel] = {}
+    for m in parts:
+        if m.library_hash != first.library_hash:
+            raise ModelFileError(f"{m.path or 'a models file'} was trained on another library than "
+                                 f"{first.path or 'the first one'}; cannot merge", None, code="sketch-retrain")
+        if (m.meta.get("config") or {}) != (first.meta.get("config") or {}):
+            raise ModelFileError(f"{m.path or 'a models file'} was trained with other settings than "
+                                 f"{first.path or 'the first one'}; cannot merge", None, code="sketch-bad-models")
+        for t, tm in m.types.items():
+            if t in types:
+                raise ModelFileError(f"object type {t!r} is in two of the files to merge", None,
+                                     code="sketch-bad-models")
+            types[t] = tm
+    meta = dict(first.meta)
+    meta["seconds"] = round(sum(float(m.meta.get("seconds", 0.0)) for m in parts), 1)
+    return SketchModels(first.library_hash, first.library_name, types, meta, None, dict(first.library_files))
