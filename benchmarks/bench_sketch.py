@@ -20,10 +20,9 @@ these seed 1000+), in the training style ("sketchy": new pens) and in styles nev
    Metropolis-Hastings steps from the middle of the ranges, the de-facto inverse procedural
    modelling method), CNN only, CNN + refinement. Ratios against MCMC alone.
 4. table3: accuracy of classifiers trained on plain (exact) drawings against the sketchy-trained
-   ones, on sketchy test drawings (the paper's Table 3); needs --plain-models, trained with the
-   shipped weights' settings (plugins/sketch/scripts/train_shipped.py) but the plain style:
-   `grammarkit train sketch --library grammars/library.grammar -o plain.models --style plain
-   --classifiers-only --samples 500 --classifier-epochs 8 --seed 0`.
+   ones, on sketchy test drawings (the paper's Table 3); needs --plain-models, classifiers
+   trained with the shipped weights' settings but on exact drawings:
+   `python plugins/sketch/scripts/train_shipped.py --plain --jobs 6 -o plain.models`.
 5. roundtrip: 100 random snippet instances drawn as sketches on their canvas, recognised (with
    refinement), derived and drawn again; the distribution of the match score, next to the score
    of the true model against the same sketch (the best possible with this score).

@@ -32,10 +32,13 @@ CLASSIFIER_EPOCHS = 8
 REGRESSOR_EPOCHS = 15
 
 
-def train_args(output: Path, workers: int, threads: int, types: str | None = None) -> list[str]:
+def train_args(output: Path, workers: int, threads: int, types: str | None = None,
+               plain: bool = False) -> list[str]:
     args = ["train", "sketch", "--library", str(LIBRARY), "-o", str(output), "--samples", str(SAMPLES),
             "--classifier-epochs", str(CLASSIFIER_EPOCHS), "--regressor-epochs", str(REGRESSOR_EPOCHS),
             "--seed", "0", "--workers", str(workers), "--threads", str(threads)]
+    if plain:
+        args += ["--style", "plain", "--classifiers-only"]
     return args + (["--types", types] if types else [])
 
 
@@ -44,13 +47,17 @@ def main() -> int:
     ap.add_argument("--jobs", type=int, default=1, help="object types trained at once (processes)")
     ap.add_argument("--workers", type=int, default=1, help="rendering processes per job")
     ap.add_argument("--threads", type=int, default=1, help="torch threads per job")
+    ap.add_argument("--plain", action="store_true",
+                    help="the paper's Table 3 comparison instead: classifiers only, trained on exact line "
+                         "drawings with the same settings (for benchmarks/bench_sketch.py --plain-models)")
     ap.add_argument("-o", "--output", type=Path,
                     default=ROOT / "plugins" / "sketch" / "grammarkit_sketch" / "weights" / "library.sketch.pt")
     args = ap.parse_args()
     if args.jobs <= 1:
         from grammarkit.cli import main as cli
 
-        return cli(train_args(args.output, args.workers, args.threads), standalone_mode=False) or 0
+        return cli(train_args(args.output, args.workers, args.threads, plain=args.plain),
+                   standalone_mode=False) or 0
 
     from grammarkit_sketch.library import load_library
     from grammarkit_sketch.models import load_models, merge_models, save_models
@@ -60,7 +67,7 @@ def main() -> int:
         parts = {t: Path(tmp) / f"{t}.pt" for t in types}
 
         def run(t: str) -> int:
-            cmd = [sys.executable, "-m", "grammarkit", *train_args(parts[t], args.workers, args.threads, t)]
+            cmd = [sys.executable, "-m", "grammarkit", *train_args(parts[t], args.workers, args.threads, t, args.plain)]
             done = subprocess.run(cmd, capture_output=True, text=True)
             print(f"--- {t} (exit {done.returncode})\n{done.stdout}{done.stderr[-2000:]}", flush=True)
             return done.returncode
