@@ -18,7 +18,7 @@ TARGET = [  # (object type, snippet, parameter values)
     ("Roof", "roof_hip", {"roof_deg": 32.0, "roof_over": 0.6}),
     ("Facade", "facade_classic", {"ground_h": 4.8, "floor_h": 3.3, "cornice_h": 0.7, "shop_w": 2.6}),
     ("Floor", "floor_windows", {"win_w": 1.3, "pier_w": 1.6, "sill_h": 0.8, "head_h": 0.5}),
-    ("Window", "window_sill", {"sill_h": 0.14, "sill_d": 0.2, "depth": 0.3}),
+    ("Window", "window_sill", {"sill_h": 0.16, "sill_d": 0.26, "depth": 0.3}),
     ("Ledge", "ledge_cornice", {"lower_d": 0.25, "upper_d": 0.6}),
 ]
 
