@@ -49,6 +49,8 @@ SESSION_VERSION = 1
 LOT_ATTRS = ("lot_w", "lot_d")
 
 
+RERANK_MIN_PROBABILITY = 0.05  # classes re-ranked by match score on a non-canonical anchor
+
 class SessionError(GrammarkitError):
     """A session file or stage that cannot be used: names the file and stage and says why."""
 
@@ -226,6 +228,21 @@ class Session:
             raise SessionError(f"stage {t}: no strokes to recognise", None, code="sketch-blank")
         r = self.recognizer.recognize_ink(ink, t, stage=sc.stage, what=f"stage {t}", refine_steps=refine,
                                           method=method, snippet=snippet, seed=seed)
+        canonical = self.models.type_model(t).stage.anchor_size
+        if snippet is None and not np.allclose(sc.stage.anchor_size, canonical, rtol=0.05):
+            # The networks were trained on the canonical anchor; on an anchor of other
+            # proportions (a 40 m tower's facade) the classifier may prefer a snippet that,
+            # drawn on the real anchor, matches the strokes far worse. Re-rank the likely
+            # classes by probability x match score on the real anchor (the classifier's belief
+            # weighted by how well each snippet, drawn there, fits the strokes).
+            for c in r.top[1:]:
+                if c.probability < RERANK_MIN_PROBABILITY:
+                    break
+                alt = self.recognizer.recognize_ink(ink, t, stage=sc.stage, what=f"stage {t}",
+                                                    refine_steps=refine, method=method, snippet=c.snippet,
+                                                    seed=seed)
+                if alt.probability * alt.score > r.probability * r.score:
+                    r = alt
         self.stages[t] = StageResult(t, r, size, [list(map(list, ln)) for ln in lines])
         return r
 
