@@ -229,8 +229,9 @@ def section_robustness(rec, args, out):
             line += f"{f'{a:.2f}{drop} / {e:.3f}':>22}"
         print(line, flush=True)
         table[t] = cells
-    print("styles: jitter 4 px wobble (trained <= 1.6), missing 25% of edges, overdrawn 4 strokes per "
-          "edge, thick 6 px lines (trained <= 3), perspective camera off by 3-6 deg, plain exact lines")
+    print("styles: jitter 4 px wobble, 10 px overshoot (trained <= 2, 7), missing 25% of edges, overdrawn "
+          "5 strokes per edge, thick 7 px lines (trained <= 3.5), perspective camera off by 3-6 deg "
+          "(trained <= 2), plain exact lines")
     out["robustness"] = table
 
 
