@@ -53,11 +53,10 @@ def main() -> int:
     ap.add_argument("-o", "--output", type=Path,
                     default=ROOT / "plugins" / "sketch" / "grammarkit_sketch" / "weights" / "library.sketch.pt")
     args = ap.parse_args()
-    if args.jobs <= 1:
-        from grammarkit.cli import main as cli
-
-        return cli(train_args(args.output, args.workers, args.threads, plain=args.plain),
-                   standalone_mode=False) or 0
+    if args.jobs <= 1:  # the command itself (through the CLI: plugins use the public API only)
+        cmd = [sys.executable, "-m", "grammarkit", *train_args(args.output, args.workers, args.threads,
+                                                                plain=args.plain)]
+        return subprocess.run(cmd).returncode
 
     from grammarkit_sketch.library import load_library
     from grammarkit_sketch.models import load_models, merge_models, save_models
