@@ -227,19 +227,48 @@ def _manifold(part: Part, key: int, geom: PartGeometry):  # noqa: ANN202
     """The part as a manifold3d solid, or None if its mesh is not a closed manifold."""
     if key in geom._manifolds:
         return geom._manifolds[key]
+    solid = solid_of(part.mesh)
+    geom._manifolds[key] = solid
+    return solid
+
+
+def solid_of(mesh: trimesh.Trimesh):  # noqa: ANN201
+    """The mesh as a manifold3d solid, or None if it is not a closed manifold."""
     import manifold3d
 
-    solid = None
-    mesh = part.mesh
     if len(mesh.faces) and np.isfinite(mesh.vertices).all():
         m = manifold3d.Mesh(vert_properties=np.ascontiguousarray(mesh.vertices, dtype=np.float32),
                             tri_verts=np.ascontiguousarray(mesh.faces, dtype=np.uint32))
         m.merge()
         cand = manifold3d.Manifold(m)
         if cand.status() == manifold3d.Error.NoError and not cand.is_empty():
-            solid = cand
-    geom._manifolds[key] = solid
-    return solid
+            return cand
+    return None
+
+
+def lifted_gap(pa: Part, pb: Part, tolerance: float, delta: np.ndarray, solids: dict | None = None,
+               ka: object = None, kb: object = None) -> float:
+    """Surface distance between `pa` and `pb` moved by `delta` (capped a little above the
+    tolerance), with the narrow phase `contacts` uses. `solids` caches manifold3d solids by the
+    keys `ka`/`kb` (support.carry_directions: one solid per part per call)."""
+    def solid(key: object, part: Part):  # noqa: ANN202
+        if solids is None or key is None:
+            return solid_of(part.mesh)
+        if key not in solids:
+            solids[key] = solid_of(part.mesh)
+        return solids[key]
+
+    sa, sb = solid(ka, pa), solid(kb, pb)
+    search = 2.0 * tolerance + 1e-12
+    if sa is not None and sb is not None:
+        both = np.concatenate([np.asarray(pa.mesh.bounds), np.asarray(pb.mesh.bounds)])
+        slack = 4e-7 * float(np.abs(both).max() + np.abs(delta).max())
+        gap = float(sb.translate(tuple(float(x) for x in delta)).min_gap(sa, search + slack))
+        return max(0.0, gap - slack)
+    mb = trimesh.Trimesh(np.asarray(pb.mesh.vertices) + delta, np.asarray(pb.mesh.faces), process=False)
+    moved = Part(pb.id, pb.type, mb)
+    geom = prepare([pa, moved])
+    return _open_gap(pa.mesh, mb, geom, 0, 1, tolerance, search)
 
 
 def _surface_gap(pa: Part, pb: Part, a: int, b: int, geom: PartGeometry, tolerance: float) -> float:

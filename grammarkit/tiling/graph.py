@@ -20,8 +20,9 @@ def shape_graph(assembly: Assembly, tolerance: float | None = None) -> nx.Graph:
 
     Nodes: part ids, with attributes `type` (str), `centroid` (np.ndarray (3,), area-weighted
     surface centroid: moves rigidly with the part), `lo`/`hi` (bounding box), `index` (position
-    in `assembly.parts`). Edges: `gap` (surface distance, <= tolerance), `kind` ("touch" or, for
-    box parts that interpenetrate deeper than the tolerance, "overlap"). Graph attributes:
+    in `assembly.parts`), `box` (the mesh is exactly its axis-aligned box). Edges: `gap`
+    (surface distance, <= tolerance), `kind` ("touch" or, for box parts that interpenetrate
+    deeper than the tolerance, "overlap"). Graph attributes:
     `tolerance`, `scale` (bounding-box diagonal), `name`.
     """
     if not isinstance(assembly, Assembly):
@@ -36,7 +37,7 @@ def shape_graph(assembly: Assembly, tolerance: float | None = None) -> nx.Graph:
     g.graph.update(tolerance=float(tolerance), scale=scale, name=assembly.name)
     for i, p in enumerate(parts):
         g.add_node(p.id, type=p.type, centroid=geom.centroid[i].copy(), lo=geom.lo[i].copy(),
-                   hi=geom.hi[i].copy(), index=i)
+                   hi=geom.hi[i].copy(), index=i, box=bool(geom.boxy[i]))
     if len(g) != len(parts):
         from collections import Counter
 
