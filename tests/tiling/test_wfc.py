@@ -140,3 +140,21 @@ def test_committed_wfc_files_are_what_the_generator_makes(tmp_path):
     mc.main(["--out", str(tmp_path)])
     for f in ("tiles.glb", "coast_6x5_h2_r0.glb", "coast_5x6_h3_r90.glb"):
         assert (tmp_path / f).read_bytes() == (WFC / f).read_bytes(), f
+
+
+def test_cli_learn_site_grammar_and_report_inferences(training, tmp_path):
+    from click.testing import CliRunner
+
+    from grammarkit.cli import main as cli
+
+    out = tmp_path / "coast.grammar"
+    res = CliRunner().invoke(cli, ["learn", *map(str, training), "--neighbors", "none", "-o", str(out)])
+    assert res.exit_code == 0, res.output
+    text = out.read_text()
+    assert "neighbors" not in text and "dock Shore.east -- Shore.west" in text
+    assert "learned: symmetry(none) for Shore" in res.output
+    held = write_assembly(mc.coast(8, 5, 3, 90), tmp_path / "held.glb")
+    bad = write_assembly(broken_tilings()[0][1], tmp_path / "bad.glb")
+    assert CliRunner().invoke(cli, ["validate", str(out), str(held)]).exit_code == 0
+    res = CliRunner().invoke(cli, ["validate", str(out), str(bad)])
+    assert res.exit_code == 1 and "[dock]" in res.output
