@@ -43,8 +43,8 @@ def round_model(columns: int, sections: int, name: str = "round") -> Assembly:
     post = trimesh.creation.cylinder(radius=0.5, height=1.0, sections=sections)
     post.apply_translation((0, 0, 0.5))
     n = max(8, int(round(math.sqrt(sections / 2))))
-    ball = trimesh.creation.uv_sphere(radius=0.5, count=(n, 2 * n))
-    ball.apply_translation((0, 0, 1.5))
+    ball = trimesh.creation.uv_sphere(radius=0.45, count=(n, 2 * n))  # balls of neighbours stay apart
+    ball.apply_translation((0, 0, 1.45))
     side = max(1, int(math.ceil(math.sqrt(columns))))
     parts = []
     for k in range(columns):

@@ -22,6 +22,7 @@ The broad phase is an rtree (R*-tree, bulk loaded) queried with all boxes at onc
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from typing import Sequence
 
@@ -31,7 +32,7 @@ import trimesh
 from .assembly import Assembly, Part
 
 __all__ = [
-    "DEFAULT_RELATIVE_TOLERANCE", "Contact", "PartGeometry", "candidate_pairs",
+    "DEFAULT_RELATIVE_TOLERANCE", "Contact", "PartGeometry", "PoseKeys", "candidate_pairs",
     "candidate_pairs_bruteforce", "contacts", "default_tolerance", "prepare",
 ]
 
@@ -57,6 +58,7 @@ class PartGeometry:
     centroid: np.ndarray  # (n, 3) area-weighted surface centroid (moves rigidly with the part)
     boxy: np.ndarray  # (n,) bool: the mesh is exactly its bounding box
     _manifolds: dict = field(default_factory=dict)
+    _triangle_boxes: dict = field(default_factory=dict)  # part index -> (triangle lo, hi), for _apart
 
     # The solids `contacts()` builds lazily (local part index -> manifold3d.Manifold, or None
     # for a part whose mesh is not a closed manifold). Back ends that measure the same placed
@@ -214,13 +216,88 @@ def contacts(assembly: Assembly | Sequence[Part], tolerance: float | None = None
         Contact(a, b, gap, d, "overlap" if d > tolerance else "touch")
         for a, b, gap, d in zip(i[box_hit].tolist(), j[box_hit].tolist(), box_dist[box_hit].tolist(),
                                 depth[box_hit].tolist())]
+    poses = PoseKeys(parts, tolerance)
+    measured: dict = {}  # rigid copies in the same relative pose have the same gap: measure once
     for k in np.flatnonzero(~both_boxy):
         a, b = int(i[k]), int(j[k])
-        gap = _surface_gap(parts[a], parts[b], a, b, geom, tolerance)
+        key = poses.pair(a, b)
+        gap = measured.get(key) if key is not None else None
+        if gap is None:
+            gap = math.inf if _apart(parts, a, b, geom, tolerance) else \
+                _surface_gap(parts[a], parts[b], a, b, geom, tolerance)
+            if key is not None:
+                measured[key] = gap
         if gap <= tolerance:
             out.append(Contact(a, b, float(gap)))
     out.sort(key=lambda c: (c.a, c.b))
     return out
+
+
+class PoseKeys:
+    """Keys under which two parts' relative configuration repeats: per part, its mesh in its
+    node frame (`Part.transform`; rigid copies of one mesh share it) hashed after rounding to a
+    tenth of the tolerance; per pair, both of those plus b's pose in a's frame (rounded alike).
+    Equal keys mean congruent pairs (same gap, same contact), so the exact narrow phase runs
+    once per key. `with_up=True` adds a's rotation (for tests that depend on gravity). None
+    where a part's transform is not rigid (world-baked meshes with odd transforms)."""
+
+    def __init__(self, parts: Sequence[Part], tolerance: float):
+        self.parts = parts
+        self.q = max(float(tolerance) / 10.0, 1e-12)
+        self._geo: dict[int, tuple | None] = {}
+
+    def part(self, i: int) -> tuple | None:
+        if i not in self._geo:
+            p = self.parts[i]
+            T = np.asarray(getattr(p, "transform", None) if getattr(p, "transform", None) is not None
+                           else np.eye(4), dtype=np.float64)
+            R = T[:3, :3] if T.shape == (4, 4) else None
+            if R is None or not np.allclose(R @ R.T, np.eye(3), atol=1e-6) or np.linalg.det(R) <= 0:
+                self._geo[i] = None
+            else:
+                V = (np.asarray(p.mesh.vertices, dtype=np.float64) - T[:3, 3]) @ R
+                self._geo[i] = (hash(np.round(V / self.q).astype(np.int64).tobytes()),
+                                hash(np.asarray(p.mesh.faces).tobytes()), len(V), T)
+        return self._geo[i]
+
+    def pair(self, a: int, b: int, *, with_up: bool = False) -> tuple | None:
+        ga, gb = self.part(a), self.part(b)
+        if ga is None or gb is None:
+            return None
+        Ta, Tb = ga[3], gb[3]
+        rel = np.linalg.inv(Ta) @ Tb
+        key = (ga[:3], gb[:3], (np.round(rel[:3, :3], 6) + 0.0).tobytes(),
+               np.round(rel[:3, 3] / self.q).astype(np.int64).tobytes())
+        if with_up:
+            key += ((np.round(Ta[:3, :3], 6) + 0.0).tobytes(),)
+        return key
+
+
+def _triangle_boxes(part: Part, key: int, geom: PartGeometry) -> tuple[np.ndarray, np.ndarray]:
+    cached = geom._triangle_boxes.get(key)
+    if cached is None:
+        tri = np.asarray(part.mesh.vertices, dtype=np.float64)[np.asarray(part.mesh.faces)]
+        cached = (tri.min(axis=1), tri.max(axis=1))
+        geom._triangle_boxes[key] = cached
+    return cached
+
+
+def _apart(parts: Sequence[Part], a: int, b: int, geom: PartGeometry, tolerance: float) -> bool:
+    """True when the two surfaces are certainly further apart than `tolerance`, by a cheap
+    test: two points within the tolerance lie in the boxes' intersection grown by it, so each
+    surface must have a triangle whose box meets that region. Not used when one bounding box
+    contains the other (nesting counts as contact, with no surfaces near each other). Finely
+    tessellated parts whose boxes merely graze (diagonal neighbours) skip the exact test."""
+    la, ha, lb, hb = geom.lo[a], geom.hi[a], geom.lo[b], geom.hi[b]
+    if ((la <= lb) & (hb <= ha)).all() or ((lb <= la) & (ha <= hb)).all():
+        return False
+    rlo = np.maximum(la, lb) - tolerance
+    rhi = np.minimum(ha, hb) + tolerance
+    for k, part in ((a, parts[a]), (b, parts[b])):
+        tlo, thi = _triangle_boxes(part, k, geom)
+        if not ((tlo <= rhi) & (thi >= rlo)).all(axis=1).any():
+            return True
+    return False
 
 
 def _manifold(part: Part, key: int, geom: PartGeometry):  # noqa: ANN202

@@ -65,14 +65,24 @@ def carry_directions(lo: np.ndarray, hi: np.ndarray, boxy: np.ndarray, edges: np
             raise ValueError("carry_directions: non-box parts need `parts`")
         from .contacts import lifted_gap
 
+        from .contacts import PoseKeys
+
         delta = np.zeros(3)
         delta[k] = sign * LIFT * tolerance
         solids: dict[int, Any] = {}  # manifold3d solids built once per part in this call
+        # contacts between rigid copies in the same relative pose (and the same pose relative to
+        # up) get the same verdict: measured once (a 1,000-column model has a few such poses)
+        pose_keys = PoseKeys(parts, tolerance) if keys is None else None
+        seen: dict = {}
         for e in rest:
             ia, ib = int(a[e]), int(b[e])
             key = (keys[ia], keys[ib]) if keys is not None else None
             if cache is not None and key is not None and key in cache:
                 out[e] = cache[key]
+                continue
+            pose = pose_keys.pair(ia, ib, with_up=True) if pose_keys is not None else None
+            if pose is not None and pose in seen:
+                out[e] = seen[pose]
                 continue
             up_b = lifted_gap(parts[ia], parts[ib], tolerance, delta, solids, ia, ib) > tolerance
             up_a = lifted_gap(parts[ib], parts[ia], tolerance, delta, solids, ib, ia) > tolerance
@@ -80,6 +90,8 @@ def carry_directions(lo: np.ndarray, hi: np.ndarray, boxy: np.ndarray, edges: np
             if up_a and up_b:  # a point graze: the higher part rests on the lower one
                 verdict = 1 if height_b[e] >= height_a[e] else -1
             out[e] = verdict
+            if pose is not None:
+                seen[pose] = verdict
             if cache is not None and key is not None:
                 cache[key] = verdict
     return out
