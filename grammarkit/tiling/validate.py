@@ -107,6 +107,10 @@ class _Shape:
         self.pos = {n: i for i, n in enumerate(nodes)}
         data = graph.nodes
         self.types = [data[n]["type"] for n in nodes]
+        # type codes: per-part loops over 100,000 parts become numpy operations
+        self.type_names = sorted(set(self.types))
+        code = {t: k for k, t in enumerate(self.type_names)}
+        self.tid = np.array([code[t] for t in self.types], dtype=np.int64)
         self.part_index = np.array([data[n].get("index", i) for i, n in enumerate(nodes)], dtype=np.int64)
         self.lo = np.array([data[n]["lo"] for n in nodes], dtype=np.float64).reshape(-1, 3)
         self.hi = np.array([data[n]["hi"] for n in nodes], dtype=np.float64).reshape(-1, 3)
@@ -174,7 +178,8 @@ def validate(grammar_or_rules: "Grammar | Rules", assembly: Assembly, *, toleran
         from ..plugins import default_registries  # the public API edge
 
         registries = default_registries()
-    if any(np.linalg.det(np.asarray(p.transform)[:3, :3]) < 0 for p in assembly.parts):
+    if assembly.parts and (np.linalg.det(np.array([np.asarray(p.transform, dtype=np.float64)[:3, :3]
+                                                    for p in assembly.parts])) < 0).any():
         assembly = Assembly([normalize_mirrored(p) for p in assembly.parts], assembly.name, assembly.meta)
     rules = grammar_or_rules if isinstance(grammar_or_rules, Rules) else rules_from_grammar(
         grammar_or_rules, registries=registries)
@@ -218,23 +223,24 @@ def validate(grammar_or_rules: "Grammar | Rules", assembly: Assembly, *, toleran
 # --------------------------------------------------------------------------------------------
 def _type_violations(rules: Rules, shape: _Shape, add: Callable[[Violation], None]) -> None:
     types, nodes = shape.types, shape.nodes
-    for node, t in zip(nodes, types):
-        if rules.types and t not in rules.types:
-            add(Violation("unknown-type", f"type {t!r} does not occur in the grammar", node, t, t,
+    names, tid = shape.type_names, shape.tid
+    if rules.types:
+        unknown = np.array([t not in rules.types for t in names], dtype=bool)
+        for i in np.flatnonzero(unknown[tid]).tolist():
+            t = types[i]
+            add(Violation("unknown-type", f"type {t!r} does not occur in the grammar", nodes[i], t, t,
                           sorted(rules.types)))
-    if rules.pairs is not None:
-        for a, b in shape.edges.tolist():
+    if rules.pairs is not None and len(shape.edges):
+        allowed = np.array([[rules.allows_pair(x, y) for y in names] for x in names], dtype=bool)
+        bad = ~allowed[tid[shape.edges[:, 0]], tid[shape.edges[:, 1]]]
+        for a, b in shape.edges[bad].tolist():
             tu, tv = types[a], types[b]
-            if not rules.allows_pair(tu, tv):
-                add(Violation("pair", f"touches {nodes[b]} ({tv}), but no dock allows {tu} -- {tv}",
-                              nodes[a], tu, f"{tu} -- {tv}", sorted(f"{x} -- {y}" for x, y in rules.pairs),
-                              other_id=nodes[b]))
+            add(Violation("pair", f"touches {nodes[b]} ({tv}), but no dock allows {tu} -- {tv}",
+                          nodes[a], tu, f"{tu} -- {tv}", sorted(f"{x} -- {y}" for x, y in rules.pairs),
+                          other_id=nodes[b]))
     if not (rules.neighbor_multisets or rules.neighbor_counts):
         return
     # one check per distinct (type, neighbour-type counts): a 100,000-part lattice has a handful
-    names = sorted(set(types))
-    code = {t: k for k, t in enumerate(names)}
-    tid = np.array([code[t] for t in types], dtype=np.int64)
     counts = np.zeros((len(types), len(names) + 1), dtype=np.int64)
     counts[:, 0] = tid
     if len(shape.edges):
@@ -344,25 +350,28 @@ def orientation_violations(rules: Rules, shape: _Shape, idx) -> list[Violation]:
     idx = np.asarray(list(idx), dtype=np.int64)
     if len(idx) == 0:
         return out
-    for i in idx.tolist():
-        meta = shape.part(i).meta
+    mirrored = np.zeros(len(shape.nodes), dtype=bool)
+    parts, pi = shape.assembly.parts, shape.part_index.tolist()
+    mirrored[idx] = [parts[pi[i]].meta.get("mirrored") is True for i in idx.tolist()]
+    for i in idx[mirrored[idx]].tolist():
         spec = rules.parts.get(shape.types[i])
-        if meta.get("mirrored") is True and not (spec is not None and spec.mirror):
+        if not (spec is not None and spec.mirror):
             out.append(Violation("mirrored", "is a mirror image of its type's part (a negative-determinant "
                                  "transform), and the type is not mirror-symmetric; declare "
                                  f"`symmetry(..., mirror)` on part {shape.types[i]} if that is intended",
                                  shape.nodes[i], shape.types[i], "mirrored", "proper copies"))
     if up is None or not rules.parts:
         return out
-    typed = np.array([i for i in idx.tolist() if shape.types[i] in rules.parts
-                      and shape.part(i).meta.get("mirrored") is not True], dtype=np.int64)
+    has_spec = np.array([t in rules.parts for t in shape.type_names], dtype=bool)
+    typed = idx[has_spec[shape.tid[idx]] & ~mirrored[idx]]
     if len(typed) == 0:
         return out
     F = shape.frames(typed)
     cos_tol = math.cos(math.radians(rules.angle_tolerance))
-    for t in sorted({shape.types[i] for i in typed.tolist()}):
+    for code in np.unique(shape.tid[typed]).tolist():
+        t = shape.type_names[code]
         spec = rules.parts[t]
-        m = typed[[shape.types[i] == t for i in typed.tolist()]]
+        m = typed[shape.tid[typed] == code]
         R = np.einsum("nij,kj->nik", F[m, :3, :3], spec.frame[:3, :3])
         d = np.einsum("nji,j->ni", R, up)
         best = (d @ spec.ups.T).max(axis=1)
