@@ -32,7 +32,7 @@ import trimesh
 from .assembly import Assembly, Part
 
 __all__ = [
-    "DEFAULT_RELATIVE_TOLERANCE", "Contact", "PartGeometry", "PoseKeys", "candidate_pairs",
+    "DEFAULT_RELATIVE_TOLERANCE", "Contact", "PartGeometry", "PoseKeys", "candidate_pairs", "contact_arrays",
     "candidate_pairs_bruteforce", "contacts", "default_tolerance", "prepare",
 ]
 
@@ -121,8 +121,12 @@ def prepare(parts: Sequence[Part]) -> PartGeometry:
 
     lo = np.full((n, 3), np.inf)
     hi = np.full((n, 3), -np.inf)
-    np.minimum.at(lo, vpart, V)
-    np.maximum.at(hi, vpart, V)
+    has = nv > 0  # parts are contiguous runs of V: reduceat (ufunc.at is ten times slower)
+    if has.all():
+        lo, hi = np.minimum.reduceat(V, voff, axis=0), np.maximum.reduceat(V, voff, axis=0)
+    else:
+        np.minimum.at(lo, vpart, V)
+        np.maximum.at(hi, vpart, V)
 
     tri = V[F]  # (m, 3, 3)
     cross = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
@@ -202,10 +206,21 @@ def contacts(assembly: Assembly | Sequence[Part], tolerance: float | None = None
     geom = geom or prepare(parts)
     if tolerance is None:
         tolerance = default_tolerance(geom)
+    a, b, gap, depth = contact_arrays(parts, tolerance, geom=geom, pairs=pairs)
+    return [Contact(x, y, g, None if d < 0 else d, "touch" if d < 0 or d <= tolerance else "overlap")
+            for x, y, g, d in zip(a.tolist(), b.tolist(), gap.tolist(), depth.tolist())]
+
+
+def contact_arrays(parts: Sequence[Part], tolerance: float, *, geom: PartGeometry,
+                   pairs: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """`contacts` as arrays sorted by (a, b): a, b (int), gap, depth (box pairs: how far the
+    boxes interpenetrate; -1 for other pairs). No object per contact: 150,000 contacts of a
+    100k-part model cost a few numpy operations."""
     if pairs is None:
         pairs = candidate_pairs(geom, tolerance)
+    empty = (np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64), np.zeros(0), np.zeros(0))
     if len(pairs) == 0:
-        return []
+        return empty
     pairs = pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))]
     i, j = pairs[:, 0], pairs[:, 1]
     # box-box: gap = largest per-axis separation (negative = overlap depth along the
@@ -214,14 +229,12 @@ def contacts(assembly: Assembly | Sequence[Part], tolerance: float | None = None
     box_dist = np.linalg.norm(np.maximum(sep, 0.0), axis=1)
     both_boxy = geom.boxy[i] & geom.boxy[j]
     depth = np.maximum(0.0, -sep.max(axis=1))
-    box_hit = both_boxy & (box_dist <= tolerance)
-    out: list[Contact] = [
-        Contact(a, b, gap, d, "overlap" if d > tolerance else "touch")
-        for a, b, gap, d in zip(i[box_hit].tolist(), j[box_hit].tolist(), box_dist[box_hit].tolist(),
-                                depth[box_hit].tolist())]
+    keep = both_boxy & (box_dist <= tolerance)
+    gaps = np.where(both_boxy, box_dist, np.inf)
+    depth = np.where(both_boxy, depth, -1.0)
     poses = PoseKeys(parts, tolerance)
     measured: dict = {}  # rigid copies in the same relative pose have the same gap: measure once
-    for k in np.flatnonzero(~both_boxy):
+    for k in np.flatnonzero(~both_boxy).tolist():
         a, b = int(i[k]), int(j[k])
         key = poses.pair(a, b)
         gap = measured.get(key) if key is not None else None
@@ -231,9 +244,9 @@ def contacts(assembly: Assembly | Sequence[Part], tolerance: float | None = None
             if key is not None:
                 measured[key] = gap
         if gap <= tolerance:
-            out.append(Contact(a, b, float(gap)))
-    out.sort(key=lambda c: (c.a, c.b))
-    return out
+            keep[k] = True
+            gaps[k] = float(gap)
+    return i[keep], j[keep], gaps[keep], depth[keep]
 
 
 class PoseKeys:
