@@ -181,6 +181,9 @@ def _first_max(values: np.ndarray) -> np.ndarray:
     return np.argmax(values >= top - _TIE * np.maximum(np.abs(top), 1e-12), axis=1)
 
 
+FRAME_CHUNK = 4096
+
+
 def local_frames(meshes) -> np.ndarray:  # noqa: ANN001
     """`local_frame` of many meshes at once, batched over meshes with equal vertex/face counts
     (rigid copies: the common case); returns (n, 4, 4). Same result as `local_frame`."""
@@ -189,7 +192,10 @@ def local_frames(meshes) -> np.ndarray:  # noqa: ANN001
     groups: dict[tuple[int, int], list[int]] = {}
     for i, m in enumerate(meshes):
         groups.setdefault((len(m.vertices), len(m.faces)), []).append(i)
-    for (nv, nf), idx in groups.items():
+    # batches of at most FRAME_CHUNK meshes: the (g, nf, 3, 3) temporaries stay small on 100k parts
+    batches = [((nv, nf), idx[k:k + FRAME_CHUNK]) for (nv, nf), idx in groups.items()
+               for k in range(0, len(idx), FRAME_CHUNK)]
+    for (nv, nf), idx in batches:
         if nv < 3 or nf == 0:
             for i in idx:
                 out[i] = local_frame(np.asarray(meshes[i].vertices, dtype=np.float64),
