@@ -20,7 +20,7 @@ edges as (i, j) index pairs with i < j.
 """
 from __future__ import annotations
 
-from typing import Iterable, Sequence
+from typing import Any, Iterable, Sequence
 
 import networkx as nx
 import numpy as np
@@ -189,7 +189,8 @@ def graph_of(types: Sequence[str], edges, centroids, tolerance: float, lo: np.nd
 def edit_violations(rule_set, types: Sequence[str], edges, meshes, centroids, tolerance: float,
                     new: Iterable[int], lo: np.ndarray | None = None,
                     hi: np.ndarray | None = None, max_violations: int = 1, *,
-                    keys: Sequence | None = None, cache: PartCache | None = None) -> list[str]:
+                    keys: Sequence | None = None, cache: PartCache | None = None,
+                    registries: Any = None) -> list[str]:
     """Rules an edited shape breaks, by `grammarkit.tiling.validate`'s checks on its graph `edges`.
 
     With `new` (the edited nodes), the checks that depend on one part or one contact only run
@@ -198,11 +199,13 @@ def edit_violations(rule_set, types: Sequence[str], edges, meshes, centroids, to
     other contacts are unchanged). Type pairs, neighbourhoods, required sites and global
     constraints (support, counts, paths, ...) are checked on the whole graph. With `keys` (a
     `part_key` per mesh) and `cache`, part frames and support verdicts of parts that recur are
-    reused. Returns the problems as text (empty: valid)."""
-    from ..plugins import default_registries
+    reused. `registries` gives the global constraints (default: as `validate`). Returns the
+    problems as text (empty: valid)."""
+    from dataclasses import replace
+
     from .validate import (
-        _constraint_violations, _dock_violations, _Full, _poses, _Shape, _type_violations,
-        orientation_violations, required_site_violations,
+        _dock_violations, _Full, _Shape, _type_violations, orientation_violations,
+        required_site_violations, validate,
     )
 
     parts = _parts(meshes, types, range(len(meshes)))
@@ -236,7 +239,15 @@ def edit_violations(rule_set, types: Sequence[str], edges, meshes, centroids, to
             extra = {}
             if cache is not None and keys is not None:
                 extra = {"support_cache": cache.support, "keys": list(keys)}
-            _constraint_violations(rule_set, shape, default_registries(), add, extra)
+            # the global constraints through `validate` (which owns the registries' default),
+            # with every other rule switched off: they were checked above
+            only = replace(rule_set, types=frozenset(), neighbor_multisets={}, neighbor_counts={},
+                           pairs=None, sites={}, configs={}, docks={})
+            report = validate(only, assembly, graph=g, docks=False, orientation=False,
+                              max_violations=max_violations, registries=registries,
+                              constraint_context=extra)
+            for v in report.violations:
+                add(v)
         if (getattr(rule_set, "configs", None) or getattr(rule_set, "docks", None)) and len(shape.edges):
             touched = np.flatnonzero(np.isin(shape.edges, new_idx).any(axis=1))
             if len(touched):

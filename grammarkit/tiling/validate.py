@@ -156,14 +156,17 @@ class _Shape:
 def validate(grammar_or_rules: "Grammar | Rules", assembly: Assembly, *, tolerance: float | None = None,
              graph: nx.Graph | None = None, docks: bool = True, max_violations: int = 1000,
              registries: Any = None, orientation: bool = True,
-             progress: Callable[[str], Any] | None = None) -> Report:
+             progress: Callable[[str], Any] | None = None,
+             constraint_context: dict | None = None) -> Report:
     """Check `assembly` against the grammar's rules; `graph` (if given) must be its shape graph.
 
     `docks=False` skips the docking-placement check (type pairs, neighbourhoods, orientation,
     required sites and constraints are still checked); `orientation=False` skips the
     orientation check. At most `max_violations` are listed (a broken 10,000-part model stays
     readable). `registries` (a grammarkit.registry.Registries) gives the global constraints;
-    default: the installed plugins'. `progress(stage)` is called as each stage starts."""
+    default: the installed plugins'. `progress(stage)` is called as each stage starts.
+    `constraint_context`: extra entries for the global constraints' context (caches a caller
+    keeps across shapes, e.g. `support_cache` and `keys` for `grounded`)."""
     from ..errors import GrammarError, ShapeError
     from ..ir.grammar import Grammar
     from .orientation import normalize_mirrored
@@ -212,7 +215,7 @@ def validate(grammar_or_rules: "Grammar | Rules", assembly: Assembly, *, toleran
             add(v)
         if rules.constraints:
             say("global constraints")
-            _constraint_violations(rules, shape, registries, add, {})
+            _constraint_violations(rules, shape, registries, add, dict(constraint_context or {}))
     except _Full:
         pass
     return report
