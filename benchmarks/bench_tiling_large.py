@@ -39,6 +39,15 @@ def peak_mb() -> float:
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
 
 
+def current_mb() -> float:
+    """Resident memory now (Linux /proc; the peak where that is missing)."""
+    try:
+        with open("/proc/self/statm") as f:
+            return int(f.read().split()[1]) * resource.getpagesize() / 2**20
+    except OSError:
+        return peak_mb()
+
+
 def round_model(columns: int, sections: int, name: str = "round") -> Assembly:
     post = trimesh.creation.cylinder(radius=0.5, height=1.0, sections=sections)
     post.apply_translation((0, 0, 0.5))
@@ -92,13 +101,15 @@ def run_boxes(args) -> None:  # noqa: ANN001
     rows = []
     for n in (args.boxes // 10, args.boxes):
         model = lattice_of_about(n)
+        before = current_mb()  # the model itself (100k trimesh parts) is part of the process
         s = median_time(lambda: validate(g, model), args.runs)
-        rows.append((len(model), s, peak_mb()))
-    print(f"{'parts':>8} {'validate s':>10} {'peak MB':>8}")
-    for parts, s, mb in rows:
-        print(f"{parts:8d} {s:10.2f} {mb:8.0f}")
+        rows.append((len(model), s, before, peak_mb()))
+        del model
+    print(f"{'parts':>8} {'validate s':>10} {'model MB':>9} {'peak MB':>8}")
+    for parts, s, before, mb in rows:
+        print(f"{parts:8d} {s:10.2f} {before:9.0f} {mb:8.0f}")
     print(f"ratio {rows[1][0] / rows[0][0]:.1f}x parts -> {rows[1][1] / rows[0][1]:.1f}x time; "
-          f"target 100k <= 6 s and <= 600 MB: {'met' if rows[1][1] <= 6 and rows[1][2] <= 600 else 'NOT met'}")
+          f"target 100k <= 6 s and <= 600 MB: {'met' if rows[1][1] <= 6 and rows[1][3] <= 600 else 'NOT met'}")
 
 
 def main(argv=None) -> int:  # noqa: ANN001
