@@ -438,10 +438,11 @@ def part_prototype(grammar: "Grammar", type_name: str, *, cache: dict | None = N
     raise ShapeError(f"grammar {grammar.name!r}: no `part {type_name} = ...` statement gives its geometry")
 
 
-def load_examples(grammar: "Grammar", *, check_types: bool = True) -> list[Assembly]:
+def load_examples(grammar: "Grammar", *, check_types: bool = True, cache: dict | None = None) -> list[Assembly]:
     """The grammar's `example` statements as assemblies: files are read relative to the grammar
     file; inline examples place each type's `part` geometry (`Type at (x,y,z) rot (rx,ry,rz)`,
-    degrees, extrinsic XYZ)."""
+    degrees, extrinsic XYZ). `cache` (as for `part_prototype`): files already read for the
+    grammar's parts are not read again (used with `check_types=False`)."""
     from .rules import placement_matrix
 
     out = []
@@ -450,14 +451,21 @@ def load_examples(grammar: "Grammar", *, check_types: bool = True) -> list[Assem
             f = Path(ex.source)
             if not f.is_absolute():
                 f = _base_dir(grammar, ex) / f
-            asm = read_assembly(f, grammar=grammar if check_types else None, name=ex.name)
+            key = str(f.resolve()) if f.exists() else str(f)
+            known = cache.get(key) if cache is not None and not check_types else None
+            if known is not None:
+                asm = Assembly(list(known.parts), name=ex.name, meta=dict(known.meta))
+            else:
+                asm = read_assembly(f, grammar=grammar if check_types else None, name=ex.name)
+                if cache is not None and not check_types:
+                    cache[key] = asm
         else:
             protos: dict[str, trimesh.Trimesh] = {}
             counts: dict[str, int] = {}
             parts = []
             for ip in ex.parts:
                 if ip.type not in protos:
-                    protos[ip.type] = part_prototype(grammar, ip.type)
+                    protos[ip.type] = part_prototype(grammar, ip.type, cache=cache)
                 T = placement_matrix(ip.placement, grammar)
                 mesh = protos[ip.type].copy()
                 mesh.apply_transform(T)

@@ -403,7 +403,7 @@ def rules_from_grammar(grammar: "Grammar", *, resolve_constraints: bool = True,
         compiled.append((c.name, args, str(c.span) if c.span else f"constraint {c.name}"))
     rules.constraints = tuple(compiled)
     if site_placements and grounded_without_level and grammar.examples:
-        rules.ground = _examples_ground(grammar, rules.up)
+        rules.ground = _examples_ground(grammar, rules.up, sources)
     for ex in grammar.examples:
         types.update(ip.type for ip in ex.parts)
     rules.types = frozenset(types)
@@ -417,14 +417,15 @@ def _up(axis: str | None) -> np.ndarray:
     return v if v is not None else np.array([0.0, 0.0, 1.0])
 
 
-def _examples_ground(grammar: "Grammar", up: str | None) -> float | None:
+def _examples_ground(grammar: "Grammar", up: str | None, sources: dict | None = None) -> float | None:
     """The examples' lowest point along the up axis: where `grounded` puts the ground when the
-    grammar does not say (`grounded(ground=...)`)."""
+    grammar does not say (`grounded(ground=...)`). `sources`: files the parts were read from
+    (not read again)."""
     from ..errors import ShapeError
     from .io import load_examples
 
     try:
-        examples = load_examples(grammar, check_types=False)
+        examples = load_examples(grammar, check_types=False, cache=sources)
     except ShapeError:
         return None  # reported where the examples are used; the shape's own minimum applies
     u = _up(up)
