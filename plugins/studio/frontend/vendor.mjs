@@ -19,12 +19,13 @@ for (const [pkg, list] of Object.entries(files)) {
   const root = join(here, "node_modules", pkg);
   versions[pkg] = JSON.parse(readFileSync(join(root, "package.json"), "utf8")).version;
   for (const rel of list) {
-    const dest = join(out, pkg, rel);
+    // three's build/ folder becomes vendor/three/ itself (the repository ignores build/ folders)
+    const dest = join(out, pkg, rel.replace(/^build\//, ""));
     mkdirSync(dirname(dest), { recursive: true });
     if (pkg === "three" && rel.startsWith("examples/")) {
       // three's add-ons import the bare name 'three'; point them at the vendored build so that
       // the page needs no import map (an inline script, which the page's CSP forbids)
-      let core = relative(dirname(dest), join(out, "three", "build", "three.module.js"));
+      let core = relative(dirname(dest), join(out, "three", "three.module.js"));
       if (!core.startsWith(".")) core = "./" + core;
       const text = readFileSync(join(root, rel), "utf8").replaceAll(/from 'three'/g, `from '${core}'`);
       writeFileSync(dest, text);

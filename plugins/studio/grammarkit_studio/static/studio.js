@@ -1,6 +1,6 @@
 // grammarkit studio: the page. Talks to the server over one websocket (see app.py).
 // No build step: three.js is loaded as ES modules from static/vendor, CodeMirror 5 as scripts.
-import * as THREE from "./vendor/three/build/three.module.js";
+import * as THREE from "./vendor/three/three.module.js";
 import { OrbitControls } from "./vendor/three/examples/jsm/controls/OrbitControls.js";
 import { GLTFLoader } from "./vendor/three/examples/jsm/loaders/GLTFLoader.js";
 
@@ -43,7 +43,7 @@ let cm = null;
 let marks = [];
 function makeEditor(text) {
   cm = CodeMirror($("editor"), {
-    value: text, mode: "grammarkit", lineNumbers: true, indentUnit: 2, tabSize: 2,
+    value: text, mode: "grammarkit", theme: "gk", lineNumbers: true, indentUnit: 2, tabSize: 2,
     gutters: ["gk-diagnostics", "CodeMirror-linenumbers"], extraKeys: {
       "Ctrl-S": () => save(false), "Cmd-S": () => save(false),
       Tab: (c) => c.replaceSelection("  "),
