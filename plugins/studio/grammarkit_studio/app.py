@@ -311,26 +311,37 @@ class Studio:
             edit, conn.pending = conn.pending, None
             if edit is None:
                 continue
-            t0 = time.perf_counter()
             try:
-                out = await self._call("derive", text=edit["text"], attrs=edit["attrs"],
-                                       seed=edit["seed"], example=edit["example"],
-                                       variation=edit["variation"])
-            except CallFailed as exc:
-                # a derive error: the page keeps the last good model and shows this
-                await conn.send_json({"type": "derive-error", "rev": edit["rev"], **exc.info})
-                continue
-            except (BudgetExceeded, WorkerFailed) as exc:
-                await conn.send_json({"type": "derive-error", "rev": edit["rev"], "message": str(exc),
-                                      "diagnostics": []})
-                continue
-            check = out.get("check")
-            await conn.send_json({"type": "check", "rev": edit["rev"], **(check or {})})
-            if out.get("ok"):
-                facts = dict(out["facts"], server_ms=round(1000 * (time.perf_counter() - t0), 1))
-                await conn.send_bytes(frame({"type": "model", "rev": edit["rev"], "facts": facts}, out["glb"]))
-            elif out.get("error"):
-                await conn.send_json({"type": "derive-error", "rev": edit["rev"], **out["error"]})
+                await self._edit(conn, edit)
+            except (WebSocketDisconnect, asyncio.CancelledError):
+                raise
+            except Exception as exc:  # noqa: BLE001 - a bug must not end the page's updates
+                log.exception("studio: edit %s failed", edit["rev"])
+                with contextlib.suppress(Exception):
+                    await conn.send_json({"type": "derive-error", "rev": edit["rev"], "diagnostics": [],
+                                          "message": f"internal error: {type(exc).__name__}: {exc}"})
+
+    async def _edit(self, conn: Connection, edit: dict) -> None:
+        t0 = time.perf_counter()
+        try:
+            out = await self._call("derive", text=edit["text"], attrs=edit["attrs"],
+                                   seed=edit["seed"], example=edit["example"],
+                                   variation=edit["variation"])
+        except CallFailed as exc:
+            # a derive error: the page keeps the last good model and shows this
+            await conn.send_json({"type": "derive-error", "rev": edit["rev"], **exc.info})
+            return
+        except (BudgetExceeded, WorkerFailed) as exc:
+            await conn.send_json({"type": "derive-error", "rev": edit["rev"], "message": str(exc),
+                                  "diagnostics": []})
+            return
+        check = out.get("check")
+        await conn.send_json({"type": "check", "rev": edit["rev"], **(check or {})})
+        if out.get("ok"):
+            facts = dict(out["facts"], server_ms=round(1000 * (time.perf_counter() - t0), 1))
+            await conn.send_bytes(frame({"type": "model", "rev": edit["rev"], "facts": facts}, out["glb"]))
+        elif out.get("error"):
+            await conn.send_json({"type": "derive-error", "rev": edit["rev"], **out["error"]})
 
     async def _start_gallery(self, conn: Connection, msg: dict) -> None:
         if conn.gallery is not None and not conn.gallery.done():
@@ -369,18 +380,18 @@ class Studio:
                 kind, item = await queue.get()
                 if kind == "item":
                     if item.get("done"):
-                        await conn.send_json({"type": "gallery-done", "id": gid, **item})
+                        await conn.send_json({"type": "gallery-done", **item, "gallery": gid})
                         continue
                     glb, png = item.pop("glb"), item.pop("png")
-                    await conn.send_bytes(frame({"type": "gallery-item", "id": gid, **item}, glb, png))
+                    await conn.send_bytes(frame({"type": "gallery-item", **item, "gallery": gid}, glb, png))
                 elif kind == "error":
-                    await conn.send_json({"type": "gallery-error", "id": gid, **item})
+                    await conn.send_json({"type": "gallery-error", **item, "gallery": gid})
                     break
                 else:
                     break
         except asyncio.CancelledError:
             with contextlib.suppress(Exception):
-                await conn.send_json({"type": "gallery-done", "id": gid, "stopped": True})
+                await conn.send_json({"type": "gallery-done", "gallery": gid, "stopped": True})
             raise
         finally:
             with contextlib.suppress(BaseException):

@@ -250,7 +250,7 @@ class Work:
         t2 = time.perf_counter()
         self.model, self.model_kind, self._parents, self._tree = model, kind, None, None
         facts.update(kind=kind, derive_ms=round(1000 * (t1 - t0), 1), export_ms=round(1000 * (t2 - t1), 1))
-        return {"ok": True, "glb": glb, "facts": facts, "check": a.summary()}
+        return {"ok": True, "glb": glb, "facts": _jsonable(facts), "check": a.summary()}
 
     def export(self, fmt: str) -> dict:
         fmt = str(fmt).lower()

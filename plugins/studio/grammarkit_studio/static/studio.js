@@ -183,7 +183,9 @@ function modelFrameOf(gltfScene) {
 }
 
 function showGLB(buffer, onShown) {
+  const t0 = performance.now();
   loader.parse(buffer, "", (gltf) => {
+    const t1 = performance.now();
     const frame = modelFrameOf(gltf.scene);
     const holder = new THREE.Group();
     if (!frame.upright) holder.rotation.x = -Math.PI / 2;
@@ -197,6 +199,7 @@ function showGLB(buffer, onShown) {
     clearHighlight();
     if (!framed) { frameModel(modelRoot); framed = true; }
     render();
+    S.timing = { parse_ms: t1 - t0, render_ms: performance.now() - t1 };
     S.models += 1;
     if (onShown) onShown();
   }, (err) => setError({ message: `could not show the model: ${err.message || err}` }));
@@ -211,6 +214,7 @@ function disposeTree(obj) {
 // boxes around parts: a part is a scope (origin, axes, size) in the model frame
 function clearHighlight() {
   for (const c of [...highlight.children]) { highlight.remove(c); c.geometry.dispose(); }
+  S.highlighted = 0;
 }
 function showParts(parts) {
   clearHighlight();
@@ -232,6 +236,7 @@ function showParts(parts) {
   const lines = new THREE.LineSegments(g, new THREE.LineBasicMaterial({ color: 0xffb020, depthTest: false }));
   lines.renderOrder = 10;
   highlight.add(lines);
+  S.highlighted = parts.length;
   render();
 }
 
@@ -308,7 +313,7 @@ function onBinary(buffer) {
       const t0 = S.sent.get(h.rev);
       if (t0 !== undefined) {
         const ms = performance.now() - t0;
-        S.latencies.push([h.rev, ms]);
+        S.latencies.push([h.rev, ms, h.facts.server_ms, S.timing.parse_ms, S.timing.render_ms, h.facts.derive_ms, h.facts.export_ms]);
         for (const r of [...S.sent.keys()]) if (r <= h.rev) S.sent.delete(r);
         showFacts(h.facts, ms);
       }
@@ -366,6 +371,7 @@ function onJSON(m) {
     case "backends":
       fillBackends(m); break;
     case "gallery-done":
+      if (m.gallery !== S.galleryId) break;
       $("gallery-status").textContent = m.stopped ? "stopped" :
         `${m.count} of ${m.requested} in ${m.seconds} s${m.shortfall ? ": " + m.shortfall : ""}`;
       break;
@@ -600,12 +606,13 @@ function startGallery(backend) {
          n: Number($("gallery-n").value) || 8, iterations: Number($("gallery-it").value) || 2 });
 }
 function addCard(h, glb, png) {
-  if (h.id !== S.galleryId) return;
+  if (h.gallery !== S.galleryId) return; // a stopped or replaced gallery
   const card = document.createElement("div");
   card.className = "card";
   const img = document.createElement("img");
   img.src = URL.createObjectURL(new Blob([png], { type: "image/png" }));
   img.alt = h.id;
+  card.dataset.id = h.id;
   card.appendChild(img);
   const title = document.createElement("div");
   const report = h.report;
@@ -620,7 +627,7 @@ function addCard(h, glb, png) {
   }
   card.dataset.index = h.index;
   card.onclick = (e) => {
-    if (e.target.tagName === "SUMMARY" || e.target.closest("details")) return;
+    if (e.target.closest(".card details")) return; // opening the report is not choosing
     for (const c of $("gallery").querySelectorAll(".card.selected")) c.classList.remove("selected");
     card.classList.add("selected");
     if (S.family === "split") { S.variation = h.index; S.seed = S.gallerySeed; sendEdit(); }
