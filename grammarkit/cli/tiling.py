@@ -1,10 +1,12 @@
 """`grammarkit learn` and `grammarkit validate`: tiling grammars from and against segmented models."""
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import warnings
 from pathlib import Path
+from typing import Any, Callable, Iterator
 
 import click
 
@@ -20,6 +22,39 @@ def _load_grammar(path: Path):  # noqa: ANN202
     if not grammar.source_path:
         grammar = grammar.model_copy(update={"source_path": str(path)})
     return grammar
+
+
+def _console() -> Any:
+    from rich.console import Console
+
+    return Console(stderr=True)
+
+
+@contextlib.contextmanager
+def _stages() -> Iterator[Callable[[str], Any]]:
+    """`stage(description)` context managers shown as rich progress lines on stderr (a spinner
+    and the elapsed time each, a tick when done), only when stderr is a terminal: reading a
+    5,000-part model or learning from it takes many seconds and should show signs of life.
+    Output that is piped or captured stays clean."""
+    console = _console()
+    if not console.is_terminal:
+        yield lambda description: contextlib.nullcontext()
+        return
+    from rich.progress import Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
+
+    progress = Progress(SpinnerColumn(finished_text="[green]done"), TextColumn("{task.description}"),
+                        TimeElapsedColumn(), console=console, transient=False)
+
+    @contextlib.contextmanager
+    def stage(description: str) -> Iterator[None]:
+        task = progress.add_task(description, total=1)
+        try:
+            yield
+        finally:
+            progress.update(task, completed=1)
+
+    with progress:
+        yield stage
 
 
 def _relative(path: Path, base: Path) -> str:
@@ -47,22 +82,27 @@ def learn(examples: tuple[Path, ...], output: Path | None, name: str | None, ban
     from ..printer import print_grammar
     from ..tiling import learn as learn_grammar
     from ..tiling import read_assembly
-    from ..tiling.io import _atomic_write
+    from ..run.writer import write_files
 
     base = output.parent if output else Path.cwd()
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
-        asms = [read_assembly(p) for p in examples]
+    with _stages() as stage:
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            asms = []
+            for k, p in enumerate(examples, 1):
+                with stage(f"reading {p} ({k}/{len(examples)})"):
+                    asms.append(read_assembly(p))
+        with stage(f"learning from {sum(len(a) for a in asms)} parts in {len(asms)} example(s)"):
+            grammar = learn_grammar(asms, name=name or (output.stem if output else "learned"),
+                                    example_paths=[_relative(p, base) for p in examples],
+                                    tolerance=tolerance, bandwidth=bandwidth, docks=not no_docks)
     for w in caught:
         click.echo(f"warning: {w.message}", err=True)
-    grammar = learn_grammar(asms, name=name or (output.stem if output else "learned"),
-                            example_paths=[_relative(p, base) for p in examples],
-                            tolerance=tolerance, bandwidth=bandwidth, docks=not no_docks)
     text = print_grammar(grammar)
     if output is None:
         click.echo(text, nl=False)
         return
-    _atomic_write(output, text.encode("utf-8"))
+    write_files({output: text})
     n_parts = sum(len(a) for a in asms)
     click.echo(f"wrote {output}: {len(grammar.neighbor_rules)} part types, {len(grammar.docks)} docks, "
                f"{len(grammar.constraints)} constraints, learned from {len(asms)} example(s) "
@@ -88,16 +128,26 @@ def validate(grammar_file: Path, shapes: tuple[Path, ...], as_json: bool, tolera
     if grammar.family == "split":
         raise ShapeError(f"{grammar_file}: this is a split grammar; `validate` checks tiling grammars")
     rules = rules_from_grammar(grammar)
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
-        # unknown part types become violations (with the part id) rather than a read error
-        asms = [read_assembly(p) for p in shapes] if shapes else load_examples(grammar, check_types=False)
+    with _stages() as stage:
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            # unknown part types become violations (with the part id) rather than a read error
+            asms = []
+            for k, p in enumerate(shapes, 1):
+                with stage(f"reading {p} ({k}/{len(shapes)})"):
+                    asms.append(read_assembly(p))
+            if not shapes:
+                with stage(f"reading the examples of {grammar_file}"):
+                    asms = load_examples(grammar, check_types=False)
+        if not asms:
+            raise ShapeError(f"{grammar_file}: nothing to validate (no shapes given and the grammar has no examples)")
+        reports = []
+        for k, a in enumerate(asms, 1):
+            with stage(f"validating {a.name or k} ({len(a)} parts, {k}/{len(asms)})"):
+                reports.append(run_validate(rules, a, tolerance=tolerance, docks=not no_docks))
     if not as_json:
         for w in caught:
             click.echo(f"warning: {w.message}", err=True)
-    if not asms:
-        raise ShapeError(f"{grammar_file}: nothing to validate (no shapes given and the grammar has no examples)")
-    reports = [run_validate(rules, a, tolerance=tolerance, docks=not no_docks) for a in asms]
     ok = all(r.ok for r in reports)
     if as_json:
         doc = reports[0].to_json() if len(reports) == 1 else {"ok": ok, "reports": [r.to_json() for r in reports]}

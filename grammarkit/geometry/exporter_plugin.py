@@ -63,15 +63,16 @@ def check_ply(data: bytes) -> str | None:
 
 
 SPECS: tuple[ExporterSpec, ...] = (
-    ExporterSpec("glb", (".glb",), "binary glTF: a node per part (name Type.N, type in extras), "
-                 "face colours kept", _Lazy("encode_glb"), check_glb),
-    ExporterSpec("gltf", (".gltf",), "text glTF with embedded buffers; same content as glb",
+    ExporterSpec("glb", (".glb",), "binary glTF, +Y up (rotated root): a PBR material per (material, "
+                 "colour), a node per terminal name or part with extras, one closed vertex set per solid",
+                 _Lazy("encode_glb"), check_glb),
+    ExporterSpec("gltf", (".gltf",), "text glTF with the buffer embedded; same content as glb",
                  _Lazy("encode_gltf"), check_gltf),
-    ExporterSpec("obj", (".obj",), "Wavefront OBJ: an o/g group per part, vertex colours",
+    ExporterSpec("obj", (".obj",), "Wavefront OBJ (Z up): an o/g group per solid, vertex colours, extras comment",
                  _Lazy("encode_obj"), check_obj),
-    ExporterSpec("stl", (".stl",), "binary STL: all parts as one mesh, no colours or names",
+    ExporterSpec("stl", (".stl",), "binary STL (Z up): all solids as one mesh, no colours or names",
                  _Lazy("encode_stl"), check_stl),
-    ExporterSpec("ply", (".ply",), "binary PLY: all parts as one mesh with face colours",
+    ExporterSpec("ply", (".ply",), "binary PLY (Z up): all solids as one mesh with face colours",
                  _Lazy("encode_ply"), check_ply),
 )
 

@@ -1,48 +1,225 @@
 """Model writers for GLB, glTF, OBJ, STL and PLY, registered as the `core-exporters` plugin.
 
-Convention (docs/rendering.md, ARCHITECTURE.md): one scene node per part, named after the
-part id `Type.N`, with `{"type": Type, "id": Type.N, ...}` in the node's glTF `extras`
-(trimesh 5 reads these back as the graph edge's `metadata`); OBJ files get one `o`/`g` group
-per part with the same name. PLY and STL have no node structure: the parts are written as one
-mesh in world coordinates (PLY keeps face colours, STL keeps nothing but triangles).
+Every writer turns a split `Model`, a tiling `Assembly`, a trimesh Scene or a Trimesh into
+bytes (`encode_*`); the run layer's writer (`grammarkit.run.writer.write_files`) writes them
+atomically. All formats share one intermediate form, a list of `Solid`s: one vertex set each
+(never split at colour seams), its triangles grouped into named groups, each triangle with a
+material (a name and an sRGB colour).
 
-Colours: GLB/glTF and OBJ only carry per-vertex colours, so a part whose faces have several
-colours gets its vertices duplicated along colour boundaries before writing (each face's
-colour then survives exactly; `grammarkit.geometry.meshio.load_mesh` welds them back so the
-part reads as watertight again).
+glTF / GLB (the layout is described for users in docs/derive.md, "Files"):
 
-Every writer goes through `atomic_output`: the file appears complete or not at all.
+- **+Y up.** Coordinates inside the file are the model's own (Z up, metres). The scene's one
+  root node carries the rotation (x, y, z) -> (x, z, -y) that glTF's +Y-up convention asks
+  for, and `extras.grammarkit = {"format": 2, "up": "+Z", ...}` so that grammarkit's readers
+  (`meshio.load_mesh`, `tiling.read_assembly`) undo it and read back in the Z-up frame.
+- **Materials.** One PBR material per distinct (material name, colour): `baseColorFactor` is
+  the colour converted from sRGB to linear (glTF's colour factors are linear), metallic 0,
+  roughness 0.8 (0.1 for glass), named after the grammar's `material("...")` or, when the
+  terminal has none, after the colour. There are no vertex colours: a triangle's colour is its
+  primitive's material, so nothing forces vertices apart.
+- **Structure.** Below the root, one node per solid (a split model's building, an assembly's
+  part `Type.N`); below a split model's node, one node per terminal name (`Window`, `Glass`,
+  `Wall`...) whose `extras` hold the terminal, its rules, their source lines (`file:line`),
+  object types, roles, materials and the label index. Each group node's mesh has one
+  primitive per material. All primitives of one solid index ONE shared POSITION accessor, so
+  the solid is stored closed: a reader that merges by accessor (grammarkit) or by position
+  (trimesh after `merge_vertices`, Blender's "merge by distance") gets the watertight
+  manifold back. (trimesh's glTF loader keeps every primitive as its own mesh and never welds
+  them, so `trimesh.load(path, force="mesh")` alone is not closed; see docs/derive.md.)
+- **Per-face labels.** Triangles are written grouped by label in the order of
+  `extras.grammarkit.labels`; `face_labels(path)` in `meshio` reads the label of every face.
+
+OBJ writes one `o`/`g` group per solid, `usemtl`-free vertex colours (`v x y z r g b`, sRGB,
+split at colour seams: OBJ readers weld by position) and a `# extras {...}` line; PLY one
+mesh with face colours; STL one mesh. All in the model's Z-up frame.
 """
 from __future__ import annotations
 
+import base64
 import json
+import math
+import struct
+from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Callable, Iterable, Iterator, Mapping
+from typing import Any, Iterable, Mapping, Sequence
 
 import numpy as np
-import trimesh
 
 from ..errors import ShapeError
 from ..jsonable import to_jsonable
 from ..registry import ExporterSpec
 
-__all__ = ["OutputError", "atomic_output", "export", "exporter_for", "known_formats", "scene_from_parts",
-           "to_scene", "grammarkit_exporters"]
-
+__all__ = ["OutputError", "Solid", "Material", "atomic_output", "encode", "encode_with", "export",
+           "exporter_for", "known_formats", "scene_from_parts", "solids_of", "to_scene",
+           "grammarkit_exporters", "srgb_to_linear", "GLTF_FORMAT", "Z_UP_TO_Y_UP"]
 
 # The atomic writer is shared by every command that writes files (fileio.py has no heavy imports).
 from ..fileio import OutputError, atomic_output  # noqa: E402
 
+# Version of grammarkit's glTF layout, stored in the root node's extras (1: the old layout, no
+# rotation, no marker; 2: this one).
+GLTF_FORMAT = 2
+# glTF quaternion (x, y, z, w) for -90 degrees about X: (x, y, z) -> (x, z, -y), Z-up to Y-up.
+Z_UP_TO_Y_UP = (-math.sqrt(0.5), 0.0, 0.0, math.sqrt(0.5))
+Z_UP_TO_Y_UP_MATRIX = np.array([[1.0, 0, 0, 0], [0, 0, 1, 0], [0, -1, 0, 0], [0, 0, 0, 1]])
+
+DEFAULT_RGBA = (200, 200, 200, 255)
+
 
 # ------------------------------------------------------------------------------------------
-# Building scenes with the part convention
+# The intermediate form
 # ------------------------------------------------------------------------------------------
-def scene_from_parts(parts: Iterable[Any]) -> trimesh.Scene:
-    """A Scene with one node per part, named by the part id with its type in the node extras.
+@dataclass(frozen=True)
+class Material:
+    """A PBR material: `name` (the grammar's material name or the colour) and sRGB bytes."""
 
-    `parts`: objects with `.id`, `.type`, `.mesh` (world coordinates) and optional `.meta`
-    (e.g. `grammarkit.tiling.assembly.Part`), or `(id, type, mesh[, meta])` tuples.
-    """
+    name: str | None
+    rgba: tuple[int, int, int, int]
+
+    @property
+    def label(self) -> str:
+        return self.name or "#{:02x}{:02x}{:02x}".format(*self.rgba[:3])
+
+
+@dataclass
+class Solid:
+    """One closed (or at least one-vertex-set) mesh with its triangles in named groups.
+
+    `face_group[i]` indexes `groups` (node name, extras); `face_material[i]` indexes
+    `materials`. `matrix` places the solid under the root (model frame). `key`, when set,
+    lets solids with equal keys share one glTF mesh (instancing of identical part geometry)."""
+
+    name: str
+    vertices: np.ndarray
+    faces: np.ndarray
+    face_group: np.ndarray
+    groups: list[tuple[str, dict]]
+    face_material: np.ndarray
+    materials: list[Material]
+    matrix: np.ndarray | None = None
+    extras: dict = field(default_factory=dict)
+    key: bytes | None = None
+
+    def face_rgba(self) -> np.ndarray:
+        palette = np.array([m.rgba for m in self.materials] or [DEFAULT_RGBA], dtype=np.uint8)
+        return palette[self.face_material]
+
+    def world_vertices(self) -> np.ndarray:
+        v = np.asarray(self.vertices, dtype=np.float64)
+        if self.matrix is None:
+            return v
+        m = np.asarray(self.matrix, dtype=np.float64)
+        return v @ m[:3, :3].T + m[:3, 3]
+
+    def world_faces(self) -> np.ndarray:
+        f = np.asarray(self.faces, dtype=np.int64)
+        if self.matrix is not None and np.linalg.det(np.asarray(self.matrix)[:3, :3]) < 0:
+            f = f[:, ::-1]  # a mirroring placement flips the winding
+        return f
+
+
+@dataclass
+class Scene:
+    """What a file holds: solids, the root's name and extras."""
+
+    name: str
+    solids: list[Solid]
+    extras: dict = field(default_factory=dict)
+
+
+def srgb_to_linear(c: np.ndarray | Sequence[float]) -> np.ndarray:
+    """sRGB-encoded values in [0, 1] to linear light (IEC 61966-2-1), as glTF's factors want."""
+    c = np.asarray(c, dtype=np.float64)
+    return np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
+
+
+def _materials_from_colors(rgba: np.ndarray) -> tuple[np.ndarray, list[Material]]:
+    """Per-face material indices for per-face colours (one unnamed material per colour).
+
+    Colours are packed into one uint32 key: 1-D np.unique is ~25x faster than axis=0."""
+    rgba = np.ascontiguousarray(rgba, dtype=np.uint8).reshape(-1, 4)
+    keys = rgba.view(np.uint32).reshape(-1)
+    uniq, inv = np.unique(keys, return_inverse=True)
+    mats = [Material(None, tuple(int(x) for x in u)) for u in uniq.view(np.uint8).reshape(-1, 4)]
+    return inv.reshape(-1).astype(np.int64), mats
+
+
+def _trimesh_solid(mesh: Any, name: str, matrix: np.ndarray | None, extras: dict) -> Solid:
+    if mesh.visual.kind in ("face", "vertex"):
+        face_material, materials = _materials_from_colors(mesh.visual.face_colors)
+    else:
+        face_material, materials = np.zeros(len(mesh.faces), np.int64), [Material(None, DEFAULT_RGBA)]
+    return Solid(name, np.asarray(mesh.vertices, dtype=np.float64), np.asarray(mesh.faces, dtype=np.int64),
+                 np.zeros(len(mesh.faces), np.int64), [(name, {})], face_material, materials,
+                 matrix, dict(extras))
+
+
+def _scene_solids(scene: Any) -> list[Solid]:
+    import trimesh
+
+    out = []
+    graph = scene.graph
+    for node in graph.nodes_geometry:
+        matrix, gname = graph[node]
+        mesh = scene.geometry.get(gname)
+        if not isinstance(mesh, trimesh.Trimesh) or len(mesh.faces) == 0:
+            continue
+        parent = graph.transforms.parents.get(node)
+        extras = graph.transforms.edge_data.get((parent, node), {}).get("metadata") or {}
+        m = np.asarray(matrix, dtype=np.float64)
+        out.append(_trimesh_solid(mesh, str(node), None if np.allclose(m, np.eye(4)) else m,
+                                  to_jsonable(dict(extras))))
+    return out
+
+
+# A colour per part type, so that assemblies show their segmentation (a qualitative palette,
+# Okabe & Ito's colour-blind-safe eight plus darker and lighter variants).
+TYPE_PALETTE = ("#e69f00", "#56b4e9", "#009e73", "#f0e442", "#0072b2", "#d55e00", "#cc79a7",
+                "#999999", "#8c5a00", "#2b7fb0", "#006b4f", "#b8ac2e", "#004c7a", "#9c4500",
+                "#8f5477", "#5e5e5e")
+
+
+def _hex_rgba(h: str) -> tuple[int, int, int, int]:
+    h = h.lstrip("#")
+    return (int(h[0:2], 16), int(h[2:4], 16), int(h[4:6], 16), 255)
+
+
+def type_colors(types: Iterable[str]) -> dict[str, tuple[int, int, int, int]]:
+    """A deterministic colour per part type (sorted type names take palette entries in turn)."""
+    return {t: _hex_rgba(TYPE_PALETTE[i % len(TYPE_PALETTE)]) for i, t in enumerate(sorted(set(types)))}
+
+
+def _assembly_solids(parts: Sequence[Any]) -> list[Solid]:
+    """One solid per part: its geometry in its own frame with `transform` as the node matrix
+    (identical local geometry shares one glTF mesh), type in the extras, a colour per type."""
+    colors = type_colors(str(p.type) for p in parts)
+    out = []
+    for p in parts:
+        mesh = p.mesh
+        T = np.asarray(getattr(p, "transform", np.eye(4)), dtype=np.float64)
+        if T.shape != (4, 4) or not np.isfinite(T).all() or abs(np.linalg.det(T[:3, :3])) < 1e-12:
+            T = np.eye(4)
+        V = np.asarray(mesh.vertices, dtype=np.float64)
+        if not np.allclose(T, np.eye(4)):
+            inv = np.linalg.inv(T)
+            V = V @ inv[:3, :3].T + inv[:3, 3]
+        F = np.asarray(mesh.faces, dtype=np.int64)
+        extras = {"type": str(p.type), "id": str(p.id)}
+        meta = getattr(p, "meta", None) or {}
+        extras.update({k: v for k, v in to_jsonable(dict(meta)).items() if k not in extras})
+        key = np.round(V, 6).astype(np.float32).tobytes() + F.tobytes() + str(p.type).encode()
+        out.append(Solid(str(p.id), V, F, np.zeros(len(F), np.int64), [(str(p.id), {})],
+                         np.zeros(len(F), np.int64), [Material(str(p.type), colors[str(p.type)])],
+                         None if np.allclose(T, np.eye(4)) else T, extras, key))
+    return out
+
+
+def scene_from_parts(parts: Iterable[Any]) -> Any:
+    """A trimesh.Scene with one node per part, named by the part id with its type in the node
+    extras. `parts`: objects with `.id`, `.type`, `.mesh` (world coordinates) and optional
+    `.meta`, or `(id, type, mesh[, meta])` tuples."""
+    import trimesh
+
     scene = trimesh.Scene()
     for part in parts:
         if isinstance(part, tuple):
@@ -57,8 +234,10 @@ def scene_from_parts(parts: Iterable[Any]) -> trimesh.Scene:
     return scene
 
 
-def to_scene(obj: Any) -> trimesh.Scene:
-    """A Scene from a Scene, a Trimesh, a model (`.to_scene()`) or an assembly (`.parts`)."""
+def to_scene(obj: Any) -> Any:
+    """A trimesh.Scene from a Scene, a Trimesh, a model (`.to_scene()`) or an assembly."""
+    import trimesh
+
     if isinstance(obj, trimesh.Scene):
         return obj
     if isinstance(obj, trimesh.Trimesh):
@@ -74,119 +253,282 @@ def to_scene(obj: Any) -> trimesh.Scene:
                      "trimesh.Trimesh, a model or an assembly")
 
 
-def _nodes(scene: trimesh.Scene) -> list[tuple[str, trimesh.Trimesh, np.ndarray, dict]]:
-    """(node name, mesh, world matrix, node extras) for every mesh node."""
-    out = []
-    graph = scene.graph
-    for node in graph.nodes_geometry:
-        matrix, gname = graph[node]
-        mesh = scene.geometry.get(gname)
-        if not isinstance(mesh, trimesh.Trimesh) or len(mesh.faces) == 0:
-            continue
-        parent = graph.transforms.parents.get(node)
-        extras = graph.transforms.edge_data.get((parent, node), {}).get("metadata") or {}
-        out.append((str(node), mesh, np.asarray(matrix, dtype=np.float64), dict(extras)))
-    if not out:
+def solids_of(obj: Any) -> Scene:
+    """The intermediate form of a split Model (`.export_solids()`), an assembly (`.parts`), a
+    trimesh Scene or a Trimesh."""
+    import trimesh
+
+    if callable(getattr(obj, "export_scene", None)):
+        scene = obj.export_scene()
+    elif isinstance(obj, trimesh.Trimesh):
+        name = str((obj.metadata or {}).get("name") or "mesh")
+        scene = Scene(name, [_trimesh_solid(obj, name, None, {})])
+    elif isinstance(obj, trimesh.Scene):
+        scene = Scene(str(obj.metadata.get("name") or "scene"), _scene_solids(obj),
+                      to_jsonable({k: v for k, v in obj.metadata.items() if k != "name"}))
+    elif hasattr(obj, "parts") and not isinstance(obj, (str, bytes)):
+        parts = list(obj.parts)
+        scene = Scene(str(getattr(obj, "name", "") or "assembly"), _assembly_solids(parts),
+                      {"kind": "assembly", "part_types": {t: "#{:02x}{:02x}{:02x}".format(*c[:3])
+                                                         for t, c in type_colors(p.type for p in parts).items()}})
+    elif callable(getattr(obj, "to_scene", None)):
+        return solids_of(obj.to_scene())
+    else:
+        raise ShapeError(f"cannot export a {type(obj).__name__}: expected a trimesh.Scene, a "
+                         "trimesh.Trimesh, a model or an assembly")
+    if not any(len(s.faces) for s in scene.solids):
         raise ShapeError("nothing to export: the model has no triangles")
-    return out
+    return scene
 
 
-def _split_color_seams(mesh: trimesh.Trimesh) -> trimesh.Trimesh:
-    """Vertex-coloured copy of `mesh` whose vertices are not shared between faces of
-    different colours, so per-face colours survive formats that only store vertex colours."""
-    if mesh.visual.kind not in ("face", "vertex"):
-        return mesh
-    fc = np.asarray(mesh.visual.face_colors, dtype=np.uint8)
-    faces = np.asarray(mesh.faces, dtype=np.int64)
-    verts = np.asarray(mesh.vertices, dtype=np.float64)
-    _, color_id = np.unique(fc, axis=0, return_inverse=True)
-    color_id = color_id.reshape(-1)
-    # one new vertex per (old vertex, colour) pair in use
-    pairs = np.column_stack([faces.ravel(), np.repeat(color_id, 3)])
-    uniq, inv = np.unique(pairs, axis=0, return_inverse=True)
-    new_faces = inv.reshape(-1, 3)
-    vcolors = np.zeros((len(uniq), 4), dtype=np.uint8)
-    vcolors[new_faces.ravel()] = np.repeat(fc, 3, axis=0)
-    return trimesh.Trimesh(verts[uniq[:, 0]], new_faces, vertex_colors=vcolors, process=False,
-                           metadata=dict(mesh.metadata))
+# ------------------------------------------------------------------------------------------
+# glTF
+# ------------------------------------------------------------------------------------------
+_ARRAY_BUFFER, _ELEMENT_ARRAY_BUFFER = 34962, 34963
+_FLOAT, _USHORT, _UINT = 5126, 5123, 5125
 
 
-def _prepared_scene(scene: trimesh.Scene) -> trimesh.Scene:
-    """A flat copy (every node a child of the root, world matrices) with colour seams split."""
-    out = trimesh.Scene()
-    for name, mesh, matrix, extras in _nodes(scene):
-        out.add_geometry(_split_color_seams(mesh), node_name=name, geom_name=name,
-                         transform=matrix, metadata=to_jsonable(extras) or None)
-    return out
+class _GltfBuilder:
+    """glTF 2.0 JSON + one binary buffer, written by hand: the layout above needs shared
+    accessors across primitives, node extras and a root transform, which trimesh's exporter
+    does not offer, and doing it directly is several times faster."""
+
+    def __init__(self, ambiguous: set[str] = frozenset()) -> None:
+        self.ambiguous = ambiguous  # material names used with several colours
+        self.chunks: list[bytes] = []
+        self.size = 0
+        self.views: list[dict] = []
+        self.accessors: list[dict] = []
+        self.materials: list[dict] = []
+        self.material_index: dict[Material, int] = {}
+        self.meshes: list[dict] = []
+        self.nodes: list[dict] = []
+
+    def _view(self, data: bytes, target: int) -> int:
+        pad = (-self.size) % 4
+        if pad:
+            self.chunks.append(b"\0" * pad)
+            self.size += pad
+        self.views.append({"buffer": 0, "byteOffset": self.size, "byteLength": len(data), "target": target})
+        self.chunks.append(data)
+        self.size += len(data)
+        return len(self.views) - 1
+
+    def positions(self, vertices: np.ndarray) -> int:
+        v = np.ascontiguousarray(vertices, dtype=np.float32)
+        view = self._view(v.tobytes(), _ARRAY_BUFFER)
+        self.accessors.append({"bufferView": view, "componentType": _FLOAT, "count": len(v), "type": "VEC3",
+                               "min": [float(x) for x in v.min(axis=0)],
+                               "max": [float(x) for x in v.max(axis=0)]})
+        return len(self.accessors) - 1
+
+    def indices(self, faces: np.ndarray, n_vertices: int) -> int:
+        dtype, ctype = (np.uint16, _USHORT) if n_vertices < 65535 else (np.uint32, _UINT)
+        f = np.ascontiguousarray(faces, dtype=dtype).reshape(-1)
+        view = self._view(f.tobytes(), _ELEMENT_ARRAY_BUFFER)
+        self.accessors.append({"bufferView": view, "componentType": ctype, "count": len(f), "type": "SCALAR"})
+        return len(self.accessors) - 1
+
+    def material(self, mat: Material) -> int:
+        idx = self.material_index.get(mat)
+        if idx is None:
+            lin = srgb_to_linear(np.asarray(mat.rgba[:3], dtype=np.float64) / 255.0)
+            glassy = bool(mat.name) and "glass" in mat.name.lower()
+            name = mat.label
+            if mat.name in self.ambiguous:
+                name = "{} #{:02x}{:02x}{:02x}".format(mat.name, *mat.rgba[:3])
+            entry = {"name": name,
+                     "pbrMetallicRoughness": {
+                         "baseColorFactor": [round(float(x), 6) for x in lin] + [round(mat.rgba[3] / 255.0, 6)],
+                         "metallicFactor": 0.0, "roughnessFactor": 0.1 if glassy else 0.8},
+                     "extras": {"srgb": mat.label if not mat.name else "#{:02x}{:02x}{:02x}".format(*mat.rgba[:3])}}
+            if mat.rgba[3] < 255:
+                entry["alphaMode"] = "BLEND"
+            if mat.name:
+                entry["extras"]["material"] = mat.name
+            self.materials.append(entry)
+            idx = self.material_index[mat] = len(self.materials) - 1
+        return idx
+
+    def node(self, entry: dict) -> int:
+        self.nodes.append(entry)
+        return len(self.nodes) - 1
+
+    def document(self, scene: Scene, root_children: list[int]) -> dict:
+        root_extras = dict(scene.extras)
+        root_extras["grammarkit"] = {"format": GLTF_FORMAT, "up": "+Z",
+                                     "note": "this node rotates the model's Z-up frame to glTF's +Y up"}
+        root = self.node({"name": scene.name, "rotation": [float(x) for x in Z_UP_TO_Y_UP],
+                          "children": root_children, "extras": root_extras})
+        doc: dict[str, Any] = {
+            "asset": {"version": "2.0", "generator": "grammarkit"},
+            "scene": 0, "scenes": [{"name": scene.name, "nodes": [root]}],
+            "nodes": self.nodes, "meshes": self.meshes, "materials": self.materials,
+            "accessors": self.accessors, "bufferViews": self.views,
+            "buffers": [{"byteLength": self.size}],
+        }
+        return doc
 
 
-def _world_mesh(scene: trimesh.Scene) -> trimesh.Trimesh:
-    """All parts as one mesh in world coordinates, face colours kept when present."""
-    verts, faces, colors = [], [], []
-    offset = 0
-    any_color = False
-    for _name, mesh, matrix, _extras in _nodes(scene):
-        v = np.asarray(mesh.vertices, dtype=np.float64) @ matrix[:3, :3].T + matrix[:3, 3]
-        verts.append(v)
-        faces.append(np.asarray(mesh.faces, dtype=np.int64) + offset)
-        offset += len(v)
-        if mesh.visual.kind in ("face", "vertex"):
-            any_color = True
-            colors.append(np.asarray(mesh.visual.face_colors, dtype=np.uint8))
+def _build_gltf(scene: Scene) -> tuple[dict, bytes]:
+    colours_of: dict[str, set] = {}
+    for solid in scene.solids:
+        for mat in solid.materials:
+            if mat.name:
+                colours_of.setdefault(mat.name, set()).add(mat.rgba)
+    b = _GltfBuilder({n for n, c in colours_of.items() if len(c) > 1})
+    children: list[int] = []
+    shared_mesh: dict[bytes, int] = {}
+    all_labels: list[str] = []
+    for solid in scene.solids:
+        F = np.asarray(solid.faces, dtype=np.int64)
+        if len(F) == 0:
+            continue
+        node_entry: dict[str, Any] = {"name": solid.name}
+        if solid.matrix is not None:
+            node_entry["matrix"] = [float(x) for x in np.asarray(solid.matrix, dtype=np.float64).T.reshape(-1)]
+        if solid.extras:
+            node_entry["extras"] = to_jsonable(solid.extras)
+        if solid.key is not None and solid.key in shared_mesh:
+            node_entry["mesh"] = shared_mesh[solid.key]
+            children.append(b.node(node_entry))
+            continue
+        pos = b.positions(solid.vertices)
+        nv = len(solid.vertices)
+        # Triangles sorted by (group, material): each run becomes a primitive. Stable sort,
+        # so the order within a run is the model's and the file is deterministic.
+        n_mat = max(len(solid.materials), 1)
+        key = np.asarray(solid.face_group, dtype=np.int64) * n_mat + np.asarray(solid.face_material, dtype=np.int64)
+        order = np.argsort(key, kind="stable")
+        skey = key[order]
+        cuts = np.flatnonzero(np.diff(skey)) + 1
+        starts = np.concatenate([[0], cuts])
+        ends = np.concatenate([cuts, [len(skey)]])
+        prims_by_group: dict[int, list[dict]] = {}
+        for s, e in zip(starts.tolist(), ends.tolist()):
+            k = int(skey[s])
+            g, m = divmod(k, n_mat)
+            acc = b.indices(F[order[s:e]], nv)
+            prim = {"attributes": {"POSITION": pos}, "indices": acc, "mode": 4,
+                    "material": b.material(solid.materials[m] if solid.materials else Material(None, DEFAULT_RGBA))}
+            prims_by_group.setdefault(g, []).append(prim)
+        single = len(prims_by_group) == 1 and len(solid.groups) == 1
+        if single:
+            (prims,) = prims_by_group.values()
+            b.meshes.append({"name": solid.name, "primitives": prims})
+            node_entry["mesh"] = len(b.meshes) - 1
+            if solid.key is not None:
+                shared_mesh[solid.key] = node_entry["mesh"]
+            all_labels.append(solid.groups[0][0])
         else:
-            colors.append(np.full((len(mesh.faces), 4), 200, dtype=np.uint8))
-    mesh = trimesh.Trimesh(np.concatenate(verts), np.concatenate(faces), process=False)
-    if any_color:
-        mesh.visual.face_colors = np.concatenate(colors)
-    return mesh
+            kids = []
+            for g, prims in sorted(prims_by_group.items()):
+                gname, gextras = solid.groups[g]
+                b.meshes.append({"name": gname, "primitives": prims})
+                extras = dict(gextras)
+                extras["label"] = len(all_labels)
+                all_labels.append(gname)
+                kids.append(b.node({"name": gname, "mesh": len(b.meshes) - 1, "extras": to_jsonable(extras)}))
+            node_entry["children"] = kids
+        children.append(b.node(node_entry))
+    if not b.meshes:
+        raise ShapeError("nothing to export: the model has no triangles")
+    doc = b.document(scene, children)
+    doc["nodes"][-1]["extras"]["grammarkit"]["labels"] = all_labels
+    pad = (-b.size) % 4
+    binary = b"".join(b.chunks) + b"\0" * pad
+    doc["buffers"][0]["byteLength"] = b.size
+    return doc, binary
 
 
-# ------------------------------------------------------------------------------------------
-# Writers
-# ------------------------------------------------------------------------------------------
+def _json_bytes(doc: dict) -> bytes:
+    return json.dumps(doc, separators=(",", ":"), sort_keys=False, allow_nan=False).encode("utf-8")
+
+
 def encode_glb(obj: Any) -> bytes:
-    return _prepared_scene(to_scene(obj)).export(file_type="glb")
+    doc, binary = _build_gltf(solids_of(obj))
+    js = _json_bytes(doc)
+    js += b" " * ((-len(js)) % 4)
+    total = 12 + 8 + len(js) + 8 + len(binary)
+    return b"".join([struct.pack("<4sII", b"glTF", 2, total),
+                     struct.pack("<I4s", len(js), b"JSON"), js,
+                     struct.pack("<I4s", len(binary), b"BIN\0"), binary])
 
 
 def encode_gltf(obj: Any) -> bytes:
-    from trimesh.exchange.gltf import export_gltf
+    doc, binary = _build_gltf(solids_of(obj))
+    doc["buffers"][0]["uri"] = "data:application/octet-stream;base64," + base64.b64encode(binary).decode("ascii")
+    doc["buffers"][0]["byteLength"] = len(binary)
+    return json.dumps(doc, indent=1, allow_nan=False).encode("utf-8")
 
-    files = export_gltf(_prepared_scene(to_scene(obj)), embed_buffers=True)
-    text = files.get("model.gltf") or next(iter(files.values()))
-    return text if isinstance(text, bytes) else str(text).encode("utf-8")
+
+# ------------------------------------------------------------------------------------------
+# OBJ, STL, PLY (Z-up, world coordinates)
+# ------------------------------------------------------------------------------------------
+def _split_color_seams(faces: np.ndarray, face_material: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(vertex index of each new vertex, new faces): one vertex per (vertex, material) pair in
+    use, so that per-face colours survive formats that only store vertex colours. 1-D keys."""
+    faces = np.asarray(faces, dtype=np.int64)
+    n_mat = int(face_material.max()) + 1 if len(face_material) else 1
+    keys = faces.reshape(-1) * n_mat + np.repeat(np.asarray(face_material, dtype=np.int64), 3)
+    uniq, inv = np.unique(keys, return_inverse=True)
+    return uniq // n_mat, inv.reshape(-1, 3)
+
+
+def _fmt_rows(fmt: str, rows: np.ndarray) -> str:
+    """Format a 2-D array as text lines, one `fmt % row` per line, in one call."""
+    if len(rows) == 0:
+        return ""
+    return ((fmt + "\n") * len(rows)) % tuple(rows.reshape(-1).tolist())
 
 
 def encode_obj(obj: Any) -> bytes:
-    """OBJ with one `o`/`g` group per part (vertex colours as `v x y z r g b`) and the part's
-    extras as a `# extras {...}` comment line that `load_mesh` reads back."""
-    lines = ["# written by grammarkit", ""]
+    """OBJ with one `o`/`g` group per solid (vertex colours as `v x y z r g b`, sRGB in 0..1)
+    and the solid's extras as a `# extras {...}` comment line that `load_mesh` reads back."""
+    scene = solids_of(obj)
+    out = ["# written by grammarkit (Z up, metres)\n"]
     offset = 1
-    for name, mesh, matrix, extras in _nodes(to_scene(obj)):
-        mesh = _split_color_seams(mesh)
-        v = np.asarray(mesh.vertices, dtype=np.float64) @ matrix[:3, :3].T + matrix[:3, 3]
-        lines.append(f"o {name}")
-        lines.append(f"g {name}")
-        if extras:
-            lines.append("# extras " + json.dumps(to_jsonable(extras), sort_keys=True))
-        if mesh.visual.kind == "vertex":
-            c = np.asarray(mesh.visual.vertex_colors, dtype=np.float64)[:, :3] / 255.0
-            lines.extend(f"v {a:.9g} {b:.9g} {d:.9g} {r:.4g} {g:.4g} {bl:.4g}"
-                         for (a, b, d), (r, g, bl) in zip(v.tolist(), c.tolist()))
-        else:
-            lines.extend(f"v {a:.9g} {b:.9g} {d:.9g}" for a, b, d in v.tolist())
-        f = np.asarray(mesh.faces, dtype=np.int64) + offset
-        lines.extend(f"f {a} {b} {d}" for a, b, d in f.tolist())
+    for solid in scene.solids:
+        if len(solid.faces) == 0:
+            continue
+        src, faces = _split_color_seams(solid.world_faces(), solid.face_material)
+        v = solid.world_vertices()[src]
+        rgba = solid.face_rgba()
+        vcol = np.zeros((len(src), 3), dtype=np.float64)
+        vcol[faces.reshape(-1)] = np.repeat(rgba[:, :3], 3, axis=0) / 255.0
+        out.append(f"o {solid.name}\ng {solid.name}\n")
+        if solid.extras:
+            out.append("# extras " + json.dumps(to_jsonable(solid.extras), sort_keys=True) + "\n")
+        out.append(_fmt_rows("v %.9g %.9g %.9g %.4g %.4g %.4g", np.column_stack([v, vcol])))
+        out.append(_fmt_rows("f %d %d %d", faces + offset))
         offset += len(v)
-        lines.append("")
-    return "\n".join(lines).encode("utf-8")
+    return "".join(out).encode("utf-8")
+
+
+def _world_mesh(obj: Any) -> Any:
+    """All solids as one mesh in world coordinates with face colours."""
+    import trimesh
+
+    scene = solids_of(obj)
+    verts, faces, colors = [], [], []
+    offset = 0
+    for s in scene.solids:
+        v = s.world_vertices()
+        verts.append(v)
+        faces.append(s.world_faces() + offset)
+        colors.append(s.face_rgba())
+        offset += len(v)
+    mesh = trimesh.Trimesh(np.concatenate(verts), np.concatenate(faces), process=False)
+    mesh.visual.face_colors = np.concatenate(colors)
+    return mesh
 
 
 def encode_stl(obj: Any) -> bytes:
-    return _world_mesh(to_scene(obj)).export(file_type="stl")
+    return _world_mesh(obj).export(file_type="stl")
 
 
 def encode_ply(obj: Any) -> bytes:
-    return _world_mesh(to_scene(obj)).export(file_type="ply", encoding="binary")
+    return _world_mesh(obj).export(file_type="ply", encoding="binary")
 
 
 # The specs (and the hookimpl registering them) live in exporter_plugin.py, which stays light.

@@ -1,17 +1,27 @@
 """Reading meshes from files with errors that name the file (`load_mesh`).
 
-Used by the split engine's `i("part.glb")` and the tiling readers. GLB/glTF node extras come
-back as the scene graph edge's `metadata` (trimesh 5); OBJ files are parsed here (trimesh
-merges `o` groups into one mesh) so every `o`/`g` group becomes its own scene node, and the
-`# extras {...}` comment grammarkit writes restores the node extras.
+Used by the split engine's `i("part.glb")`, `grammarkit render` and the tiling readers.
 
-Meshes written by `grammarkit.geometry.exporters` with colour seams split are welded back:
-vertices at the same position are merged while face colours are kept, so parts read as
-watertight again.
+- GLB/glTF written by grammarkit (format 2, marked in the root node's extras): read here
+  (`read_gltf_solids`): the root's Z-up -> Y-up rotation is undone, so meshes come back in the
+  model's Z-up frame; each solid's groups (terminal names) are merged back through their shared
+  POSITION accessor into one closed mesh with face colours from the materials, and the per-face
+  labels in `mesh.face_attributes["label"]` (names in `mesh.metadata["labels"]`).
+- Other GLB/glTF files (including grammarkit's older ones, which had no rotation): trimesh;
+  node extras come back as the scene graph edge's `metadata` (trimesh 5).
+- OBJ files are parsed here (trimesh merges `o` groups into one mesh) so every `o`/`g` group
+  becomes its own scene node, and the `# extras {...}` comment grammarkit writes restores the
+  node extras.
+
+Meshes with vertices split at colour seams (OBJ, other writers) are welded back: vertices at
+the same position are merged while face colours are kept, so parts read as watertight again.
 """
 from __future__ import annotations
 
+import base64
 import json
+import struct
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -19,7 +29,8 @@ import trimesh
 
 from ..errors import ShapeError
 
-__all__ = ["MESH_SUFFIXES", "flatten", "load_mesh", "weld"]
+__all__ = ["MESH_SUFFIXES", "GltfSolid", "face_labels", "flatten", "gltf_root_extras", "load_mesh",
+           "read_gltf_solids", "weld"]
 
 MESH_SUFFIXES = (".glb", ".gltf", ".obj", ".stl", ".ply", ".off")
 
@@ -38,6 +49,8 @@ def weld(mesh: trimesh.Trimesh) -> trimesh.Trimesh:
     out = trimesh.Trimesh(v[first], faces, process=False, metadata=dict(mesh.metadata))
     if colors is not None:
         out.visual.face_colors = colors
+    for key, value in mesh.face_attributes.items():  # e.g. the per-face "label" of grammarkit GLBs
+        out.face_attributes[key] = value
     return out
 
 
@@ -155,6 +168,220 @@ def _load_obj(path: Path) -> trimesh.Scene:
     return scene
 
 
+# --------------------------------------------------------------------------------------------
+# grammarkit's own glTF layout (format 2: see grammarkit.geometry.exporters)
+# --------------------------------------------------------------------------------------------
+_COMPONENTS = {5120: np.int8, 5121: np.uint8, 5122: np.int16, 5123: np.uint16, 5125: np.uint32, 5126: np.float32}
+_WIDTH = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4, "MAT4": 16}
+
+
+@dataclass
+class GltfSolid:
+    """One solid of a grammarkit GLB/glTF (format 2): a node below the root, its groups merged
+    back into one mesh through the shared POSITION accessor (so it is closed as derived)."""
+
+    name: str
+    matrix: np.ndarray  # placement in the model's Z-up frame (the root's rotation undone)
+    vertices: np.ndarray  # float64, the solid's own frame
+    faces: np.ndarray
+    face_colors: np.ndarray  # sRGB bytes from the materials
+    face_labels: np.ndarray  # index into `labels`
+    labels: list[str]
+    extras: dict = field(default_factory=dict)
+
+
+def _gltf_json(path: Path) -> tuple[dict, bytes | None] | None:
+    """(JSON document, binary chunk) of a .glb/.gltf file, or None if it is not one."""
+    try:
+        raw = path.read_bytes()
+        if raw[:4] == b"glTF":
+            length, kind = struct.unpack_from("<II", raw, 12)
+            if kind != 0x4E4F534A:  # "JSON"
+                return None
+            doc = json.loads(raw[20:20 + length])
+            rest = 20 + length
+            binary = None
+            if len(raw) >= rest + 8:
+                blen, bkind = struct.unpack_from("<II", raw, rest)
+                if bkind == 0x004E4942:  # "BIN\0"
+                    binary = raw[rest + 8:rest + 8 + blen]
+            return doc, binary
+        return json.loads(raw.decode("utf-8")), None
+    except (OSError, ValueError, struct.error, UnicodeDecodeError):
+        return None
+
+
+def gltf_root_extras(path: str | Path) -> dict:
+    """The `extras.grammarkit` block of a GLB/glTF's root node ({} for other files)."""
+    loaded = _gltf_json(Path(path))
+    if loaded is None:
+        return {}
+    doc = loaded[0]
+    try:
+        roots = doc["scenes"][doc.get("scene", 0)]["nodes"]
+        extras = doc["nodes"][roots[0]].get("extras") or {}
+    except (KeyError, IndexError, TypeError):
+        return {}
+    marker = extras.get("grammarkit") if isinstance(extras, dict) else None
+    return marker if isinstance(marker, dict) else {}
+
+
+def _node_matrix(node: dict) -> np.ndarray:
+    if "matrix" in node:
+        return np.asarray(node["matrix"], dtype=np.float64).reshape(4, 4).T
+    m = np.eye(4)
+    if "scale" in node:
+        m = np.diag([*node["scale"], 1.0]) @ m
+    if "rotation" in node:
+        x, y, z, w = node["rotation"]
+        r = np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+                      [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+                      [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
+        rot = np.eye(4)
+        rot[:3, :3] = r
+        m = rot @ m
+    if "translation" in node:
+        t = np.eye(4)
+        t[:3, 3] = node["translation"]
+        m = t @ m
+    return m
+
+
+def read_gltf_solids(path: str | Path) -> list[GltfSolid] | None:
+    """The solids of a GLB/glTF written by grammarkit (format 2), in the model's Z-up frame,
+    or None for any other glTF file (read those with trimesh). Raises ShapeError naming the
+    file when a grammarkit file is damaged."""
+    path = Path(path)
+    loaded = _gltf_json(path)
+    if loaded is None:
+        return None
+    doc, binary = loaded
+    try:
+        root = doc["nodes"][doc["scenes"][doc.get("scene", 0)]["nodes"][0]]
+        marker = (root.get("extras") or {}).get("grammarkit")
+    except (KeyError, IndexError, TypeError, AttributeError):
+        return None
+    if not isinstance(marker, dict) or int(marker.get("format", 0)) < 2:
+        return None
+    try:
+        return _solids_from_doc(doc, binary, root, path)
+    except (KeyError, IndexError, TypeError, ValueError) as exc:
+        raise ShapeError(f"{path}: damaged grammarkit glTF file ({type(exc).__name__}: {exc})") from None
+
+
+def _solids_from_doc(doc: dict, binary: bytes | None, root: dict, path: Path) -> list[GltfSolid]:
+    buffers: list[bytes] = []
+    for i, buf in enumerate(doc.get("buffers", [])):
+        uri = buf.get("uri")
+        if uri is None:
+            if binary is None:
+                raise ValueError("the GLB has no binary chunk")
+            buffers.append(binary)
+        elif uri.startswith("data:"):
+            buffers.append(base64.b64decode(uri.split(",", 1)[1]))
+        else:
+            buffers.append((path.parent / uri).read_bytes())
+    cache: dict[int, np.ndarray] = {}
+
+    def accessor(i: int) -> np.ndarray:
+        if i in cache:
+            return cache[i]
+        acc = doc["accessors"][i]
+        view = doc["bufferViews"][acc["bufferView"]]
+        dtype = np.dtype(_COMPONENTS[acc["componentType"]])
+        width = _WIDTH[acc["type"]]
+        start = view.get("byteOffset", 0) + acc.get("byteOffset", 0)
+        stride = view.get("byteStride") or dtype.itemsize * width
+        raw = buffers[view["buffer"]]
+        count = acc["count"]
+        if stride == dtype.itemsize * width:
+            arr = np.frombuffer(raw, dtype=dtype, count=count * width, offset=start).reshape(count, width)
+        else:
+            rows = np.frombuffer(raw, dtype=np.uint8, count=stride * (count - 1) + dtype.itemsize * width,
+                                 offset=start)
+            arr = np.lib.stride_tricks.as_strided(rows, (count, dtype.itemsize * width), (stride, 1)).copy()
+            arr = arr.view(dtype).reshape(count, width)
+        cache[i] = arr
+        return arr
+
+    materials = doc.get("materials", [])
+
+    def colour(mi: int | None) -> np.ndarray:
+        if mi is None:
+            return np.array([200, 200, 200, 255], dtype=np.uint8)
+        mat = materials[mi]
+        srgb = (mat.get("extras") or {}).get("srgb")
+        alpha = mat.get("pbrMetallicRoughness", {}).get("baseColorFactor", [1, 1, 1, 1])[3]
+        if isinstance(srgb, str) and len(srgb) == 7:
+            rgb = [int(srgb[k:k + 2], 16) for k in (1, 3, 5)]
+        else:  # linear factor back to sRGB
+            lin = np.asarray(mat.get("pbrMetallicRoughness", {}).get("baseColorFactor", [1, 1, 1, 1])[:3])
+            rgb = np.round(255 * np.where(lin <= 0.0031308, lin * 12.92, 1.055 * lin ** (1 / 2.4) - 0.055))
+        return np.array([*[int(v) for v in rgb], int(round(255 * alpha))], dtype=np.uint8)
+
+    nodes = doc["nodes"]
+    out = []
+    for ci in root.get("children", []):
+        node = nodes[ci]
+        name = str(node.get("name", f"node{ci}"))
+        members = [(name, node)] if "mesh" in node else []
+        members += [(str(nodes[k].get("name", f"node{k}")), nodes[k]) for k in node.get("children", [])
+                    if "mesh" in nodes[k]]
+        pos_offset: dict[int, int] = {}
+        verts, faces, colors, labels_of, label_names = [], [], [], [], []
+        for gname, gnode in members:
+            label = len(label_names)
+            label_names.append(gname)
+            for prim in doc["meshes"][gnode["mesh"]]["primitives"]:
+                if prim.get("mode", 4) != 4:
+                    continue
+                pa = prim["attributes"]["POSITION"]
+                if pa not in pos_offset:
+                    pos_offset[pa] = sum(len(v) for v in verts)
+                    verts.append(accessor(pa).astype(np.float64))
+                idx = accessor(prim["indices"]).reshape(-1, 3).astype(np.int64) if "indices" in prim \
+                    else np.arange(len(accessor(pa)), dtype=np.int64).reshape(-1, 3)
+                faces.append(idx + pos_offset[pa])
+                colors.append(np.tile(colour(prim.get("material")), (len(idx), 1)))
+                labels_of.append(np.full(len(idx), label, dtype=np.int64))
+        if not faces:
+            continue
+        extras = dict(node.get("extras") or {})
+        out.append(GltfSolid(name, _node_matrix(node), np.concatenate(verts), np.concatenate(faces),
+                             np.concatenate(colors), np.concatenate(labels_of), label_names, extras))
+    if not out:
+        raise ShapeError(f"{path}: the file contains no triangle meshes")
+    return out
+
+
+def _scene_of_solids(solids: list[GltfSolid]) -> trimesh.Scene:
+    scene = trimesh.Scene()
+    for s in solids:
+        # only the referenced vertices (a solid's accessor may be shared by instanced parts)
+        used, inv = np.unique(s.faces, return_inverse=True)
+        mesh = trimesh.Trimesh(s.vertices[used], inv.reshape(-1, 3), process=False,
+                               face_colors=s.face_colors, metadata={"labels": list(s.labels)})
+        mesh.face_attributes["label"] = s.face_labels
+        scene.add_geometry(mesh, node_name=s.name, geom_name=s.name, transform=s.matrix,
+                           metadata=s.extras or None)
+    return scene
+
+
+def face_labels(path: str | Path) -> list[str]:
+    """The label (terminal name, or part id) of every face of a grammarkit GLB/glTF, in the
+    order of `load_mesh(path, single=True).faces`."""
+    path = Path(path)
+    if not path.is_file():
+        raise ShapeError(f"{path}: mesh file not found")
+    solids = read_gltf_solids(path)
+    if solids is None:
+        raise ShapeError(f"{path}: not a GLB/glTF written by grammarkit (format 2); no face labels")
+    out: list[str] = []
+    for s in solids:
+        out.extend(s.labels[i] for i in s.face_labels.tolist())
+    return out
+
+
 def load_mesh(path: str | Path, *, weld_vertices: bool = True,
               single: bool = False) -> trimesh.Trimesh | trimesh.Scene:
     """Read a mesh file: a Trimesh for single-mesh formats (STL, PLY, OFF), a Scene for GLB,
@@ -172,8 +399,11 @@ def load_mesh(path: str | Path, *, weld_vertices: bool = True,
                          f"expected one of {', '.join(MESH_SUFFIXES)}")
     if path.stat().st_size == 0:
         raise ShapeError(f"{path}: the file is empty")
-    if suffix == ".obj":
-        loaded: trimesh.Trimesh | trimesh.Scene = _load_obj(path)
+    solids = read_gltf_solids(path) if suffix in (".glb", ".gltf") else None
+    if solids is not None:
+        loaded: trimesh.Trimesh | trimesh.Scene = _scene_of_solids(solids)
+    elif suffix == ".obj":
+        loaded = _load_obj(path)
     else:
         try:
             loaded = trimesh.load(str(path), file_type=suffix[1:], process=False, force=None)

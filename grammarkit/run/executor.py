@@ -38,6 +38,7 @@ import threading
 import time
 import traceback
 from collections import deque
+from contextlib import contextmanager
 from typing import Any, Callable, Iterable, Iterator, Protocol, Sequence
 
 __all__ = ["Executor", "LocalExecutor", "Session", "WorkerError", "default_workers", "make_executor"]
@@ -145,12 +146,30 @@ def _worker_main(conn: Any) -> None:  # pragma: no cover - runs in the child pro
                 return
 
 
+@contextmanager
+def _main_without_phantom_file() -> Iterator[None]:
+    """Spawned children re-import the parent's main script from `__main__.__file__`. Code run
+    from standard input or a notebook has a `__file__` that is no file ('<stdin>'), and the
+    child would die looking for it: hide it while starting (the work never lives in it)."""
+    main = sys.modules.get("__main__")
+    path = getattr(main, "__file__", None)
+    if path is None or os.path.isfile(path):
+        yield
+        return
+    del main.__file__  # type: ignore[union-attr]
+    try:
+        yield
+    finally:
+        main.__file__ = path  # type: ignore[union-attr]
+
+
 class _Worker:
     def __init__(self) -> None:
         ctx = mp.get_context("spawn")  # fork deadlocks in manifold3d's TBB thread pool
         self.conn, child = ctx.Pipe()
         self.proc = ctx.Process(target=_worker_main, args=(child,), daemon=True)
-        self.proc.start()
+        with _main_without_phantom_file():
+            self.proc.start()
         child.close()
         self.ready = False
         self.sessions: set[int] = set()
@@ -325,12 +344,24 @@ class _LocalSession:
                         results[pos] = (False, exc)
                     self._poll_ready(timeout=0)
                     continue
+                if not self.workers:  # none could start: the rest runs here, in order
+                    while pending:
+                        pos, item = pending.popleft()
+                        try:
+                            results[pos] = (True, fn(self.state, item))
+                        except Exception as exc:  # noqa: BLE001 - raised in order below
+                            results[pos] = (False, exc)
+                            break
+                    continue
                 conns = list(out) + [w.conn for w in self.workers if not w.ready]
                 for conn in wait(conns, timeout=1.0):
                     w = next(x for x in self.workers if x.conn is conn)
                     try:
                         msg = conn.recv()
                     except (EOFError, OSError):
+                        if not w.ready:
+                            self._failed_start(w)
+                            continue
                         raise WorkerError("a worker process died (out of memory?); "
                                           "try fewer workers") from None
                     self._handle(w, msg, out, results)
@@ -353,8 +384,23 @@ class _LocalSession:
             try:
                 msg = conn.recv()
             except (EOFError, OSError):
-                raise WorkerError("a worker process died while starting") from None
+                self._failed_start(w)
+                continue
             self._handle(w, msg, {}, {})
+
+    def _failed_start(self, w: _Worker) -> None:
+        """A worker died before it was ready (e.g. a main script without the
+        `if __name__ == "__main__":` guard re-ran itself in it): the work goes on without it,
+        here if need be; results are the same either way."""
+        import warnings
+
+        self.workers.remove(w)
+        _release([w], broken=True)
+        if not self.workers:
+            self.local_only = True
+            warnings.warn("grammarkit: worker processes could not start; continuing in this "
+                          "process (a script that starts parallel work needs an "
+                          "`if __name__ == \"__main__\":` guard)", RuntimeWarning, stacklevel=4)
 
     def _handle(self, w: _Worker, msg: tuple, out: dict, results: dict) -> None:
         if msg[0] == "ready":

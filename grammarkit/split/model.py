@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import json
+import os
 from dataclasses import dataclass, field
 from functools import cached_property
 from typing import Any
@@ -17,6 +18,8 @@ Manifold = manifold3d.Manifold
 
 DEFAULT_COLOR = "#b8b4ac"
 CUT_COLOR = "#3a4450"
+# the group name of triangles no terminal claims (none in practice; kept so that every face has a label)
+UNTAGGED = "untagged"
 
 __all__ = ["Model", "Part", "TreeNode", "compose"]
 
@@ -133,7 +136,11 @@ class Model:
     - `parts`: the terminals with their tags (rule, object type, colour, material) and scopes
     - `tree` / `tree_dict()`: the derivation tree
     - `triangle_tags`: for every triangle, the index into `tags` of what it came from
-    - `to_scene()`: a trimesh.Scene for the exporters
+    - `save(path, format=None)`: write through the exporter registry (GLB: +Y up, a PBR material
+      per (material, colour), a node per terminal name; docs/derive.md "Files")
+    - `face_labels()`: the terminal name of every triangle; `export_scene()`: what exporters get
+    - `to_scene()`: a trimesh.Scene (one node with face colours)
+    - `_repr_png_()`: a picture for Jupyter
     """
 
     def __init__(self, name: str, seed: int, attrs: dict[str, Any], ctx: Derivation, manifold: Any,
@@ -181,10 +188,11 @@ class Model:
 
     def _paint_faces(self, out: np.ndarray) -> None:
         """Face terminals have no volume: they colour the body triangles lying in their region."""
-        faces = [f for f in self._ctx.faces if self.tags[f[0]].color or self.tags[f[0]].material]
+        raw = self._ctx.tags  # plain lists [name, rule, otype, color, material, node, role]
+        faces = [f for f in self._ctx.faces if raw[f[0]][3] or raw[f[0]][4]]
         if not faces:
             return
-        is_body = np.array([t.role == "body" for t in self.tags] + [False], dtype=bool)
+        is_body = np.array([t[6] == "body" for t in raw] + [False], dtype=bool)
         idx = np.nonzero(is_body[out])[0]
         if len(idx) == 0:
             return
@@ -197,39 +205,44 @@ class Model:
         ok = ln > 1e-12
         nrm[ok] /= ln[ok, None]
         tol = 2 * WELD
-        # Group faces by plane and in-plane axes: one triangle selection per facade plane, then a
-        # (faces x triangles) rectangle test with numpy broadcasting.
-        groups: dict[tuple, list] = {}
-        for f in faces:
-            _, o, ax, _, _ = f
-            ez = ax[2]
-            key = (tuple(round(v, 6) for v in ax[0]), tuple(round(v, 6) for v in ez),
-                   round(o[0] * ez[0] + o[1] * ez[1] + o[2] * ez[2], 5))
-            groups.setdefault(key, []).append(f)
-        for members in groups.values():
-            _, o, ax, _, _ = members[0]
-            ex, ey, ez = (np.asarray(v) for v in ax)
-            d = cen - np.asarray(o)
+        # Group faces by plane and in-plane axes (vectorised: one key row per face), then per
+        # facade plane one triangle selection and a (faces x triangles) rectangle test.
+        O = np.array([f[1] for f in faces], dtype=np.float64)
+        AX = np.array([f[2] for f in faces], dtype=np.float64)
+        SZ = np.array([f[3][:2] for f in faces], dtype=np.float64)
+        TAG = np.array([f[0] for f in faces], dtype=np.int64)
+        keys = np.column_stack([np.round(AX[:, 0], 6), np.round(AX[:, 2], 6),
+                                np.round(np.einsum("ij,ij->i", O, AX[:, 2]), 5)])
+        _, first, gid = np.unique(keys, axis=0, return_index=True, return_inverse=True)
+        gid = gid.reshape(-1)
+        order = np.argsort(gid, kind="stable")  # members of a group in face order
+        bounds = np.searchsorted(gid[order], np.arange(len(first) + 1))
+        for g in np.argsort(first, kind="stable").tolist():  # groups in order of first appearance
+            members = order[bounds[g]:bounds[g + 1]]
+            m0 = members[0]
+            o0 = O[m0]
+            ex, ey, ez = AX[m0]
+            d = cen - o0
             m = (np.abs(d @ ez) < 4 * WELD) & (nrm @ ez > 0.99)
             if not m.any():
                 continue
             rows = np.nonzero(m)[0]
             U, W = d[rows] @ ex, d[rows] @ ey
-            o0 = np.asarray(o)
-            starts = np.array([[(np.asarray(f[1]) - o0) @ ex, (np.asarray(f[1]) - o0) @ ey] for f in members])
-            sizes = np.array([[f[3][0], f[3][1]] for f in members])
+            rel = O[members] - o0
+            starts = np.column_stack([rel @ ex, rel @ ey])
+            sizes = SZ[members]
             inside = ((U[None, :] > starts[:, :1] - tol) & (U[None, :] < starts[:, :1] + sizes[:, :1] + tol)
                       & (W[None, :] > starts[:, 1:] - tol) & (W[None, :] < starts[:, 1:] + sizes[:, 1:] + tol))
-            for k, f in enumerate(members):
-                if f[4] is not None and inside[k].any():
+            for k, fi in enumerate(members.tolist()):
+                poly = faces[fi][4]
+                if poly is not None and inside[k].any():
                     cols = np.nonzero(inside[k])[0]
-                    inside[k, cols] = _in_contours(U[cols] - starts[k, 0], W[cols] - starts[k, 1], f[4])
+                    inside[k, cols] = _in_contours(U[cols] - starts[k, 0], W[cols] - starts[k, 1], poly)
             hit = inside.any(axis=0)
             if not hit.any():
                 continue
             last = len(members) - 1 - np.argmax(inside[::-1], axis=0)  # the latest face wins
-            tags = np.array([f[0] for f in members])
-            out[idx[rows[hit]]] = tags[last[hit]]
+            out[idx[rows[hit]]] = TAG[members][last[hit]]
 
     @cached_property
     def mesh(self) -> Any:
@@ -288,6 +301,102 @@ class Model:
 
     def tree_json(self, indent: int | None = None) -> str:
         return json.dumps(self.tree_dict(), indent=indent)
+
+    def face_labels(self) -> list[str]:
+        """The terminal name of every triangle (what the GLB groups nodes by), e.g. for a
+        segmentation data set: `model.face_labels()[i]` labels `model.faces[i]`."""
+        names = [t.name for t in self.tags] + [UNTAGGED]
+        return [names[i] for i in self.triangle_tags.tolist()]
+
+    def export_scene(self) -> Any:
+        """The building for the exporters (`grammarkit.geometry.exporters.Scene`): one solid,
+        its triangles grouped by terminal name, a material per (material name, colour), and
+        per group the rules, source lines and semantic tags (docs/derive.md, "Files")."""
+        from ..geometry.exporters import Material, Scene, Solid
+
+        raw = self._ctx.tags  # plain lists [name, rule, otype, color, material, node, role]
+        nodes = self._ctx.nodes
+        group_of_name: dict[str, int] = {}
+        material_index: dict[Material, int] = {}
+        materials: list[Material] = []
+        info: list[dict] = []
+        # Tags repeat (every window of a facade has its own): work on distinct ones only.
+        kind_of: dict[tuple, int] = {}
+        tag_kind = np.empty(len(raw) + 1, dtype=np.int64)
+        for i, t in enumerate(raw):
+            span = nodes[t[5]][7] if 0 <= t[5] < len(nodes) else None
+            key = (t[0], t[1], t[2], t[3], t[4], t[6], span.file if span else None, span.line if span else None)
+            k = kind_of.get(key)
+            if k is None:
+                k = kind_of[key] = len(kind_of)
+            tag_kind[i] = k
+        untagged = (UNTAGGED, None, None, None, None, "untagged", None, None)
+        tag_kind[-1] = kind_of.setdefault(untagged, len(kind_of))
+        kind_group = np.empty(len(kind_of), dtype=np.int64)
+        kind_material = np.empty(len(kind_of), dtype=np.int64)
+        for (name, rule, otype, color, mat_name, role, file, line), k in kind_of.items():
+            rgba = _rgba(color, CUT_COLOR if role == "cut" else DEFAULT_COLOR)
+            g = group_of_name.get(name)
+            if g is None:
+                g = group_of_name[name] = len(info)
+                info.append({"terminal": name, "rules": set(), "sources": set(), "object_types": set(),
+                             "roles": set(), "materials": set()})
+            mat = Material(mat_name, rgba)
+            m = material_index.get(mat)
+            if m is None:
+                m = material_index[mat] = len(materials)
+                materials.append(mat)
+            kind_group[k], kind_material[k] = g, m
+            if rule is not None:
+                d = info[g]
+                d["rules"].add(rule)
+                d["roles"].add(role)
+                d["materials"].add(mat.label)
+                if otype:
+                    d["object_types"].add(otype)
+                if line:
+                    d["sources"].add(f"{os.path.basename(file or self.name)}:{line}")
+        tag_group, tag_material = kind_group[tag_kind], kind_material[tag_kind]
+        tri_tags = self.triangle_tags  # -1 (untagged) picks the entry appended last
+        face_group = tag_group[tri_tags]
+        groups = []
+        for d in info:
+            extras = {k: (sorted(v) if isinstance(v, set) else v) for k, v in d.items()}
+            groups.append((d["terminal"], extras))
+        counts = np.bincount(face_group, minlength=len(groups))
+        for g, (_name, extras) in enumerate(groups):
+            extras["triangles"] = int(counts[g])
+        name = self.name or "building"
+        solid = Solid(name, self.vertices, self.faces, face_group, groups, tag_material[tri_tags], materials,
+                      extras={"grammar": self.name, "seed": self.seed})
+        extras = {"grammar": self.name, "seed": self.seed,
+                  "attrs": {k: v for k, v in self.attrs.items() if isinstance(v, (int, float, str, bool))},
+                  "bindings": dict(self.bindings),
+                  "materials": sorted({t[4] for t in raw if t[4]})}
+        return Scene(name, [solid], extras)
+
+    def save(self, path: Any, format: str | None = None) -> Any:
+        """Write the model through grammarkit's exporters (format from `format` or the suffix:
+        glb, gltf, obj, stl, ply), atomically; returns the path. Colours, materials, terminal
+        groups and attrs are kept (see docs/derive.md, "Files")."""
+        from pathlib import Path
+
+        from ..geometry.exporters import encode_with, exporter_for
+        from ..run.writer import write_files
+
+        path = Path(path)
+        write_files({path: encode_with(exporter_for(path, format), self)})
+        return path
+
+    def _repr_png_(self) -> bytes:
+        """A shaded picture for Jupyter (grammarkit's CPU renderer, default camera)."""
+        import io
+
+        from ..geometry.render import render
+
+        buf = io.BytesIO()
+        render(self, style="shaded+lines", size=(480, 480)).save(buf, format="PNG")
+        return buf.getvalue()
 
     def to_scene(self) -> Any:
         """A trimesh.Scene with the building as one node whose extras carry the model facts."""

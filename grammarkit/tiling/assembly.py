@@ -65,6 +65,16 @@ class Assembly:
         lo, hi = self.bounds
         return float(np.linalg.norm(hi - lo))
 
+    def _repr_png_(self) -> bytes:
+        """A shaded picture for Jupyter (grammarkit's CPU renderer, default camera)."""
+        import io
+
+        from ..geometry.render import render
+
+        buf = io.BytesIO()
+        render(self, style="shaded+lines", size=(480, 480)).save(buf, format="PNG")
+        return buf.getvalue()
+
     def type_histogram(self) -> dict[str, int]:
         hist: dict[str, int] = {}
         for p in self.parts:

@@ -163,6 +163,21 @@ def _open_parts(parts: list[Part]) -> list[str]:
 
 
 def _read_gltf(path: Path) -> list[Part]:
+    from ..geometry.meshio import read_gltf_solids
+
+    solids = read_gltf_solids(path)  # grammarkit's own layout (format 2), in the Z-up frame
+    if solids is not None:
+        parts = []
+        for s in solids:
+            ptype = s.extras.get("type") if isinstance(s.extras, dict) else None
+            ptype = str(ptype) if ptype else type_from_name(s.name)
+            used, inv = np.unique(s.faces, return_inverse=True)
+            mesh = trimesh.Trimesh(s.vertices[used], inv.reshape(-1, 3), process=False)
+            check_part_mesh(mesh, f"{path}: part {s.name!r}")
+            mesh.apply_transform(s.matrix)
+            meta = {"source": str(path)}
+            parts.append(Part(s.name, ptype, mesh, s.matrix.copy(), meta))
+        return parts
     try:
         scene = trimesh.load(str(path), force="scene")
     except Exception as exc:  # noqa: BLE001 - any parser failure means "not a mesh file"
@@ -213,14 +228,25 @@ def _gltf_node_extras(path: Path) -> dict[str, dict]:
 
 def _read_obj(path: Path) -> list[Part]:
     """A small OBJ reader that keeps `o`/`g` groups as parts and reports file:line on errors."""
+    from ..geometry.meshio import weld
+
     try:
         text = path.read_text(encoding="utf-8")
     except UnicodeDecodeError:
         raise ShapeError(f"{path}: not a mesh file (binary data in an .obj file)") from None
     verts: list[tuple[float, float, float]] = []
     groups: dict[str, list[list[int]]] = {}
+    group_types: dict[str, str] = {}
     current = path.stem
     for lineno, line in enumerate(text.splitlines(), 1):
+        if line.startswith("# extras "):  # grammarkit's OBJ writer: the part's type and id
+            try:
+                extras = json.loads(line[len("# extras "):])
+            except ValueError:
+                extras = {}
+            if isinstance(extras, dict) and extras.get("type"):
+                group_types[current] = str(extras["type"])
+            continue
         fields = line.split()
         if not fields or fields[0].startswith("#"):
             continue
@@ -253,8 +279,12 @@ def _read_obj(path: Path) -> list[Part]:
     for name, tris in groups.items():
         F = np.asarray(tris, dtype=np.int64)
         used, inverse = np.unique(F, return_inverse=True)
+        # OBJ writers (grammarkit's included) repeat vertices at colour seams: weld by position
         mesh = trimesh.Trimesh(V[used], inverse.reshape(-1, 3), process=False)
-        parts.append(Part(name, type_from_name(name), mesh, np.eye(4), {"source": str(path)}))
+        if np.isfinite(mesh.vertices).all():  # NaN is reported by finish_assembly, naming the part
+            mesh = weld(mesh)
+        parts.append(Part(name, group_types.get(name) or type_from_name(name), mesh, np.eye(4),
+                          {"source": str(path)}))
     return parts
 
 
@@ -306,61 +336,28 @@ def _read_folder(path: Path) -> list[Part]:
 # writing
 # --------------------------------------------------------------------------------------------
 def write_assembly(assembly: Assembly, path: str | os.PathLike) -> Path:
-    """Write `assembly` as GLB/glTF/OBJ (by suffix) or, for a path without suffix, a folder of
-    GLB part files. Files are written atomically (temporary file, then rename)."""
+    """Write `assembly` as GLB/glTF/OBJ/STL/PLY (by suffix) or, for a path without suffix, a
+    folder of GLB part files, through the exporter registry (grammarkit.geometry.exporters: one
+    node per part with its type in the extras, a colour per part type, +Y up) and the one
+    atomic writer (grammarkit.run.writer.write_files)."""
+    from ..geometry.exporters import encode_with, exporter_for
+    from ..run.writer import write_files
+
     path = Path(path)
     if not assembly.parts:
         raise ShapeError(f"{path}: refusing to write an empty assembly")
-    suffix = path.suffix.lower()
-    if suffix in (".glb", ".gltf"):
-        data = _scene_of(assembly).export(file_type=suffix[1:])
-        if isinstance(data, dict):  # .gltf export returns {name: bytes}; embed buffers instead
-            data = trimesh.exchange.gltf.export_gltf(_scene_of(assembly), embed_buffers=True)["model.gltf"]
-        _atomic_write(path, data if isinstance(data, bytes) else data.encode())
-    elif suffix == ".obj":
-        _atomic_write(path, _obj_text(assembly).encode())
-    elif suffix == "":
-        path.mkdir(parents=True, exist_ok=True)
-        for p in assembly.parts:
-            sub = Assembly([p], name=p.id)
-            _atomic_write(path / f"{p.id}.glb", _scene_of(sub).export(file_type="glb"))
+    if path.suffix == "":
+        spec = exporter_for("part.glb")
+        files = {path / f"{p.id}.glb": encode_with(spec, Assembly([p], name=p.id)) for p in assembly.parts}
     else:
-        raise ShapeError(f"{path}: cannot write assemblies as {suffix!r} (use .glb, .gltf, .obj or a folder)")
+        try:
+            spec = exporter_for(path)
+        except ShapeError:
+            raise ShapeError(f"{path}: cannot write assemblies as {path.suffix!r} (use .glb, .gltf, .obj, "
+                             ".stl, .ply or a folder)") from None
+        files = {path: encode_with(spec, assembly)}
+    write_files(files)
     return path
-
-
-def _scene_of(assembly: Assembly) -> trimesh.Scene:
-    scene = trimesh.Scene()
-    shared: dict[bytes, str] = {}
-    for p in assembly.parts:
-        T = np.asarray(p.transform, dtype=np.float64)
-        if not np.isfinite(T).all() or abs(np.linalg.det(T[:3, :3])) < 1e-12:
-            T = np.eye(4)
-        local = np.asarray(p.mesh.vertices) @ np.linalg.inv(T)[:3, :3].T + np.linalg.inv(T)[:3, 3]
-        faces = np.asarray(p.mesh.faces)
-        key = np.round(local, 6).tobytes() + faces.astype(np.int64).tobytes()
-        extras = {"type": p.type}
-        if key in shared:
-            scene.graph.update(frame_to=p.id, frame_from=scene.graph.base_frame, matrix=T,
-                               geometry=shared[key], metadata=extras)
-        else:
-            geom_name = f"{p.type}.mesh{len(shared)}"
-            shared[key] = geom_name
-            scene.add_geometry(trimesh.Trimesh(local, faces, process=False), geom_name=geom_name,
-                               node_name=p.id, transform=T, metadata=extras)
-    return scene
-
-
-def _obj_text(assembly: Assembly) -> str:
-    out = [f"# grammarkit assembly {assembly.name}: one object per part, named Type.N"]
-    base = 1
-    for p in assembly.parts:
-        name = p.id if type_from_name(p.id) == p.type else f"{p.type}.{p.id}"
-        out.append(f"o {name}")
-        out.extend(f"v {x:.9g} {y:.9g} {z:.9g}" for x, y, z in np.asarray(p.mesh.vertices))
-        out.extend(f"f {a + base} {b + base} {c + base}" for a, b, c in np.asarray(p.mesh.faces))
-        base += len(p.mesh.vertices)
-    return "\n".join(out) + "\n"
 
 
 def _atomic_write(path: Path, data: bytes) -> None:

@@ -51,10 +51,10 @@ def test_neighbouring_recesses_leave_no_sliver_walls():
 
 
 @pytest.mark.parametrize("name", ["paris", "lshape"])
-@pytest.mark.parametrize("fmt", ["glb", "stl"])
+@pytest.mark.parametrize("fmt", ["glb", "gltf", "obj", "stl", "ply"])
 def test_example_files_read_back_watertight(tmp_path, name, fmt):
     m = grammarkit.derive(GRAMMARS / f"{name}.grammar", seed=0)
-    path = export(m.to_scene(), tmp_path / f"{name}.{fmt}", fmt)
+    path = m.save(tmp_path / f"{name}.{fmt}")
     rep = mesh_report(load_mesh(path))
     assert rep.ok, f"{name}.{fmt}: {rep}"
     assert math.isclose(rep.volume, m.manifold.volume(), rel_tol=1e-4)

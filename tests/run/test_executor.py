@@ -157,3 +157,33 @@ class _Unpicklable(Exception):
 
 def raise_unpicklable(state, item):
     raise _Unpicklable("no pickle", 2)
+
+
+def test_code_from_standard_input_can_start_workers():
+    code = textwrap.dedent(f"""
+        import sys
+        sys.path.insert(0, {str(os.path.dirname(__file__))!r})
+        from test_executor import make_state, compute
+        from grammarkit.run.executor import LocalExecutor
+        with LocalExecutor(2, parallel="always").session(make_state, 2) as s:
+            print([r[0] for r in s.map(compute, range(6))])
+    """)
+    r = subprocess.run([sys.executable, "-"], input=code, capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0, r.stderr
+    assert r.stdout.strip() == "[0, 2, 4, 6, 8, 10]"
+
+
+def test_a_script_without_main_guard_still_finishes(tmp_path):
+    script = tmp_path / "noguard.py"
+    script.write_text(textwrap.dedent(f"""
+        import sys
+        sys.path.insert(0, {str(os.path.dirname(__file__))!r})
+        from test_executor import make_state, compute
+        from grammarkit.run.executor import LocalExecutor
+        with LocalExecutor(2, parallel="always").session(make_state, 2) as s:
+            print([r[0] for r in s.map(compute, range(6))])
+    """))
+    r = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, timeout=180)
+    assert r.returncode == 0, r.stderr
+    assert r.stdout.strip().splitlines()[-1] == "[0, 2, 4, 6, 8, 10]"
+    assert "could not start" in r.stderr

@@ -1,0 +1,104 @@
+"""Khronos' glTF validator (npm `gltf-validator`, run under node) reports no errors, warnings,
+infos or hints on the GLB and glTF files grammarkit writes for every example grammar and for a
+tiling assembly, and the files carry what docs/derive.md promises (root rotation, linear PBR
+materials, a node per terminal with extras)."""
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import grammarkit
+from grammarkit.dsl import load
+from grammarkit.geometry.exporters import Z_UP_TO_Y_UP, srgb_to_linear
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "js"))
+from _node import JS_DIR, ROOT, node_or_skip, package_or_skip  # noqa: E402
+
+GRAMMARS = ROOT / "grammars"
+EXAMPLES = sorted(p for p in GRAMMARS.glob("*.grammar") if load(p).rules)
+
+
+def _validate(files: list[Path]) -> dict[str, dict]:
+    node = node_or_skip()
+    package_or_skip("gltf-validator")
+    proc = subprocess.run([node, str(JS_DIR / "validate.mjs"), *map(str, files)], capture_output=True,
+                          text=True, timeout=300, cwd=JS_DIR)
+    assert proc.returncode == 0, proc.stderr
+    reports = [json.loads(line) for line in proc.stdout.splitlines() if line.strip()]
+    return {r["file"]: r for r in reports}
+
+
+def _glb_json(path: Path) -> dict:
+    data = path.read_bytes()
+    length = int.from_bytes(data[12:16], "little")
+    return json.loads(data[20:20 + length])
+
+
+@pytest.fixture(scope="module")
+def written(tmp_path_factory):
+    out = tmp_path_factory.mktemp("gltf")
+    files = []
+    for path in EXAMPLES:
+        m = grammarkit.derive(path, seed=0)
+        files += [m.save(out / f"{path.stem}.glb"), m.save(out / f"{path.stem}.gltf")]
+    from grammarkit.tiling import load_examples, write_assembly
+
+    tiling = grammarkit.parse(GRAMMARS / "tiling" / "castle" / "castle.grammar") \
+        if (GRAMMARS / "tiling" / "castle" / "castle.grammar").exists() else None
+    if tiling is not None:
+        asm = load_examples(tiling)[0]
+        files += [write_assembly(asm, out / "castle_example.glb"), write_assembly(asm, out / "castle_example.gltf")]
+    return files
+
+
+def test_validator_reports_nothing(written):
+    reports = _validate(written)
+    assert set(reports) == {str(f) for f in written}
+    for f, r in reports.items():
+        assert (r["errors"], r["warnings"], r["infos"], r["hints"]) == (0, 0, 0, 0), \
+            f"{f}: {json.dumps(r['messages'], indent=1)}"
+
+
+def test_the_validator_does_catch_a_broken_file(tmp_path, written):
+    # the check can fail: a GLB whose accessor points past its buffer view is reported
+    src = next(f for f in written if f.suffix == ".gltf")
+    doc = json.loads(src.read_text())
+    doc["accessors"][0]["count"] += 10
+    bad = tmp_path / "bad.gltf"
+    bad.write_text(json.dumps(doc))
+    (report,) = _validate([bad]).values()
+    assert report["errors"] > 0
+
+
+def test_layout_root_rotation_materials_and_terminal_nodes(written):
+    paris = next(f for f in written if f.name == "paris.glb")
+    doc = _glb_json(paris)
+    root = doc["nodes"][doc["scenes"][0]["nodes"][0]]
+    assert np.allclose(root["rotation"], Z_UP_TO_Y_UP)
+    assert root["extras"]["grammarkit"]["up"] == "+Z"
+    names = [m["name"] for m in doc["materials"]]
+    assert len(set(names)) == len(names)  # one material per (name, colour), each named
+    assert "zinc" in names and any(n.startswith("glass") for n in names)
+    assert {m["extras"].get("material") for m in doc["materials"]} >= {"glass", "zinc", "limestone"}
+    for m in doc["materials"]:
+        pbr = m["pbrMetallicRoughness"]
+        assert pbr["metallicFactor"] == 0.0 and 0.0 < pbr["roughnessFactor"] <= 1.0
+        srgb = m["extras"]["srgb"]
+        expected = srgb_to_linear(np.array([int(srgb[k:k + 2], 16) for k in (1, 3, 5)]) / 255.0)
+        assert np.allclose(pbr["baseColorFactor"][:3], expected, atol=1e-6)
+    assert not any("COLOR_0" in p["attributes"] for mesh in doc["meshes"] for p in mesh["primitives"])
+    (building,) = [doc["nodes"][i] for i in root["children"]]
+    groups = {doc["nodes"][i]["name"]: doc["nodes"][i]["extras"] for i in building["children"]}
+    model = grammarkit.derive(GRAMMARS / "paris.grammar", seed=0)
+    assert set(groups) == set(model.face_labels())
+    glass = next(e for e in groups.values() if "glass" in e["materials"])
+    assert glass["rules"] and all(":" in s for s in glass["sources"]) and glass["roles"]
+    # one POSITION accessor for the whole building: it is stored closed
+    positions = {p["attributes"]["POSITION"] for i in building["children"]
+                 for p in doc["meshes"][doc["nodes"][i]["mesh"]]["primitives"]}
+    assert len(positions) == 1
