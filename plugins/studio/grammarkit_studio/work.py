@@ -217,6 +217,7 @@ class Work:
                variation: int | None = None) -> dict:
         """The model of the text (split: derived with attrs and seed, or variation `variation`
         of the seed; tiling: example `example`) as GLB bytes plus facts about it."""
+        t_in = time.perf_counter()
         a = self.analysis(text)
         if not a.ok:
             return {"ok": False, "check": a.summary()}
@@ -250,7 +251,9 @@ class Work:
         t2 = time.perf_counter()
         self.model, self.model_kind, self._parents, self._tree = model, kind, None, None
         facts.update(kind=kind, derive_ms=round(1000 * (t1 - t0), 1), export_ms=round(1000 * (t2 - t1), 1))
-        return {"ok": True, "glb": glb, "facts": _jsonable(facts), "check": a.summary()}
+        out = {"ok": True, "glb": glb, "facts": _jsonable(facts), "check": a.summary()}
+        out["facts"]["work_ms"] = round(1000 * (time.perf_counter() - t_in), 1)
+        return out
 
     def export(self, fmt: str) -> dict:
         fmt = str(fmt).lower()

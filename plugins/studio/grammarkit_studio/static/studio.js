@@ -313,7 +313,7 @@ function onBinary(buffer) {
       const t0 = S.sent.get(h.rev);
       if (t0 !== undefined) {
         const ms = performance.now() - t0;
-        S.latencies.push([h.rev, ms, h.facts.server_ms, S.timing.parse_ms, S.timing.render_ms, h.facts.derive_ms, h.facts.export_ms]);
+        S.latencies.push([h.rev, ms, h.facts.server_ms, S.timing.parse_ms, S.timing.render_ms, h.facts.derive_ms, h.facts.export_ms, h.facts.work_ms]);
         for (const r of [...S.sent.keys()]) if (r <= h.rev) S.sent.delete(r);
         showFacts(h.facts, ms);
       }
@@ -342,7 +342,10 @@ function onJSON(m) {
       S.lastCheckRev = m.rev;
       S.lastCheck = m;
       S.family = m.family || S.family;
-      showDiagnostics(m.diagnostics || []);
+      {
+        const key = JSON.stringify(m.diagnostics || []);
+        if (key !== S.diagKey) { S.diagKey = key; showDiagnostics(m.diagnostics || []); } // slider edits: unchanged
+      }
       if (m.ok) updateSliders(m.sliders || []);
       if (m.ok) requestBackends();
       if (!m.ok) status(`${(m.diagnostics || []).filter((d) => d.severity === "error").length} error(s): the last good model is shown`);
@@ -397,7 +400,7 @@ function setError(m) {
   el.textContent = (m.message || "failed") + "\n(the last good model is shown)";
   el.hidden = false;
   S.errors.push(m.message);
-  if (m.diagnostics && m.diagnostics.length) showDiagnostics(m.diagnostics);
+  if (m.diagnostics && m.diagnostics.length) { S.diagKey = null; showDiagnostics(m.diagnostics); }
 }
 
 function sendEdit() {
