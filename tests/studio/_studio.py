@@ -87,8 +87,15 @@ def open_page(browser, url: str):
 
 
 def screenshot(page, name: str, tmp: Path, **kwargs) -> Path:
+    """A screenshot of the page as docs/studio.md shows it: a 128-colour PNG (small enough to
+    commit), into GRAMMARKIT_STUDIO_SCREENSHOTS when set, else the test's temporary folder."""
+    import io
+
+    from PIL import Image
+
     folder = Path(SCREENSHOTS) if SCREENSHOTS else tmp
     folder.mkdir(parents=True, exist_ok=True)
     path = folder / f"studio_{name}.png"
-    page.screenshot(path=str(path), **kwargs)
+    image = Image.open(io.BytesIO(page.screenshot(**kwargs))).convert("RGB")
+    image.quantize(colors=128, method=Image.Quantize.MEDIANCUT).save(path, optimize=True)
     return path
