@@ -43,7 +43,7 @@ let cm = null;
 let marks = [];
 function makeEditor(text) {
   cm = CodeMirror($("editor"), {
-    value: text, mode: "grammarkit", theme: "gk", lineNumbers: true, indentUnit: 2, tabSize: 2,
+    value: text, mode: "grammarkit", theme: "gk", lineNumbers: true, lineWrapping: true, indentUnit: 2, tabSize: 2,
     gutters: ["gk-diagnostics", "CodeMirror-linenumbers"], extraKeys: {
       "Ctrl-S": () => save(false), "Cmd-S": () => save(false),
       Tab: (c) => c.replaceSelection("  "),
@@ -163,9 +163,10 @@ function frameModel(object) {
   const box = new THREE.Box3().setFromObject(object);
   if (box.isEmpty()) return;
   const size = box.getSize(new THREE.Vector3()), center = box.getCenter(new THREE.Vector3());
-  const r = Math.max(size.x, size.y, size.z);
+  const r = Math.max(0.5 * size.length(), 1e-3); // bounding sphere radius
+  const dist = (1.15 * r) / Math.sin((camera.fov * Math.PI) / 360) / Math.min(1, camera.aspect);
   controls.target.copy(center);
-  camera.position.copy(center).add(new THREE.Vector3(0.9 * r, 0.55 * r, 1.25 * r));
+  camera.position.copy(center).add(new THREE.Vector3(0.55, 0.35, 0.76).normalize().multiplyScalar(dist));
   camera.near = r / 500; camera.far = r * 50;
   camera.updateProjectionMatrix();
   controls.update();
@@ -512,7 +513,11 @@ function selectNode(id, from3dToo) {
   S.selectedNode = id;
   for (const el of $("tree").querySelectorAll(".node.selected")) el.classList.remove("selected");
   const row = $("tree").querySelector(`.node[data-id="${id}"]`);
-  if (row) { row.classList.add("selected"); row.scrollIntoView({ block: "nearest" }); }
+  if (row) {
+    row.classList.add("selected");
+    const box = $("tree"); // scroll the tree only (scrollIntoView would scroll the page too)
+    box.scrollTop = Math.max(0, row.offsetTop - box.clientHeight / 2);
+  }
   const n = S.treeById && S.treeById.get(id);
   if (n) highlightSource(S.tree.files[n[4]], n[5]);
   if (from3dToo) send({ op: "node", id });
@@ -634,7 +639,7 @@ function addCard(h, glb, png) {
     for (const c of $("gallery").querySelectorAll(".card.selected")) c.classList.remove("selected");
     card.classList.add("selected");
     if (S.family === "split") { S.variation = h.index; S.seed = S.gallerySeed; sendEdit(); }
-    else showGLB(glb);
+    else { framed = false; showGLB(glb); } // a variant can be much larger than the example
   };
   $("gallery").appendChild(card);
   $("gallery-status").textContent = `${$("gallery").children.length} so far…`;
