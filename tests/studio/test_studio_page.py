@@ -191,3 +191,35 @@ def test_download_glb_reads_back_watertight(page, tmp_path):
         with page.expect_download() as info:
             page.click(f"#export-{fmt}")
         assert info.value.suggested_filename.endswith(f".{fmt}")
+
+
+def test_sketch_canvas_draws_strokes_and_asks_the_recognizer(page):
+    page.click("#sketch-toggle")
+    canvas = page.locator("#sketch")
+    assert canvas.is_visible()
+    assert "Roof" in page.locator("#sketch-type option").all_inner_texts()  # the grammar's object types
+    page.select_option("#sketch-type", "Roof")
+    box = canvas.bounding_box()
+    for (x0, y0), (x1, y1) in (((0.3, 0.6), (0.5, 0.3)), ((0.5, 0.3), (0.7, 0.6))):  # a gable
+        page.mouse.move(box["x"] + x0 * box["width"], box["y"] + y0 * box["height"])
+        page.mouse.down()
+        for k in range(1, 9):
+            t = k / 8
+            page.mouse.move(box["x"] + (x0 + t * (x1 - x0)) * box["width"],
+                            box["y"] + (y0 + t * (y1 - y0)) * box["height"])
+        page.mouse.up()
+    assert page.evaluate("window.studio.strokes.length") == 2
+    page.click("#sketch-recognize")
+    result = page.locator("#sketch-result")
+    try:
+        import grammarkit_sketch  # noqa: F401
+        installed = True
+    except ImportError:
+        installed = False
+    if installed:
+        page.wait_for_function("document.querySelectorAll('#sketch-result button').length > 0", timeout=60_000)
+    else:
+        page.wait_for_function("document.getElementById('sketch-result').textContent.length > 0")
+        assert "sketch recognizer is not installed" in result.inner_text()
+    page.click("#sketch-toggle")
+    assert not canvas.is_visible()

@@ -41,6 +41,16 @@ def test_tiling_gallery_streams_validated_variants(browser, tmp_path):
         models = page.evaluate("window.studio.models")
         cards.nth(1).click()  # shows that variant in the view
         page.wait_for_function(f"window.studio.models > {models}")
+        with page.expect_download() as info:  # and exports it
+            page.click("#export-glb")
+        variant = tmp_path / "variant.glb"
+        info.value.save_as(variant)
+        from grammarkit.tiling import read_assembly, validate
+        from grammarkit.dsl import load
+
+        assembly = read_assembly(variant)
+        assert len(assembly.parts) == page.evaluate("window.studio.galleryParts[1]")
+        assert validate(load(folder / "castle.grammar"), assembly).ok
         screenshot(page, "tiling_gallery", tmp_path)
         assert not page.errors
         page.context.close()

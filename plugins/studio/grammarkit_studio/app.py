@@ -202,8 +202,14 @@ class Studio:
         if fmt not in EXPORT_FORMATS:
             return PlainTextResponse(f"unknown format {fmt!r} (the studio exports "
                                      f"{', '.join(EXPORT_FORMATS)})", status_code=404)
+        gallery = request.query_params.get("gallery")
+        if gallery is not None and not (gallery.isdigit() and int(gallery) < MAX_GALLERY):
+            return PlainTextResponse("gallery= must be a variant's index", status_code=400)
+        # a tiling gallery's variant lives in the gallery worker; everything else in the view's
+        worker = self.derive_worker if gallery is None else self.gallery_worker
         try:
-            out = await asyncio.to_thread(self.derive_worker.call, "export", self.budget, fmt=fmt)
+            out = await asyncio.to_thread(worker.call, "export", self.budget, fmt=fmt,
+                                          gallery=None if gallery is None else int(gallery))
         except CallFailed as exc:
             return PlainTextResponse(exc.info.get("message", "export failed"), status_code=409)
         except (BudgetExceeded, WorkerFailed) as exc:
@@ -286,11 +292,11 @@ class Studio:
                     conn.gallery.cancel()
                     self.gallery_worker.interrupt()
             elif op == "backends":
-                out = await asyncio.to_thread(self.gallery_worker.call, "backends", self.budget,
-                                              text=_text(msg.get("text")))
+                out = await self._call("backends", text=_text(msg.get("text")))
                 await conn.send_json({"type": "backends", **out})
             elif op == "sketch":
-                out = await self._call("sketch", image_png=b"", object_type=str(msg.get("object_type")),
+                out = await self._call("sketch", strokes=msg.get("strokes"), width=msg.get("width"),
+                                       height=msg.get("height"), object_type=str(msg.get("object_type")),
                                        text=_text(msg.get("text")))
                 await conn.send_json({"type": "sketch", **out})
             else:

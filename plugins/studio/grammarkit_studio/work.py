@@ -178,6 +178,7 @@ class Work:
         self._parents: dict[int, int] | None = None  # shape id -> parent id, of self.model
         self._tree: dict | None = None  # the compact tree of self.model
         self._registries = None
+        self.gallery_models: list[Any] = []  # the last gallery's models, by index (for export)
 
     # -- plumbing ------------------------------------------------------------------------------
     @property
@@ -255,14 +256,21 @@ class Work:
         out["facts"]["work_ms"] = round(1000 * (time.perf_counter() - t_in), 1)
         return out
 
-    def export(self, fmt: str) -> dict:
+    def export(self, fmt: str, gallery: int | None = None) -> dict:
+        """The model in the view (or the gallery's variant `gallery`) in format `fmt`."""
         fmt = str(fmt).lower()
         if fmt not in EXPORT_FORMATS:
             raise StudioError(f"unknown export format {fmt!r}; the studio exports {', '.join(EXPORT_FORMATS)}")
-        if self.model is None:
+        if gallery is not None:
+            if not 0 <= gallery < len(self.gallery_models):
+                raise StudioError(f"the gallery has no variant {gallery} (sample again)")
+            model = self.gallery_models[gallery]
+        elif self.model is None:
             raise StudioError("there is no model to export yet (the grammar has errors?)")
-        name = getattr(self.model, "name", None) or self.path.stem
-        return {"data": self.encode(self.model, fmt), "filename": f"{name}.{fmt}"}
+        else:
+            model = self.model
+        name = getattr(model, "name", None) or self.path.stem
+        return {"data": self.encode(model, fmt), "filename": f"{name}.{fmt}"}
 
     def tree(self) -> dict:
         """The derivation tree of the current split model, compact: one row per shape
@@ -369,6 +377,7 @@ class Work:
             opts.setdefault("variations", True)
         t0 = time.perf_counter()
         count = 0
+        self.gallery_models = []
         for result in iter_results(g, backend=backend, n=n, seed=seed, iterations=iterations,
                                    options=opts, attrs=attrs if g.family == "split" else None,
                                    timeout=timeout, registries=self.registries):
@@ -387,6 +396,7 @@ class Work:
                 item["seed"] = result.seed
             item["glb"] = self.encode(model, "glb")
             item["png"] = preview_png(model, (192, 192))
+            self.gallery_models.append(model)
             count += 1
             yield item
         yield {"done": True, "count": count, "requested": n,
@@ -403,14 +413,14 @@ class Work:
                 "backends": sorted(name for name, spec in self.registries.backends.items()
                                    if family in spec.families)}
 
-    def sketch(self, image_png: bytes, object_type: str, text: str) -> dict:
-        """Recognise a sketch with the sketch plugin (grammarkit_sketch), when installed."""
-        try:
-            import grammarkit_sketch  # noqa: F401 - an optional plugin
-        except ImportError:
-            raise StudioError("the sketch recognizer is not installed (the grammarkit_sketch "
-                              "plugin); the sketch canvas needs it") from None
-        raise StudioError("the sketch recognizer's API is not available in this version")
+    def sketch(self, strokes: list, width: int, height: int, object_type: str, text: str) -> dict:
+        """The sketch recognizer's top candidates for a drawing (see sketching.py)."""
+        from .sketching import recognize_sketch
+
+        a = self.analysis(text)
+        if not a.ok or a.grammar.family != "split":
+            raise StudioError("sketching needs a split grammar without errors")
+        return recognize_sketch(strokes, width, height, object_type, text, self.path, a.grammar)
 
 
 def _jsonable(value: Any) -> Any:

@@ -319,6 +319,7 @@ function onBinary(buffer) {
         showFacts(h.facts, ms);
       }
       $("derive-error").hidden = true;
+      exportFrom(null);
       S.tree = null;
       if ($("tree-panel").open) scheduleTree();
     });
@@ -384,6 +385,7 @@ function onJSON(m) {
     case "sketch":
       onSketch(m); break;
     case "error":
+      if (m.op === "sketch") { $("sketch-result").textContent = m.message; break; }
       if (m.op === "pick" || m.op === "node" || m.op === "tree") status(m.message);
       else setError(m);
       break;
@@ -402,6 +404,13 @@ function setError(m) {
   el.hidden = false;
   S.errors.push(m.message);
   if (m.diagnostics && m.diagnostics.length) { S.diagKey = null; showDiagnostics(m.diagnostics); }
+}
+
+// the Export links download the model in the view: a tiling variant from the gallery worker
+function exportFrom(galleryIndex) {
+  for (const fmt of ["glb", "obj", "stl"]) {
+    $(`export-${fmt}`).setAttribute("href", galleryIndex === null ? `export/${fmt}` : `export/${fmt}?gallery=${galleryIndex}`);
+  }
 }
 
 function sendEdit() {
@@ -634,12 +643,14 @@ function addCard(h, glb, png) {
     card.appendChild(det);
   }
   card.dataset.index = h.index;
+  S.galleryParts = S.galleryParts || {};
+  if (h.metrics && h.metrics.parts !== undefined) S.galleryParts[h.index] = h.metrics.parts;
   card.onclick = (e) => {
     if (e.target.closest(".card details")) return; // opening the report is not choosing
     for (const c of $("gallery").querySelectorAll(".card.selected")) c.classList.remove("selected");
     card.classList.add("selected");
     if (S.family === "split") { S.variation = h.index; S.seed = S.gallerySeed; sendEdit(); }
-    else { framed = false; showGLB(glb); } // a variant can be much larger than the example
+    else { framed = false; showGLB(glb); exportFrom(h.index); } // a variant can be much larger than the example
   };
   $("gallery").appendChild(card);
   $("gallery-status").textContent = `${$("gallery").children.length} so far…`;
@@ -649,6 +660,7 @@ function addCard(h, glb, png) {
 // sketch canvas (needs the grammarkit_sketch plugin on the server)
 const sketch = $("sketch");
 let strokes = [], drawing = null;
+Object.defineProperty(S, "strokes", { get: () => strokes });
 $("sketch-toggle").onclick = () => {
   const on = sketch.hidden;
   sketch.hidden = !on; $("sketch-tools").hidden = !on;
@@ -682,7 +694,8 @@ function onSketch(m) {
   box.textContent = "";
   for (const [i, c] of (m.candidates || []).entries()) {
     const b = document.createElement("button");
-    b.textContent = `${i + 1}. ${c.snippet} ${Object.entries(c.params || {}).map(([k, v]) => `${k}=${v}`).join(" ")}`;
+    b.textContent = `${i + 1}. ${c.snippet} (${Math.round(100 * c.probability)}%) ` +
+      Object.entries(c.params || {}).map(([k, v]) => `${k}=${Number(v).toPrecision(3)}`).join(" ");
     b.onclick = () => { if (c.text) cm.setValue(c.text); };
     box.appendChild(b);
   }
