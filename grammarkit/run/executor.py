@@ -106,6 +106,13 @@ def _portable_error(exc: BaseException) -> BaseException:
 def _worker_main(conn: Any) -> None:  # pragma: no cover - runs in the child process
     _die_with_parent()
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's to handle
+    try:
+        _serve(conn)
+    except (EOFError, OSError):
+        return  # the parent went away (killed, or done with us): end quietly, no traceback
+
+
+def _serve(conn: Any) -> None:  # pragma: no cover - runs in the child process
     states: dict[int, Any] = {}
     conn.send(("ready",))
     while True:
