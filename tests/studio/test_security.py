@@ -3,7 +3,6 @@ websocket, no cross-origin or foreign-Host requests, GET only with bounded bodie
 websocket messages, a content security policy, and file access limited to the grammar's folder."""
 from __future__ import annotations
 
-import asyncio
 import http.client
 import json
 import socket

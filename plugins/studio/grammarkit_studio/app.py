@@ -21,7 +21,7 @@ from pathlib import Path
 from typing import Any
 
 from starlette.applications import Starlette
-from starlette.responses import FileResponse, JSONResponse, PlainTextResponse, Response
+from starlette.responses import FileResponse, PlainTextResponse, Response
 from starlette.routing import Mount, Route, WebSocketRoute
 from starlette.staticfiles import StaticFiles
 from starlette.websockets import WebSocket, WebSocketDisconnect
@@ -101,7 +101,6 @@ class Studio:
         routes = [
             Route("/", self.index),
             Route("/export/{fmt}", self.export),
-            Route("/info", self.info),
             WebSocketRoute("/ws", self.websocket),
             Mount("/static", app=StaticFiles(directory=STATIC), name="static"),
         ]
@@ -191,11 +190,6 @@ class Studio:
     # -- HTTP ------------------------------------------------------------------------------------------
     async def index(self, request: Any) -> Response:
         return FileResponse(STATIC / "index.html", media_type="text/html")
-
-    async def info(self, request: Any) -> Response:
-        return JSONResponse({"path": str(self.path), "name": self.path.name,
-                             "formats": list(EXPORT_FORMATS), "pid": {
-                                 "derive": self.derive_worker.pid, "gallery": self.gallery_worker.pid}})
 
     async def export(self, request: Any) -> Response:
         fmt = request.path_params["fmt"].lower()

@@ -15,7 +15,6 @@ import time
 from pathlib import Path
 from typing import Any, Iterator
 
-import grammarkit
 from grammarkit.errors import GrammarkitError
 
 # How many text analyses to keep (the undo/redo of a few edits hits the cache).
@@ -79,10 +78,11 @@ def sliders(grammar: Any, values: dict[str, Any]) -> list[dict]:
 
 
 def _step(lo: float, hi: float) -> float:
+    """A round slider step giving at least 200 positions over the range."""
     span = hi - lo
     if span <= 0:
         return 1.0
-    return 10.0 ** math.floor(math.log10(span / 200.0)) if span > 0 else 0.01
+    return 10.0 ** math.floor(math.log10(span / 200.0))
 
 
 def confined_imports(text: str, path: Path, root: Path, depth: int = 0) -> list[dict]:
@@ -407,8 +407,6 @@ class Work:
     def backends(self, text: str) -> dict:
         a = self.analysis(text)
         family = a.grammar.family if a.ok else None
-        from grammarkit.run import describe_options  # noqa: F401 - part of the public run API
-
         return {"family": family,
                 "backends": sorted(name for name, spec in self.registries.backends.items()
                                    if family in spec.families)}

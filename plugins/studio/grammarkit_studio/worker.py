@@ -14,6 +14,7 @@ multiprocessing.connection.Connection.
 """
 from __future__ import annotations
 
+import os
 import socket
 import subprocess
 import sys
@@ -39,6 +40,7 @@ def _serve(conn: Any, path: str, root: str) -> None:  # runs in the child proces
     import signal
 
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C in the terminal stops the server, which ends us
+    _exit_with_parent()
     from .work import Work, error_json
 
     work = Work(path, root)
@@ -48,18 +50,40 @@ def _serve(conn: Any, path: str, root: str) -> None:  # runs in the child proces
         except (EOFError, OSError):
             return  # the server went away
         try:
-            if op == "gallery":
-                for item in work.gallery(**kwargs):
-                    conn.send(("item", item))
-                conn.send(("end", None))
-            elif op == "format":
-                conn.send(("ok", work.format_text(**kwargs)))
-            else:
-                conn.send(("ok", getattr(work, op)(**kwargs)))
-        except (GrammarkitError, KeyboardInterrupt, MemoryError, RecursionError) as exc:
-            conn.send(("error", error_json(exc)))
-        except Exception as exc:  # noqa: BLE001 - a bug must reach the page, not kill the worker
-            conn.send(("error", error_json(exc)))
+            try:
+                if op == "gallery":
+                    for item in work.gallery(**kwargs):
+                        conn.send(("item", item))
+                    reply = ("end", None)
+                elif op == "format":
+                    reply = ("ok", work.format_text(**kwargs))
+                else:
+                    reply = ("ok", getattr(work, op)(**kwargs))
+            except (EOFError, OSError):
+                raise
+            except (GrammarkitError, KeyboardInterrupt, MemoryError, RecursionError) as exc:
+                reply = ("error", error_json(exc))
+            except Exception as exc:  # noqa: BLE001 - a bug must reach the page, not kill the worker
+                reply = ("error", error_json(exc))
+            conn.send(reply)
+        except (EOFError, OSError):
+            return  # the server closed our socket (it stopped, or gave up on this call)
+
+
+def _exit_with_parent() -> None:
+    """End this process soon after the server's process ends, even in the middle of a derive
+    (the socket tells only once we next read or write it)."""
+    import threading
+
+    parent = os.getppid()
+
+    def watch() -> None:
+        while True:
+            time.sleep(1.0)
+            if os.getppid() != parent:
+                os._exit(0)
+
+    threading.Thread(target=watch, daemon=True, name="parent-watch").start()
 
 
 class CallFailed(GrammarkitError):

@@ -277,7 +277,7 @@ renderer.domElement.addEventListener("pointerdown", (e) => { down = [e.clientX, 
 renderer.domElement.addEventListener("pointerup", (e) => {
   if (!down || Math.hypot(e.clientX - down[0], e.clientY - down[1]) > 4) return; // a drag orbits
   const hit = S.hitAt(e.clientX, e.clientY);
-  if (!hit) { select(null); return; }
+  if (!hit) { clearSelection(); return; }
   if (S.family === "split") send({ op: "pick", point: hit.point, terminal: hit.terminal, rev: S.shownRev });
 });
 
@@ -553,7 +553,7 @@ function onPick(m) {
     send({ op: "tree", rev: S.shownRev });
   } else expand();
 }
-function select(x) { if (x === null) { clearHighlight(); render(); $("selection").hidden = true; } }
+function clearSelection() { clearHighlight(); render(); $("selection").hidden = true; }
 
 // ---------------------------------------------------------------------------------------------
 // saving, external edits
