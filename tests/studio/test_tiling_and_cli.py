@@ -158,3 +158,29 @@ def test_textmate_scopes_of_grammar_text():
     t = _scopes("dock Gate -- Tower { at (-2.8, 2.2, -0.9) rot (-6.97, -3.7, -164.28) }")
     assert t["dock"] == "keyword.other.declaration" and t["--"] == "keyword.operator"
     assert t["at"] == "keyword.control" and t["Gate"] == "entity.name.type.successor"
+
+
+def test_shipped_assets_are_complete_and_licensed():
+    """Every file the page loads (index.html's scripts and styles, the ES module imports) is in
+    the package, with the vendored libraries' licences; nothing is fetched from elsewhere."""
+    import re
+
+    static = ROOT / "plugins" / "studio" / "grammarkit_studio" / "static"
+    html = (static / "index.html").read_text()
+    refs = re.findall(r'(?:src|href)="([^"]+)"', html)
+    assert refs and not [r for r in refs if r.startswith(("http:", "https:", "//"))]
+    for ref in refs:
+        if not ref.startswith("data:"):
+            assert (static.parent / ref).is_file(), ref
+    modules = [static / "studio.js", *(static / "vendor" / "three").rglob("*.js")]
+    for module in modules:
+        for target in re.findall(r"^\s*(?:import|export)\b[^;]*?from\s+['\"]([^'\"]+)['\"]", module.read_text(), re.M):
+            assert target.startswith("."), f"{module.name} imports {target!r} (a bare name needs an import map)"
+            assert (module.parent / target).resolve().is_file(), f"{module.name} -> {target}"
+    for lib in ("three", "codemirror"):
+        assert "MIT" in (static / "vendor" / lib / "LICENSE").read_text() or \
+               "Permission is hereby granted" in (static / "vendor" / lib / "LICENSE").read_text()
+    lock = json.loads((ROOT / "plugins" / "studio" / "frontend" / "package-lock.json").read_text())
+    versions = json.loads((static / "vendor" / "VERSIONS.json").read_text())
+    for lib, version in versions.items():
+        assert lock["packages"][f"node_modules/{lib}"]["version"] == version
