@@ -96,6 +96,8 @@ def screenshot(page, name: str, tmp: Path, **kwargs) -> Path:
     folder = Path(SCREENSHOTS) if SCREENSHOTS else tmp
     folder.mkdir(parents=True, exist_ok=True)
     path = folder / f"studio_{name}.png"
+    # Playwright scrolls what it clicks into view, even in a page that has no scroll bars
+    page.evaluate("document.scrollingElement.scrollTop = 0; document.body.scrollTop = 0")
     image = Image.open(io.BytesIO(page.screenshot(**kwargs))).convert("RGB")
     image.quantize(colors=128, method=Image.Quantize.MEDIANCUT).save(path, optimize=True)
     return path

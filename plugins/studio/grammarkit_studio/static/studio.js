@@ -198,6 +198,7 @@ function showGLB(buffer, onShown) {
     if (highlight.parent) highlight.parent.remove(highlight);
     frame.node.add(highlight);
     clearHighlight();
+    $("selection").hidden = true; // the picked part belonged to the old model
     if (!framed) { frameModel(modelRoot); framed = true; }
     render();
     S.timing = { parse_ms: t1 - t0, render_ms: performance.now() - t1 };
@@ -332,7 +333,7 @@ function onJSON(m) {
   switch (m.type) {
     case "file":
       S.fileName = m.name; S.filePath = m.path; S.diskText = m.text; S.diskHash = m.hash;
-      $("filename").textContent = m.path;
+      $("filename").textContent = "\u200e" + m.path; // LRM: ellipsis on the left, slashes in place
       document.title = `${m.name} · grammarkit studio`;
       if (!cm) makeEditor(m.text); else cm.setValue(m.text);
       S.text = m.text;
