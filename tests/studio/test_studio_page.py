@@ -157,6 +157,10 @@ def test_click_window_selects_window_terminal_and_back(page, tmp_path):
     parent = page.locator(f'#tree .node[data-id="{part.node}"]').locator("xpath=preceding-sibling::div[1]")
     parent.click()
     page.wait_for_function("window.studio.highlighted > 1", timeout=15_000)
+    # and from the text: the cursor on the axiom's line outlines every part it made
+    lot = next(i for i, t in enumerate(page.evaluate("window.studio.text").splitlines()) if t.startswith("Lot -->"))
+    page.locator(".CodeMirror-code > div").nth(lot).click()
+    page.wait_for_function(f"window.studio.highlighted === {len(model.parts)}", timeout=15_000)
 
 
 def test_variations_fill_the_gallery(page, tmp_path):

@@ -96,5 +96,5 @@ def test_pick_finds_the_part_under_a_point():
     assert out["source"]["file"].endswith("library.grammar")
     rows = work.tree()["nodes"]
     assert [rows[i][2] for i in out["path"]][:2] == ["Lot", "Mass"]
-    below = work.node_box(out["path"][-3])
+    below = work.node_box([out["path"][-3]])
     assert below["count"] > 1 and any(p["id"] == glass.id for p in below["parts"])

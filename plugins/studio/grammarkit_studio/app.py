@@ -268,9 +268,12 @@ class Studio:
                 out = await self._call("pick", point=[float(v) for v in point],
                                        terminal=terminal if isinstance(terminal, str) else None)
                 await conn.send_json({"type": "pick", "rev": msg.get("rev"), **out})
-            elif op == "node":
-                out = await self._call("node_box", node=_int(msg.get("id"), "node id"))
-                await conn.send_json({"type": "node", "id": msg.get("id"), **out})
+            elif op == "node":  # a tree row, or the shapes of a source line: their parts
+                ids = msg.get("ids")
+                if not (isinstance(ids, list) and 0 < len(ids) <= 10_000):
+                    raise ValueError("node: ids must be a list of shape ids")
+                out = await self._call("node_box", nodes=[_int(i, "shape id") for i in ids])
+                await conn.send_json({"type": "node", "ids": ids, **out})
             elif op == "save":
                 text = _text(msg.get("text"))
                 out = await asyncio.to_thread(self.save, text, msg.get("base") if isinstance(msg.get("base"), str) else None,

@@ -337,18 +337,19 @@ class Work:
             node = parents.get(node, -1)
         return out[::-1]
 
-    def node_box(self, node: int) -> dict:
-        """The scope (origin, axes, size) of shape `node` and the terminal parts below it."""
+    def node_box(self, nodes: list[int]) -> dict:
+        """The terminal parts below the shapes `nodes` (their scopes: origin, axes, size)."""
         if self.model_kind != "split":
             raise StudioError("shapes exist for split models only")
         children: dict[int, list[int]] = {}
         for c, p in self._parent_table().items():
             children.setdefault(p, []).append(c)
-        below, stack = set(), [int(node)]
+        below, stack = set(), [int(n) for n in nodes]
         while stack:
             n = stack.pop()
-            below.add(n)
-            stack.extend(children.get(n, ()))
+            if n not in below:
+                below.add(n)
+                stack.extend(children.get(n, ()))
         parts = [q.to_dict() for q in self.model.parts if q.node in below]
         return {"parts": parts[:5000], "count": len(parts)}
 

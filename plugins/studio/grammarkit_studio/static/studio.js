@@ -49,6 +49,19 @@ function makeEditor(text) {
       Tab: (c) => c.replaceSelection("  "),
     },
   });
+  // the reverse link from the text: the cursor on a rule's line outlines the parts it made
+  let lineTimer = null;
+  cm.on("cursorActivity", () => {
+    clearTimeout(lineTimer);
+    lineTimer = setTimeout(() => {
+      if (!S.tree || S.treeRev !== S.shownRev || S.sent.size || S.text !== cm.getValue()) return;
+      const line = cm.getCursor().line + 1;
+      if (line === S.cursorLine) return;
+      S.cursorLine = line;
+      const ids = S.tree.nodes.filter((n) => n[5] === line && S.tree.files[n[4]] === S.filePath).map((n) => n[0]);
+      if (ids.length) send({ op: "node", ids: ids.slice(0, 10000) });
+    }, 250);
+  });
   let timer = null;
   cm.on("change", () => {
     S.text = cm.getValue();
@@ -530,7 +543,7 @@ function selectNode(id, from3dToo) {
   }
   const n = S.treeById && S.treeById.get(id);
   if (n) highlightSource(S.tree.files[n[4]], n[5]);
-  if (from3dToo) send({ op: "node", id });
+  if (from3dToo) send({ op: "node", ids: [id] });
 }
 
 function onPick(m) {
