@@ -6,6 +6,7 @@ from __future__ import annotations
 import http.client
 import json
 import socket
+from pathlib import Path
 
 import pytest
 
@@ -133,3 +134,27 @@ def test_imports_outside_the_folder_are_refused(tmp_path):
     assert not out["ok"]
     (d,) = out["diagnostics"]
     assert d["code"] == "studio-outside-folder" and d["line"] == 2 and "only reads files in" in d["message"]
+
+
+def test_asset_files_outside_the_folder_are_refused(tmp_path):
+    from grammarkit_studio.work import Work
+
+    inside = tmp_path / "proj"
+    inside.mkdir()
+    path = inside / "g.grammar"
+    text = ('grammar g\nLot --> footprint(rect(8, 6)) extrude(10) comp(f) { top: Top | side: NIL | bottom: NIL }\n'
+            'Top --> i("../../etc/passwd.glb") Chimney.\n')
+    path.write_text(text)
+    out = Work(str(path), str(inside)).check(text)
+    assert not out["ok"]
+    (d,) = [d for d in out["diagnostics"] if d["code"] == "studio-outside-folder"]
+    assert d["line"] == 3 and "passwd.glb" in d["message"]
+    tiling = 'grammar t\npart A = mesh("/tmp/elsewhere.glb")\nexample e = assembly("../e.glb")\n'
+    path.write_text(tiling)
+    out = Work(str(path), str(inside)).check(tiling)
+    lines = sorted(d["line"] for d in out["diagnostics"] if d["code"] == "studio-outside-folder")
+    assert lines == [2, 3]
+    # the shipped examples read only files beside them
+    root = Path(__file__).resolve().parents[2] / "grammars"
+    for grammar in (root / "paris.grammar", root / "tiling" / "castle" / "castle.grammar"):
+        assert Work(str(grammar), str(grammar.parent)).check(grammar.read_text())["ok"], grammar

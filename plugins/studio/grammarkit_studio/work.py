@@ -108,6 +108,52 @@ def confined_imports(text: str, path: Path, root: Path, depth: int = 0) -> list[
     return problems
 
 
+# Calls whose first string argument names a file the engine reads: split inserts `i("a.glb")`,
+# tiling part meshes `mesh("a.glb", ...)` and example assemblies `assembly("a.glb")`.
+_FILE_CALLS = {"op": {"i"}, "call": {"mesh", "assembly"}}
+
+
+def confined_files(grammar: Any, root: Path) -> list[dict]:
+    """Diagnostics for files named in the grammar (inserted assets, part meshes, examples)
+    that lie outside the grammar's folder. Paths are relative to the grammar's folder, as the
+    engine reads them."""
+    from grammarkit.ir import Node
+
+    problems = []
+
+    def check(value: str, node: Any) -> None:
+        target = (root / value).resolve()
+        if not target.is_relative_to(root):
+            span = getattr(node, "span", None)
+            problems.append({"severity": "error", "code": "studio-outside-folder", "hint": None,
+                             "message": f"{value!r}: the studio only reads files in {root}",
+                             "file": span.file if span else None, "line": span.line if span else None,
+                             "column": span.column if span else None,
+                             "end_line": span.end_line if span else None,
+                             "end_column": span.end_column if span else None})
+
+    stack = [grammar]
+    while stack:
+        node = stack.pop()
+        if isinstance(node, (tuple, list)):
+            stack.extend(node)
+            continue
+        if not isinstance(node, Node):
+            continue
+        kind = getattr(node, "kind", None)
+        name = getattr(node, "name", None) if kind == "op" else getattr(node, "func", None)
+        if kind in _FILE_CALLS and name in _FILE_CALLS[kind] and node.args:
+            first = node.args[0]
+            if kind == "op":
+                first = first.value  # an operation's Arg wraps its expression
+            if getattr(first, "kind", None) == "str":
+                check(first.value, node)
+        if kind == "example" and node.source:
+            check(node.source, node)
+        stack.extend(getattr(node, f) for f in type(node).model_fields if f != "span")
+    return problems
+
+
 class Analysis:
     """One grammar text, checked: diagnostics, the IR (imports inlined) when it has no error."""
 
@@ -121,6 +167,8 @@ class Analysis:
         if not self.diagnostics:
             grammar, diags = check_text(text, filename=str(path))
             self.diagnostics = [d.to_json() for d in diags]
+            if grammar is not None:
+                self.diagnostics += confined_files(grammar, root)
             if not any(d["severity"] == "error" for d in self.diagnostics):
                 self.grammar = grammar
         self.seconds = time.perf_counter() - t0
