@@ -38,10 +38,11 @@ def test_save_and_external_edits(own_studio, browser):
     mode = 0o640
     os.chmod(path, mode)
 
-    # Save writes exactly the editor's text, atomically, keeping the file's permissions
+    # Save (Ctrl-S, in the editor) writes exactly the editor's text, atomically, keeping the
+    # file's permissions
     type_at_end(page, "# edited in the studio\n")
     assert page.locator("#dirty").is_visible()
-    page.click("#save")
+    page.keyboard.press("Control+s")
     page.locator("#status", has_text="saved").wait_for(timeout=10_000)
     assert path.read_text() == original + "# edited in the studio\n"
     assert (path.stat().st_mode & 0o777) == mode

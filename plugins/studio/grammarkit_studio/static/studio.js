@@ -43,9 +43,10 @@ let cm = null;
 let marks = [];
 function makeEditor(text) {
   cm = CodeMirror($("editor"), {
-    value: text, mode: "grammarkit", theme: "gk", lineNumbers: true, lineWrapping: true, indentUnit: 2, tabSize: 2,
+    value: text, mode: "grammarkit", theme: "gk", lineNumbers: true, lineWrapping: true,
+    indentUnit: 2, tabSize: 2,
+    lineSeparator: text.includes("\r\n") ? "\r\n" : null, // saving keeps the file's line ends
     gutters: ["gk-diagnostics", "CodeMirror-linenumbers"], extraKeys: {
-      "Ctrl-S": () => save(false), "Cmd-S": () => save(false),
       Tab: (c) => c.replaceSelection("  "),
     },
   });
@@ -577,6 +578,9 @@ function save(force) {
   send({ op: "save", text: S.text, base: S.diskHash, force });
 }
 $("save").onclick = () => save(false);
+document.addEventListener("keydown", (e) => {
+  if ((e.ctrlKey || e.metaKey) && e.key === "s") { e.preventDefault(); save(false); } // not the browser's "save page"
+});
 $("format").onclick = () => send({ op: "format", text: S.text });
 
 async function onDiskChanged(m) {
