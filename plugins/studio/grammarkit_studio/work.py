@@ -157,7 +157,7 @@ def confined_files(grammar: Any, root: Path) -> list[dict]:
 class Analysis:
     """One grammar text, checked: diagnostics, the IR (imports inlined) when it has no error."""
 
-    def __init__(self, text: str, path: Path, root: Path):
+    def __init__(self, text: str, path: Path, root: Path, registries: Any = None):
         from grammarkit.dsl import check_text
 
         t0 = time.perf_counter()
@@ -165,7 +165,7 @@ class Analysis:
         self.diagnostics = confined_imports(text, path, root)
         self.grammar = None
         if not self.diagnostics:
-            grammar, diags = check_text(text, filename=str(path))
+            grammar, diags = check_text(text, filename=str(path), registries=registries)
             self.diagnostics = [d.to_json() for d in diags]
             if grammar is not None:
                 self.diagnostics += confined_files(grammar, root)
@@ -240,7 +240,7 @@ class Work:
     def analysis(self, text: str) -> Analysis:
         hit = self._analyses.pop(text, None)
         if hit is None:
-            hit = Analysis(text, self.path, self.root)
+            hit = Analysis(text, self.path, self.root, self.registries)
         self._analyses[text] = hit  # most recent last
         while len(self._analyses) > _CACHE:
             self._analyses.pop(next(iter(self._analyses)))
