@@ -176,6 +176,28 @@ def test_variations_fill_the_gallery(page, tmp_path):
     wait_shown(page)
 
 
+def test_new_seed_and_format(page, paris_copy):
+    page.click("#reseed")
+    seed = int(page.input_value("#seed"))
+    facts = wait_shown(page)
+    assert facts["seed"] == seed and page.evaluate("window.studio.seed") == seed
+    page.fill("#seed", "0")
+    page.dispatch_event("#seed", "change")
+    assert wait_shown(page)["seed"] == 0
+    # Format: the text as grammarkit's printer writes it (`grammarkit fmt`)
+    text = page.evaluate("window.studio.text")
+    untidy = text.replace("attr lot_w = 16 @range(12, 24)", "attr   lot_w=16   @range( 12,24 )")
+    assert untidy != text
+    set_text = "(t) => document.querySelector('.CodeMirror').CodeMirror.setValue(t)"
+    page.evaluate(set_text, untidy)
+    page.click("#format")
+    expected = grammarkit.format(grammarkit.parse(untidy, filename=str(paris_copy)))
+    assert "attr lot_w = 16 @range(12, 24)" in expected
+    page.wait_for_function("(t) => window.studio.text === t", arg=expected, timeout=15_000)
+    page.evaluate(set_text, text)
+    wait_shown(page)
+
+
 def test_download_glb_reads_back_watertight(page, tmp_path):
     import trimesh
 

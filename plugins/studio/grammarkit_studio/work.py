@@ -280,7 +280,7 @@ class Work:
                 facts["variation"] = var.to_dict()
             else:
                 model = derive(a.grammar, seed=seed, attrs=attrs)
-            facts.update(triangles=model.triangle_count, terminals=len(model.parts),
+            facts.update(seed=model.seed, triangles=model.triangle_count, terminals=len(model.parts),
                          shapes=model.shape_count, warnings=list(model.warnings), attrs=model.attrs,
                          bindings=model.bindings)
             kind = "split"
