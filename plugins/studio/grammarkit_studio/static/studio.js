@@ -197,9 +197,10 @@ function modelFrameOf(gltfScene) {
   return { node: gltfScene, upright: false };
 }
 
-function showGLB(buffer, onShown) {
+function showGLB(buffer, onShown, isStale) {
   const t0 = performance.now();
   loader.parse(buffer, "", (gltf) => {
+    if (isStale && isStale()) { disposeTree(gltf.scene); return; } // a newer model was shown meanwhile
     const t1 = performance.now();
     const frame = modelFrameOf(gltf.scene);
     const holder = new THREE.Group();
@@ -337,7 +338,7 @@ function onBinary(buffer) {
       exportFrom(null);
       S.tree = null;
       if ($("tree-panel").open) scheduleTree();
-    });
+    }, () => h.rev < S.shownRev);
   } else if (h.type === "gallery-item") {
     addCard(h, parts[0], parts[1]);
   }
@@ -365,9 +366,13 @@ function onJSON(m) {
       }
       if (m.ok) updateSliders(m.sliders || []);
       if (m.ok) requestBackends();
-      if (!m.ok) status(`${(m.diagnostics || []).filter((d) => d.severity === "error").length} error(s): the last good model is shown`);
+      if (!m.ok) {
+        forget(m.rev); // no model comes for this edit
+        status(`${(m.diagnostics || []).filter((d) => d.severity === "error").length} error(s): the last good model is shown`);
+      }
       break;
     case "derive-error":
+      forget(m.rev);
       setError(m);
       break;
     case "tree":
@@ -396,7 +401,8 @@ function onJSON(m) {
         `${m.count} of ${m.requested} in ${m.seconds} s${m.shortfall ? ": " + m.shortfall : ""}`;
       break;
     case "gallery-error":
-      $("gallery-status").textContent = m.message; break;
+      if (m.gallery === S.galleryId) $("gallery-status").textContent = m.message;
+      break;
     case "sketch":
       onSketch(m); break;
     case "error":
@@ -409,6 +415,8 @@ function onJSON(m) {
 S.lastCheckRev = -1;
 
 function status(text) { $("status").textContent = text; }
+// edits up to `rev` that will bring no model (errors): no longer waited for
+function forget(rev) { if (typeof rev === "number") for (const r of [...S.sent.keys()]) if (r <= rev) S.sent.delete(r); }
 function showFacts(f, ms) {
   const what = f.kind === "split" ? `${f.triangles} triangles · ${f.terminals} parts` : `${f.parts} parts · example ${f.example}`;
   status(`${what} · derive ${f.derive_ms} ms · export ${f.export_ms} ms · shown in ${ms.toFixed(0)} ms`);
