@@ -158,3 +158,40 @@ def test_asset_files_outside_the_folder_are_refused(tmp_path):
     root = Path(__file__).resolve().parents[2] / "grammars"
     for grammar in (root / "paris.grammar", root / "tiling" / "castle" / "castle.grammar"):
         assert Work(str(grammar), str(grammar.parent)).check(grammar.read_text())["ok"], grammar
+
+
+def test_a_page_from_another_origin_cannot_drive_the_studio(studio, browser, tmp_path):
+    """A real page on another local origin (as a malicious site would be) that even knows the
+    token: its websocket is closed and its requests are refused by the studio itself."""
+    import functools
+    import http.server
+    import threading
+
+    (tmp_path / "index.html").write_text("<!doctype html><title>elsewhere</title>")
+    handler = functools.partial(http.server.SimpleHTTPRequestHandler, directory=str(tmp_path))
+    handler.log_message = lambda *a: None
+    server = http.server.ThreadingHTTPServer(("127.0.0.1", 0), handler)
+    threading.Thread(target=server.serve_forever, daemon=True).start()
+    try:
+        page = browser.new_page()
+        page.goto(f"http://127.0.0.1:{server.server_address[1]}/")
+        refused = studio.gate.refused
+        result = page.evaluate("""async (base) => {
+            const ws = await new Promise((resolve) => {
+                const s = new WebSocket(base.replace("http", "ws") + "ws");
+                s.onopen = () => resolve("open");
+                s.onclose = () => resolve("closed");
+                s.onerror = () => {};
+            });
+            let fetched;
+            try { fetched = (await fetch(base + "export/glb")).status; } catch (e) { fetched = "blocked"; }
+            let blind;  // a no-cors request the page cannot read, but the server must still refuse
+            try { await fetch(base + "export/glb", {mode: "no-cors"}); blind = "sent"; } catch (e) { blind = "blocked"; }
+            return {ws, fetched, blind};
+        }""", studio.url)
+        assert result["ws"] == "closed" and result["fetched"] == "blocked"
+        assert studio.gate.refused >= refused + 2  # the websocket and the requests reached the gate
+        page.close()
+    finally:
+        server.shutdown()
+        server.server_close()
