@@ -73,3 +73,27 @@ def test_save_and_external_edits(own_studio, browser):
     assert path.read_text() == editor_text(page)
     assert not page.errors
     page.context.close()
+
+
+def test_a_save_in_one_page_reaches_the_other(own_studio, browser):
+    studio, path = own_studio
+    first, second = open_page(browser, studio.url), open_page(browser, studio.url)
+    type_at_end(first, "# from the first page\n")
+    first.click("#save")
+    first.locator("#status", has_text="saved").wait_for(timeout=10_000)
+    second.wait_for_function("window.studio.text.endsWith('# from the first page\\n')", timeout=10_000)
+    assert not second.locator("#dirty").is_visible()
+    assert path.read_text() == editor_text(second)
+    first.context.close()
+    second.context.close()
+
+
+def test_unreadable_file_is_a_clear_error(tmp_path):
+    pytest.importorskip("starlette", reason="the studio extra is not installed")
+    from grammarkit.errors import GrammarkitError
+    from grammarkit_studio import Studio
+
+    bad = tmp_path / "latin1.grammar"
+    bad.write_bytes("grammar caf\xe9\n".encode("latin-1"))
+    with pytest.raises(GrammarkitError, match="not UTF-8 text"):
+        Studio(bad, port=1)

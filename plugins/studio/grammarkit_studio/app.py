@@ -15,6 +15,7 @@ import hashlib
 import json
 import logging
 import struct
+import threading
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -93,7 +94,13 @@ class Studio:
         self.budget = float(budget)
         self.gallery_budget = float(gallery_budget)
         self.poll = poll
-        self.disk = self._read_disk()
+        try:
+            self.disk = self._read_disk()
+        except UnicodeDecodeError as exc:
+            raise GrammarkitError(f"{path}: not UTF-8 text ({exc.reason} at byte {exc.start})") from None
+        except OSError as exc:
+            raise GrammarkitError(f"{path}: cannot read: {exc.strerror or exc}") from None
+        self._disk_lock = threading.Lock()  # a save and the watcher's read never interleave
         self.derive_worker = Worker(str(path), str(self.root), "derive")
         self.gallery_worker = Worker(str(path), str(self.root), "gallery")
         self.connections: set[Connection] = set()
@@ -161,12 +168,13 @@ class Studio:
                 continue  # being replaced right now (atomic save by an editor)
             if st.st_mtime_ns == self.disk.mtime_ns:
                 continue
-            try:
-                disk = self._read_disk()
-            except (OSError, UnicodeDecodeError):
-                continue
-            changed = disk.hash != self.disk.hash
-            self.disk = disk
+            with self._disk_lock:
+                try:
+                    disk = self._read_disk()
+                except (OSError, UnicodeDecodeError):
+                    continue
+                changed = disk.hash != self.disk.hash
+                self.disk = disk
             if changed:
                 for conn in list(self.connections):
                     with contextlib.suppress(Exception):
@@ -177,15 +185,16 @@ class Studio:
         the page loaded it (`base_hash`) and the user has not confirmed (`force`)."""
         from grammarkit.run import write_files
 
-        try:
-            current = self._read_disk()
-        except FileNotFoundError:
-            current = None
-        if current is not None and not force and base_hash is not None and current.hash != base_hash:
-            return {"type": "save-conflict", "text": current.text, "hash": current.hash}
-        write_files({self.path: text})
-        self.disk = self._read_disk()
-        return {"type": "saved", "hash": self.disk.hash, "path": str(self.path)}
+        with self._disk_lock:
+            try:
+                current = self._read_disk()
+            except FileNotFoundError:
+                current = None
+            if current is not None and not force and base_hash is not None and current.hash != base_hash:
+                return {"type": "save-conflict", "text": current.text, "hash": current.hash}
+            write_files({self.path: text})
+            self.disk = self._read_disk()
+            return {"type": "saved", "hash": self.disk.hash, "path": str(self.path)}
 
     # -- HTTP ------------------------------------------------------------------------------------------
     async def index(self, request: Any) -> Response:
@@ -279,6 +288,11 @@ class Studio:
                 out = await asyncio.to_thread(self.save, text, msg.get("base") if isinstance(msg.get("base"), str) else None,
                                               bool(msg.get("force")))
                 await conn.send_json(out)
+                if out["type"] == "saved":  # the other pages learn of the new file now
+                    for other in list(self.connections - {conn}):
+                        with contextlib.suppress(Exception):
+                            await other.send_json({"type": "disk-changed", "text": self.disk.text,
+                                                   "hash": self.disk.hash})
             elif op == "format":
                 out = await self._call("format", text=_text(msg.get("text")))
                 await conn.send_json({"type": "formatted", **out})
