@@ -98,3 +98,13 @@ def test_pick_finds_the_part_under_a_point():
     assert [rows[i][2] for i in out["path"]][:2] == ["Lot", "Mass"]
     below = work.node_box([out["path"][-3]])
     assert below["count"] > 1 and any(p["id"] == glass.id for p in below["parts"])
+
+
+def test_empty_and_exampleless_grammars_say_what_is_missing(tmp_path):
+    path = tmp_path / "g.grammar"
+    work = Work(str(path), str(tmp_path))
+    out = work.derive("grammar g\n", {}, 0)
+    assert not out["ok"] and "no rules, parts or examples" in out["error"]["message"]
+    tiling = "grammar t\npart A = box(1, 1, 1)\nneighbors A: {A}\n"
+    out = work.derive(tiling, {}, 0)
+    assert not out["ok"] and "no `example`" in out["error"]["message"] and out["check"]["family"] == "tiling"

@@ -272,6 +272,10 @@ class Work:
             return {"ok": False, "check": a.summary()}
         t0 = time.perf_counter()
         facts: dict[str, Any] = {}
+        if a.grammar.family == "empty":
+            return {"ok": False, "check": a.summary(),
+                    "error": {"message": "the grammar has no rules, parts or examples yet: nothing to show",
+                              "diagnostics": []}}
         if a.grammar.family == "split":
             from grammarkit.split import derive, variations
 
