@@ -64,7 +64,7 @@ def page_times(path: Path, attr: str, edits: int) -> tuple[list[dict], list[floa
     rows, values = [], []
     with running(path) as studio, sync_playwright() as pw:
         browser = pw.chromium.launch(executable_path=shutil.which("chromium") or "/usr/bin/chromium",
-                                     args=CHROMIUM_FLAGS)
+                                     args=CHROMIUM_FLAGS)  # checked in main()
         page = browser.new_page(viewport={"width": 1280, "height": 800}, bypass_csp=True)
         page.goto(studio.url)
         page.wait_for_function("window.studio && window.studio.models > 0", timeout=120_000)
@@ -98,6 +98,15 @@ def main() -> None:
     ap.add_argument("--edits", type=int, default=15)
     ap.add_argument("--attr", default="mass_h")
     args = ap.parse_args()
+    chromium = shutil.which("chromium") or "/usr/bin/chromium"
+    try:
+        import playwright  # noqa: F401
+        import grammarkit_studio  # noqa: F401
+    except ImportError as exc:
+        sys.exit(f"bench_studio needs the test and studio extras ({exc.name} is missing): "
+                 'python -m pip install -e ".[test]"')
+    if not Path(chromium).is_file():
+        sys.exit("bench_studio needs Debian's chromium: apt-get install chromium")
     with tempfile.TemporaryDirectory() as tmp:
         path = copy_paris(Path(tmp) / "grammars")
         rows, values = page_times(path, args.attr, args.edits)
