@@ -23,6 +23,7 @@ BUILTIN_COMMANDS = [
     ("grammarkit.cli.render", "render"),
     ("grammarkit.cli.train", "train"),
     ("grammarkit.cli.cga", "import_cga_command"),
+    ("grammarkit.cli.batch", "batch"),
 ]
 
 

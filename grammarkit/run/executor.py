@@ -481,10 +481,19 @@ class LocalExecutor:
         self.close()
 
 
-def make_executor(spec: str | None = None, workers: int | None = None) -> Executor:
-    """An executor from a `--executor` value: None or "local" (the default)."""
+def make_executor(spec: str | None = None, workers: int | None = None, **options: Any) -> Executor:
+    """An executor from a `--executor` value: None or "local" (the default); "dask" (a Dask
+    LocalCluster of `workers` processes); "dask://host:port" or "tcp://host:port" (an existing
+    Dask cluster). `options` go to the executor (e.g. connect_timeout= for Dask). Dask is
+    imported only here, when asked for (`pip install "grammarkit[dask]"`)."""
     if spec in (None, "", "local"):
-        return LocalExecutor(workers)
+        return LocalExecutor(workers, **options)
+    text = str(spec).strip()
+    if text == "dask" or text.startswith(("dask://", "tcp://", "tls://")):
+        from .dask_executor import DaskExecutor
+
+        return DaskExecutor(None if text == "dask" else text, workers, **options)
     from ..errors import GrammarkitError
 
-    raise GrammarkitError(f"unknown executor {spec!r}; known executors: local")
+    raise GrammarkitError(f"unknown executor {spec!r}; known executors: local, dask, "
+                          "dask://HOST:PORT")
