@@ -102,6 +102,8 @@ def _check_image(path: Path, option: str) -> None:
               help="worker processes at most (default: one per CPU; started only when they pay)")
 @click.option("--option", "options", multiple=True, metavar="KEY=VALUE",
               help="back-end option (see `grammarkit plugins`); repeatable")
+@click.option("--executor", "executor_spec", default="local", show_default=True,
+              help="where parallel work runs: local, dask (a LocalCluster), or dask://HOST:PORT")
 @click.option("--timeout", type=click.FloatRange(min=0, min_open=True), default=None,
               help="stop with an error after this many seconds")
 @click.option("--overwrite", is_flag=True, help="folder output: discard an earlier run's results "
@@ -109,7 +111,7 @@ def _check_image(path: Path, option: str) -> None:
 def derive(file: Path, out: Path, preview: Path | None, seed: int, sets: tuple[str, ...],
            fmt: str | None, tree: Path | None, variations: int | None, backend: str | None,
            count: int | None, iterations: int, workers: int | None, options: tuple[str, ...],
-           timeout: float | None, overwrite: bool) -> None:
+           executor_spec: str, timeout: float | None, overwrite: bool) -> None:
     """Derive a model from the grammar FILE.
 
     \b
@@ -158,7 +160,8 @@ def derive(file: Path, out: Path, preview: Path | None, seed: int, sets: tuple[s
         raise click.UsageError("for a folder of results, give --preview alone: each result gets "
                                "<id>.png in the -o folder")
     _run_folder(grammar, file, spec.name, out, count or 1, iterations, seed, attrs, option_values,
-                fmt, preview is not None, workers, timeout, overwrite, registries, console)
+                fmt, preview is not None, workers, executor_spec, timeout, overwrite, registries,
+                console)
 
 
 def _run_single(grammar: Any, file: Path, out: Path, seed: int, attrs: dict[str, str], fmt: str,
@@ -215,11 +218,12 @@ def _image_bytes(png: bytes, path: Path) -> bytes:
 
 def _run_folder(grammar: Any, file: Path, backend: str, out: Path, n: int, iterations: int,
                 seed: int, attrs: dict[str, str], options: dict[str, Any], fmt: str | None,
-                preview: bool, workers: int | None, timeout: float | None, overwrite: bool,
-                registries: Any, console: Any) -> None:
-    from ..run.api import run_backend
-
+                preview: bool, workers: int | None, executor_spec: str, timeout: float | None,
+                overwrite: bool, registries: Any, console: Any) -> None:
     import signal
+
+    from ..run.api import run_backend
+    from ..run.executor import make_executor
 
     progress, factory = progress_factory(console)
     written: list[str] = []
@@ -228,11 +232,12 @@ def _run_folder(grammar: Any, file: Path, backend: str, out: Path, n: int, itera
         raise KeyboardInterrupt  # SIGTERM ends the run like Ctrl-C: the current result completes or vanishes
 
     previous = signal.signal(signal.SIGTERM, terminate)
+    executor = make_executor(executor_spec, workers)
     try:
         with progress:
             summary = run_backend(grammar, out=out, backend=backend, n=n, seed=seed,
                                   iterations=iterations, attrs=attrs, options=options,
-                                  workers=workers, format=fmt, preview=preview, progress=factory,
+                                  executor=executor, format=fmt, preview=preview, progress=factory,
                                   timeout=timeout, overwrite=overwrite, inputs=(file,),
                                   registries=registries, on_result=lambda e: written.append(e["id"]))
     except KeyboardInterrupt:
@@ -240,6 +245,7 @@ def _run_folder(grammar: Any, file: Path, backend: str, out: Path, n: int, itera
                    "every complete one); run the same command again to continue", err=True)
         raise SystemExit(130) from None
     finally:
+        executor.close()
         signal.signal(signal.SIGTERM, previous)
     if summary.resumed:
         console.print(f"continued an earlier run: {summary.resumed} results were already in {out}/",

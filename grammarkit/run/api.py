@@ -284,6 +284,7 @@ def run_backend(grammar: Any, *, out: str | Path, backend: str | None = None, n:
                 stats = stop.value or {}
     finally:
         gen.close()
+        folder.close()
     summary.stats = stats
     if folder.done < n:
         reason = stats.get("shortfall") if isinstance(stats, dict) else None

@@ -274,38 +274,6 @@ def merge_models(folder: str | Path, entries: Sequence[Mapping[str, Any]], path:
     return merge_glb([(e["id"], folder / e["file"]) for e in ok], path)
 
 
-def _size(path: Path) -> int | None:
-    try:
-        return path.stat().st_size
-    except OSError:
-        return None
-
-
-def _drop_torn_line(manifest: Path, size: int | None) -> None:
-    """After a failed append (a full disk), cut a partly written last line off the manifest, so
-    that it lists exactly the complete items for every reader, not only for the writer (which
-    skips a torn line when it reopens the folder). Truncating needs no free space."""
-    if size is None:
-        return
-    try:
-        with open(manifest, "rb") as fh:
-            fh.seek(size)
-            tail = fh.read()
-        if not tail:
-            return
-        if tail.endswith(b"\n") and tail.count(b"\n") == 1:
-            try:
-                import json
-
-                json.loads(tail)
-                return  # the line is complete (the failure came after it): keep it
-            except ValueError:
-                pass
-        os.truncate(manifest, size)
-    except OSError:
-        pass  # the writer's reader still stops at a torn line
-
-
 class _Writer:
     """Writes outcomes in item order on a thread of its own, so that writing an item (atomic
     files, an fsync'd manifest line and folder: ~10 ms on a local disk) overlaps with deriving
@@ -344,6 +312,7 @@ class _Writer:
         """Write what is queued (unless a write failed) and stop the thread."""
         self.queue.put(None)
         self.thread.join()
+        self.folder.close()
 
     def _run(self) -> None:
         folder = self.folder
@@ -354,12 +323,10 @@ class _Writer:
             if self.error is not None:
                 continue  # after a failure: drop the rest, the manifest stays consistent
             entry, files, seconds = job
-            before = _size(folder.manifest)
             t0 = time.perf_counter()
             try:
                 folder.add(entry, files)
             except OSError as exc:  # a full disk, a folder gone read-only
-                _drop_torn_line(folder.manifest, before)
                 if isinstance(exc, OutputError):  # already names the path and the problem
                     what = str(exc)
                 else:
