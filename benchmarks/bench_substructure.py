@@ -1,0 +1,193 @@
+"""Benchmark of the substructure search (Liu et al. 2015; plugins/substructure).
+
+Tables (medians of --runs runs, measured in this process):
+1. every tiling example: parts, contacts, symmetries, operations, enumeration time, and the
+   brute-force reference (all connected subgraph pairs, networkx VF2) where it finishes;
+2. castles grown by tiling to 70, 300 and 1,000 parts (copies of castle_small side by side,
+   corner towers touching, cut to N parts breadth-first): enumeration time, the fitted exponent
+   of time against parts, and the brute force where it finishes (it does not beyond ~20 parts);
+3. valid new variants per minute of the substructure back end beside the graph sampler's, both
+   through grammarkit.run on the same examples.
+
+Paper: up to 3 s to enumerate all matching subgraphs for 5-70 nodes (2.9 GHz laptop).
+Targets: <= 0.3 s at 70 nodes, <= 10 s at 1,000 nodes, exponent <= 2.2.
+
+    python benchmarks/bench_substructure.py [--runs 3] [--variants 20] [--skip-yield]
+"""
+from __future__ import annotations
+
+import argparse
+import statistics
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "plugins" / "substructure"))
+sys.path.insert(0, str(ROOT / "plugins" / "graph_sampler"))
+
+from grammarkit.tiling import Assembly, Part, read_assembly  # noqa: E402
+from grammarkit_substructure.search import (  # noqa: E402
+    OrderedGraph, brute_force_operations, find_operations, find_symmetries,
+)
+from grammarkit_substructure.shape import Shape  # noqa: E402
+
+EXAMPLES = ROOT / "grammars" / "tiling"
+
+
+def median_time(fn, runs: int) -> tuple[float, object]:
+    times, out = [], None
+    for _ in range(runs):
+        t = time.perf_counter()
+        out = fn()
+        times.append(time.perf_counter() - t)
+    return statistics.median(times), out
+
+
+def in_child(fn, limit_s: float):
+    """(seconds, value) of fn() run in a forked child, or None when it passes `limit_s`."""
+    import multiprocessing as mp
+
+    ctx = mp.get_context("fork")
+    q = ctx.Queue()
+
+    def work():  # noqa: ANN202
+        t = time.perf_counter()
+        value = fn()
+        q.put((time.perf_counter() - t, value))
+
+    p = ctx.Process(target=work)
+    p.start()
+    p.join(limit_s)
+    if p.is_alive():
+        p.kill()
+        p.join()
+        return None
+    return q.get()
+
+
+def brute(graph: OrderedGraph, limit_s: float) -> str:
+    """The brute force (exponential) with a time limit."""
+    out = in_child(lambda: len(brute_force_operations(graph)), limit_s)
+    return f"> {limit_s:.0f} s" if out is None else f"{out[0]:.3f} s ({out[1]} ops)"
+
+
+def grown_castle(n_parts: int) -> Shape:
+    """Copies of castle_small on a grid (towers touching), cut to n_parts breadth-first."""
+    import networkx as nx
+
+    base = read_assembly(EXAMPLES / "castle" / "castle_small.glb")
+    (lo, hi) = base.bounds
+    dx, dy = hi[0] - lo[0], hi[1] - lo[1]
+    side = int(np.ceil(np.sqrt(n_parts / len(base)))) + 1
+    parts = []
+    for i in range(side):
+        for j in range(side):
+            for p in base.parts:
+                T = np.eye(4)
+                T[:3, 3] = [i * dx, j * dy, 0.0]
+                parts.append(p.transformed(T, f"{p.type}.{len(parts)}"))
+    shape = Shape.from_assembly(Assembly(parts, name="grid"))
+    g = nx.Graph(shape.edges)
+    keep = sorted(list(nx.bfs_tree(g, 0))[:n_parts])
+    idx = {v: k for k, v in enumerate(keep)}
+    nbrs = [[idx[w] for w in shape.graph.nbrs[v] if w in idx] for v in keep]
+    shape.graph = OrderedGraph([shape.types[v] for v in keep], nbrs)
+    shape.types = [shape.types[v] for v in keep]
+    shape.edges = sorted({(min(idx[u], idx[v]), max(idx[u], idx[v])) for u, v in shape.edges
+                          if u in idx and v in idx})
+    return shape
+
+
+def table_examples(runs: int, brute_limit: float) -> None:
+    print("\n### Tiling examples (donor = host = the example, q = 0)\n")
+    print("| example | parts | contacts | symmetries | operations | recursive | enumerate | brute force |")
+    print("|---|---:|---:|---:|---:|---:|---:|---:|")
+    for path in sorted(EXAMPLES.glob("*/*.glb")):
+        shape = Shape.from_assembly(read_assembly(path))
+        t, ops = median_time(lambda: find_operations(shape.graph), runs)
+        syms = find_symmetries(shape.graph)  # noqa: F841 - counted below
+        rec = sum(1 for o in ops if o.recursive)
+        bf = brute(shape.graph, brute_limit)
+        print(f"| {path.stem} | {len(shape)} | {len(shape.edges)} | {len(syms)} | {len(ops)} | {rec} "
+              f"| {t:.3f} s | {bf} |")
+
+
+def table_scaling(runs: int, brute_limit: float, limit: float, sizes=(20, 70, 300, 1000)) -> None:
+    print("\n### Grown castles (copies of castle_small, cut breadth-first)\n")
+    print("| parts | contacts | operations | enumerate (median) | per operation | brute force |")
+    print("|---:|---:|---:|---:|---:|---:|")
+    xs, ys = [], []
+    for n in sizes:
+        shape = grown_castle(n)
+        times, count = [], None
+        for _ in range(runs if n < 1000 else 1):
+            out = in_child(lambda: len(find_operations(shape.graph)), limit)
+            if out is None:
+                break
+            times.append(out[0])
+            count = out[1]
+        bf = brute(shape.graph, brute_limit) if n <= 70 else "not run (exponential)"
+        if not times:
+            print(f"| {n} | {len(shape.edges)} | ? | > {limit:.0f} s | | {bf} |")
+            continue
+        t = statistics.median(times)
+        print(f"| {n} | {len(shape.edges)} | {count} | {t:.3f} s | {1e6 * t / max(count, 1):.0f} us | {bf} |")
+        if n >= 70:
+            xs.append(np.log(n))
+            ys.append(np.log(t))
+    if len(xs) >= 2:
+        k = np.polyfit(xs, ys, 1)[0]
+        print(f"\nfitted exponent (time ~ parts^k over the sizes >= 70 that finished): k = {k:.2f}")
+
+
+def table_yield(n: int, timeout: float) -> None:
+    from grammarkit.dsl import load
+    from grammarkit.run import iter_results
+
+    print(f"\n### Valid new variants per minute (grammarkit.run, 1 worker, up to {n} variants or {timeout:.0f} s)\n")
+    print("| example grammar | substructure | graph sampler | ratio |")
+    print("|---|---:|---:|---:|")
+    for gpath in sorted(EXAMPLES.glob("*/*.grammar")):
+        g = load(gpath)
+        rates = []
+        for backend, it in (("substructure", 1), ("graph-sampler", 4)):
+            t = time.perf_counter()
+            made = 0
+            try:
+                for _ in iter_results(g, backend=backend, n=n, seed=7, iterations=it, workers=1,
+                                      timeout=timeout):
+                    made += 1
+            except Exception as exc:  # a run that stops at the time limit still counts what it made
+                if "time budget" not in str(exc):
+                    raise
+            dt = time.perf_counter() - t
+            rates.append(60.0 * made / dt)
+        ratio = rates[0] / rates[1] if rates[1] else float("nan")
+        print(f"| {gpath.stem} | {rates[0]:.1f} | {rates[1]:.1f} | {ratio:.2f} |")
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--runs", type=int, default=3)
+    ap.add_argument("--brute-limit", type=float, default=60.0, help="seconds before the brute force is stopped")
+    ap.add_argument("--limit", type=float, default=600.0, help="seconds before an enumeration is stopped")
+    ap.add_argument("--variants", type=int, default=20)
+    ap.add_argument("--yield-timeout", type=float, default=120.0)
+    ap.add_argument("--skip-yield", action="store_true")
+    ap.add_argument("--only-yield", action="store_true")
+    args = ap.parse_args()
+    import os
+
+    print(f"load average at start: {os.getloadavg()[0]:.2f} (2 cores shared with other jobs)")
+    if not args.only_yield:
+        table_examples(args.runs, args.brute_limit)
+        table_scaling(args.runs, args.brute_limit, args.limit)
+    if not args.skip_yield:
+        table_yield(args.variants, args.yield_timeout)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,276 @@
+"""The `substructure` back end: new assemblies by replacing substructures (Liu et al. 2015).
+
+Candidate j (a pure function of the run seed and j) starts from an example drawn by its own
+random stream and applies up to max(--iterations, `operations`) operations in a row; every
+shape along the chain is a result. Before every operation all
+matching cuts are recomputed on the current shape (section 4.2): the copied piece comes from
+one of the original examples (in-model and in-group synthesis, section 6), the hole is cut in
+the current shape. Operations are drawn at random among all of them; those whose result graph equals the
+current shape's or an example's are trivial (the paper drops them) and skipped before any
+geometry; an operation whose embedding breaks the grammar (after the optional repair) is
+replaced by another draw, up to `tries` embeddings per step. Candidates whose typed shape graph equals an example's or an earlier
+result's are skipped (in candidate order), so the output depends only on (seed, index).
+
+Candidates are computed through `request.executor` (a session holding the examples), in
+fixed-size batches merged in candidate order.
+"""
+from __future__ import annotations
+
+import time
+import zlib
+from collections import Counter
+from dataclasses import dataclass
+from typing import Any, Iterator
+
+import numpy as np
+
+from .search import find_operations
+from .shape import Shape, embed
+
+BATCH = 16
+
+
+@dataclass
+class _State:
+    examples: list[Shape]
+    rules: Any
+    options: Any
+    seed: int
+    steps: int
+    max_parts: int
+    cache: dict
+
+
+def _init(examples, rules, options, seed, steps, max_parts) -> _State:  # noqa: ANN001
+    return _State(examples, rules, options, seed, steps, max_parts, {})
+
+
+def _operations(state: _State, donor_i: int, host: Shape, host_key: Any) -> list:
+    key = (donor_i, host_key)
+    ops = state.cache.get(key) if host_key is not None else None
+    if ops is None:
+        donor = state.examples[donor_i]
+        ops = find_operations(donor.graph, host.graph if donor is not host else None, q=state.options.q)
+        if host_key is not None:
+            state.cache[key] = ops
+    return ops
+
+
+def _typed_graph(types, edges, rounds: int = 4):
+    """(None, key): a Weisfeiler-Lehman key of the typed graph: colours start from the types and
+    are refined `rounds` times by the sorted colours of the neighbours; the key is the sorted
+    colour multiset of every round. Hand-written instead of networkx's
+    weisfeiler_lehman_graph_hash because it runs for every candidate operation and this one is
+    about 20x faster (tuples of ints, no hashlib); int and tuple hashes do not depend on
+    PYTHONHASHSEED, so workers agree."""
+    names = sorted(set(types))
+    code = {t: k for k, t in enumerate(names)}
+    n = len(types)
+    nbrs: list[list[int]] = [[] for _ in range(n)]
+    for u, v in edges:
+        nbrs[u].append(v)
+        nbrs[v].append(u)
+    colour = [hash((code[t], len(nbrs[i]))) for i, t in enumerate(types)]
+    # type names enter as CRC-32 ints: str hashes change with PYTHONHASHSEED between processes
+    key = [tuple(zlib.crc32(t.encode("utf-8")) for t in names), tuple(sorted(colour))]
+    for _ in range(rounds):
+        colour = [hash((colour[i], tuple(sorted(colour[w] for w in nbrs[i])))) for i in range(n)]
+        key.append(tuple(sorted(colour)))
+    return None, hash(tuple(key))
+
+
+def _trivial(donor: Shape, host: Shape, op, known: list) -> bool:
+    """True when the operation's result graph equals the host's or an example's (the paper
+    keeps only results with a topological change), by Weisfeiler-Lehman hash; graph only."""
+    from grammarkit.tiling import replace_subgraph
+
+    kept, edges = replace_subgraph(len(host), host.edges, op.removed, donor.edges, op.copied,
+                                   [(b, w) for _, w, b, _ in op.pairs])
+    types = [host.types[v] for v in kept] + [donor.types[v] for v in op.copied]
+    g, h = _typed_graph(types, edges)
+    return any(h == kh for _, kh in known)
+
+
+def candidate(state: _State, index: int) -> dict:
+    """Candidate `index`: a chain of up to `steps` operations from an example (each shape
+    along the chain is a result); a pure function of (seed, index)."""
+    rng = np.random.default_rng(np.random.SeedSequence([int(state.seed) & 0xFFFFFFFF, int(index)]))
+    opt = state.options
+    if "known" not in state.cache:
+        state.cache["known"] = [_typed_graph(e.types, e.edges) for e in state.examples]
+    examples_known = state.cache["known"]
+    start = int(rng.integers(len(state.examples)))
+    host, host_key = state.examples[start], ("example", start)
+    history: list = []
+    shapes: list = []
+    tried = 0
+    for _ in range(state.steps):
+        options = []
+        for d in range(len(state.examples)):
+            donor = state.examples[d]
+            same = host_key == ("example", d)
+            ops = _operations(state, d, donor if same else host, ("example", d) if same else host_key)
+            options.extend((d, op) for op in ops)
+        if not options:
+            break
+        known = examples_known + ([_typed_graph(host.types, host.edges)] if host_key is None else [])
+        embedded = 0
+        done = False
+        # Local edits first: an operation whose pieces are "the rest of the shape" (stored as
+        # complements) mostly swaps one whole example for another, a trivial result; those are
+        # drawn only after every local one (random order within each group).
+        local = [k for k, (_, op) in enumerate(options)
+                 if not op.copied_side.complement and not op.removed_side.complement]
+        far = [k for k, (_, op) in enumerate(options)
+               if op.copied_side.complement or op.removed_side.complement]
+        order = [local[i] for i in rng.permutation(len(local))] + [far[i] for i in rng.permutation(len(far))]
+        for k in order:
+            if embedded >= opt.tries:
+                break
+            d, op = options[k]
+            donor = state.examples[d]
+            if _trivial(donor, host, op, known):
+                continue
+            embedded += 1
+            tried += 1
+            out = embed(donor, host, op, state.rules, embedding=opt.embedding, repair=opt.repair,
+                        orientation_degrees=opt.orientation_degrees, max_parts=state.max_parts)
+            if out.shape is None:
+                continue
+            history.append({"donor": donor.name, "operation": op.to_json(host.ids, donor.ids),
+                            "repaired": out.repaired})
+            host, host_key = out.shape, None
+            shapes.append((host, list(history)))
+            done = True
+            break
+        if not done:
+            break
+    return {"index": index, "shapes": shapes, "start": state.examples[start].name, "tried": tried}
+
+
+class _Deduper:
+    """Typed shape graphs already seen, by Weisfeiler-Lehman hash. (VF2 on rings of identical
+    parts backtracks for minutes; WL can only merge non-isomorphic graphs, never tell two
+    isomorphic ones apart, so a duplicate is never written, at worst a rare new shape skipped.)"""
+
+    def __init__(self, mode: str):
+        self.mode = mode
+        self.seen: set = set()
+
+    def add(self, shape: Shape) -> bool:
+        if self.mode == "none":
+            return True
+        h = _typed_graph(shape.types, shape.edges)[1]
+        if h in self.seen:
+            return False
+        self.seen.add(h)
+        return True
+
+
+def load_examples(grammar, tolerance: float | None) -> tuple[list, list[Shape], float]:
+    """The grammar's example assemblies, as Shapes at one contact tolerance (the smallest
+    example's default unless given)."""
+    from grammarkit.errors import GrammarError
+    from grammarkit.tiling import default_tolerance, load_examples as loader
+
+    assemblies = list(loader(grammar))
+    if not assemblies:
+        raise GrammarError(f"grammar {grammar.name!r} has no examples: the substructure search "
+                           "edits example assemblies (add `example NAME = assembly(\"file.glb\")`)",
+                           getattr(grammar, "span", None))
+    tol = tolerance if tolerance is not None else min(float(default_tolerance(a)) for a in assemblies)
+    shapes = []
+    for n, a in enumerate(assemblies):
+        a.name = a.name or f"example{n}"
+        shapes.append(Shape.from_assembly(a, tol))
+    return assemblies, shapes, tol
+
+
+def run(request) -> Iterator:  # noqa: ANN001
+    """Yield up to `request.n` new valid assemblies; return the run's statistics."""
+    from grammarkit.errors import DerivationError
+    from grammarkit.run import Result
+    from grammarkit.tiling import rules_from_grammar, validate
+
+    t0 = time.perf_counter()
+    opt = request.options
+    rules = rules_from_grammar(request.grammar)
+    assemblies, examples, tol = load_examples(request.grammar, opt.contact_tolerance)
+    for a, s in zip(assemblies, examples):
+        report = validate(rules, a, tolerance=tol, max_violations=3)
+        if not report.ok:
+            raise DerivationError(f"example {a.name!r} violates the grammar, so it cannot seed the "
+                                  "substructure search: " + "; ".join(v.format() for v in report.violations),
+                                  getattr(request.grammar, "span", None))
+    n_ops = sum(len(find_operations(d.graph, h.graph if d is not h else None, q=opt.q))
+                for d in examples for h in examples)
+    if n_ops == 0:
+        raise DerivationError(
+            f"grammar {request.grammar.name!r}: its examples have no replaceable substructure (no "
+            "two pieces whose boundaries reconnect in observed ways), so the substructure back end "
+            "can make nothing new; try --option q=1 or 2 to tolerate ordering defects, or more examples",
+            getattr(request.grammar, "span", None))
+    max_parts = opt.max_parts or 4 * max(len(s) for s in examples)
+    steps = max(int(request.iterations), opt.operations)
+    dedupe = _Deduper(opt.dedupe)
+    for s in examples:
+        dedupe.add(s)
+    stats = {"candidates": 0, "valid": 0, "new": 0, "embeddings_tried": 0, "repaired": 0}
+    made = 0
+    session = request.executor.session(_init, examples, rules, opt, request.seed, steps, max_parts) \
+        if request.executor is not None else None
+    state = None if session is not None else _init(examples, rules, opt, request.seed, steps, max_parts)
+    advance = request.progress("substructure candidates", request.n)
+    try:
+        next_index = 0
+        last_new = 0  # candidate count when the last new variant came
+        while made < request.n and next_index < opt.max_candidates \
+                and stats["candidates"] - last_new < opt.patience:
+            request.check_deadline()
+            items = list(range(next_index, min(opt.max_candidates, next_index + BATCH)))
+            next_index = items[-1] + 1
+            outs = session.map(candidate, items) if session is not None else (candidate(state, i) for i in items)
+            for out in outs:
+                stats["candidates"] += 1
+                stats["embeddings_tried"] += out["tried"]
+                for shape, history in out["shapes"]:
+                    if made >= request.n:
+                        break
+                    stats["valid"] += 1
+                    if not dedupe.add(shape):
+                        continue
+                    index = made
+                    made += 1
+                    last_new = stats["candidates"]
+                    stats["new"] += 1
+                    repaired = any(h["repaired"] for h in history)
+                    stats["repaired"] += int(repaired)
+                    advance(1, candidates=stats["candidates"], new=made)
+                    if index < request.start:
+                        continue
+                    key = f"variant_{index + 1:05d}"
+                    assembly = shape.to_assembly(key, {"substructure": {"start": out["start"],
+                                                                        "operations": history}})
+                    yield Result(id=key, index=index, seed=request.seed, model=assembly,
+                                 parents=(f"example:{out['start']}",) + tuple(
+                                     f"example:{h['donor']}" for h in history),
+                                 metrics={"parts": len(shape), "operations": len(history),
+                                          "candidate": out["index"], "repaired": repaired},
+                                 extra={"operation": history[-1]["operation"], "operations": history,
+                                        "histogram": dict(sorted(Counter(shape.types).items()))})
+    finally:
+        if session is not None:
+            session.close()
+    elapsed = time.perf_counter() - t0
+    summary = {"examples": len(examples), "operations_in_examples": n_ops, **stats,
+               "seconds": round(elapsed, 3),
+               "variants_per_minute": round(60.0 * made / elapsed, 1) if elapsed > 0 else None}
+    if made < request.n:
+        why = (f"the last {opt.patience} candidates gave nothing new" if stats["candidates"] - last_new >= opt.patience
+               else f"max_candidates ({opt.max_candidates}) reached" if stats["candidates"] >= opt.max_candidates
+               else "stopped")
+        summary["shortfall"] = (f"{why}: {stats['candidates']} candidates gave {stats['valid']} valid shapes, "
+                                f"{made} of them new (the rest repeat an example or an earlier result); "
+                                + ("longer chains (--option operations=8), " if opt.operations < 8 else "")
+                                + "--option q=1 or more examples may find more")
+    return summary

@@ -1,0 +1,41 @@
+"""The substructure back end's options (`--option key=value`), as a pydantic model.
+
+Kept apart from the algorithm so that `grammarkit plugins` does not import numpy or trimesh.
+"""
+from __future__ import annotations
+
+from typing import Literal, Optional
+
+from pydantic import BaseModel, ConfigDict, Field
+
+
+class SubstructureOptions(BaseModel):
+    """Parameters of Liu et al. 2015 (defaults follow the paper where it gives one)."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+    q: int = Field(0, ge=0, le=4, description="ordering violations tolerated per match (dummy "
+                   "edges; searched exhaustively, exponential in q; the paper uses q <= 2)")
+    embedding: Literal["rigid", "non-rigid"] = Field("rigid", description="interpolate the "
+                                                     "boundary transforms per part (rigid) or per "
+                                                     "vertex (non-rigid, blend skinning)")
+    repair: bool = Field(True, description="greedy part rescaling (along z) when the embedded "
+                         "shape breaks a constraint, as the paper suggests")
+    orientation_degrees: float = Field(20.0, gt=0, lt=45, description="orientation check: "
+                                       "consecutive cut edges within this angle of parallel "
+                                       "may not become perpendicular, and vice versa")
+    operations: int = Field(4, ge=1, le=100, description="operations chained per candidate "
+                            "(at least --iterations); every shape along the chain is a result")
+    tries: int = Field(64, ge=1, description="operations tried per step before a candidate "
+                       "gives up (each one embedded and validated)")
+    max_candidates: int = Field(20000, ge=1, description="candidates tried in all before the "
+                                "run stops short")
+    patience: int = Field(400, ge=1, description="stop after this many candidates in a row "
+                          "gave nothing new")
+    max_parts: Optional[int] = Field(None, ge=1, description="largest variant (default: 4 x "
+                                     "the largest example)")
+    dedupe: Literal["isomorphism", "none"] = Field("isomorphism", description="skip variants "
+                                                   "whose typed graph equals an earlier one's "
+                                                   "or an example's")
+    contact_tolerance: Optional[float] = Field(None, gt=0, description="absolute contact "
+                                               "distance (default: from the examples' scale)")
