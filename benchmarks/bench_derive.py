@@ -64,9 +64,12 @@ def record_recipe(grammar):
                         ("prism", (s.poly, size[2]), frame(o, s.ax)))
             return super().add_cut(s, depth)
 
-    compiled = compile_split(grammar)
-    compiled.set_values(None, 0)
-    ctx = Recorder(compiled, 0, Limits(), compiled.base_dir)
+    from grammarkit.plugins import default_registries
+
+    registries = default_registries()
+    compiled = compile_split(grammar, registries=registries)
+    values = compiled.evaluate_values(None, 0)
+    ctx = Recorder(compiled, 0, Limits(), values, registries, compiled.base_dir)
     ctx.start(compiled.axiom, Shape((0.0, 0.0, 0.0), ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0)),
                                     (10.0, 10.0, 0.0), FACE))
     ctx.run()

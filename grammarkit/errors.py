@@ -13,9 +13,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Iterable, Literal
+from typing import TYPE_CHECKING, Iterable, Literal
 
-from .ir.base import Span
+if TYPE_CHECKING:  # pragma: no cover - spans are IR (pydantic); this module stays import-light
+    from .ir.base import Span
 
 Severity = Literal["error", "warning", "note"]
 

@@ -9,20 +9,33 @@ like the specifications below. Register it with an entry point in group ``gramma
 grammarkit's own features (the split operations, the tiling constraints, the exporters,
 the graph sampler) are registered exactly this way. Every hook is optional. Hooks are
 called once, lazily, the first time the plugin manager needs that kind of thing; results
-are cached for the process. A hook that raises is reported with the plugin's name and its
-contribution is skipped; other plugins and unrelated commands keep working.
-See docs/plugins.md for a complete example.
+are cached for the process.
+
+- Order: implementations are called in pluggy's call order (`@hookimpl(tryfirst=True)` /
+  `trylast=True`, otherwise the later registered first).
+- Names are global: a name two plugins provide is an error naming both (the first in call
+  order is used); a built-in (grammarkit's own entry points) is never replaced.
+- Each returned item must have the hook's spec type; a wrong one is reported and dropped.
+- A hook that raises is reported with the plugin's name and its contribution is skipped;
+  other plugins and unrelated commands keep working.
+
+What a split operation's `apply(ctx, shape, args, block)` receives is described by the
+protocols at the end of this module: `OperationContext` (ctx), `ShapeView` (shape and the
+shapes it makes) and `BlockSlot` (the entries of `block`). Operations use nothing else; the
+built-in ones (grammarkit/split/ops.py) are written against exactly these.
+See docs/plugins.md for complete examples.
 """
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Iterable
+import random
+from typing import TYPE_CHECKING, Any, Callable, Iterable, Protocol
 
 import pluggy
 
 if TYPE_CHECKING:  # pragma: no cover - types only
     import click
 
-    from .registry import BackendSpec, ConstraintSpec, ExporterSpec, FitSpec, FunctionSpec, OperationSpec
+    from .registry import BackendSpec, ConstraintSpec, ExporterSpec, FitSpec, FunctionSpec, OperationSpec, Registries
 
 PROJECT = "grammarkit"
 hookspec = pluggy.HookspecMarker(PROJECT)
@@ -34,8 +47,10 @@ def grammarkit_operations() -> Iterable["OperationSpec"]:
     """Split operations this plugin provides (e.g. `extrude`, `split`, `roofGable`).
 
     Return `OperationSpec`s. The checker validates calls against `params`/`block`; the split
-    engine calls `apply(ctx, shape, args, block)`. A name provided twice is an error reported
-    with both plugins' names; the first registered wins.
+    engine calls `apply(ctx, shape, args, block)` with an `OperationContext`, a `ShapeView`,
+    the evaluated arguments in parameter order (defaults filled in) and the block's
+    `BlockSlot`s (or None). A name provided twice is an error reported with both plugins'
+    names; a built-in operation is never replaced.
     """
 
 
@@ -84,3 +99,99 @@ def grammarkit_train_commands() -> Iterable["click.Command"]:
 def grammarkit_insert_fits() -> Iterable["FitSpec"]:
     """Ways to fit an inserted asset into a scope, named in grammar text as
     `i("asset.glb", fit=NAME)`; see `grammarkit.registry.FitSpec`."""
+
+
+# -- what operations receive -----------------------------------------------------------------
+Vec = tuple[float, float, float]
+
+
+class ShapeView(Protocol):
+    """A shape of the split engine as operations see it (grammarkit.split.Shape implements it).
+
+    The scope is an origin `o`, three orthonormal world axes `ax` (the scope's x, y, z) and a
+    size `sz`. An operation may modify and return the shape it receives (it owns it for the
+    call), or return new shapes made with `copy()` / `derived()`; never build a Shape from
+    scratch (derived shapes carry the derivation's values and tags)."""
+
+    o: Vec  # origin, world coordinates
+    ax: tuple[Vec, Vec, Vec]  # the scope's x, y, z axes in world coordinates
+    sz: Vec  # size along the scope's axes
+    kind: str  # "F" (a face in the scope's xy plane) or "V" (a volume)
+    poly: Any  # face/footprint contours in scope coordinates, None for the full rectangle
+    solid: Any  # a manifold3d.Manifold in scope coordinates (roofs, inserted meshes), or None
+    color: str | None  # "#rrggbb" tag
+    material: str | None  # material tag
+    params: tuple  # the current rule's arguments
+    seed: int  # the shape's seed (run seed mixed with its derivation path)
+    entry: tuple | None  # (o, ax, sz) when the current rule was entered
+
+    @property
+    def rule_name(self) -> str: ...  # the rule being applied (for messages)
+
+    @property
+    def index(self) -> int: ...  # split.index: position among its parent block's children
+
+    @property
+    def total(self) -> int: ...  # split.total
+
+    @property
+    def is_face(self) -> bool: ...
+
+    def rng(self) -> random.Random: ...  # the shape's own generator, seeded by `seed`
+
+    def copy(self) -> "ShapeView": ...
+
+    def derived(self, o: Vec, sz: Vec, poly: Any = None, kind: str | None = None,
+                ax: tuple[Vec, Vec, Vec] | None = None, solid: Any = None) -> "ShapeView":
+        """A new shape with a new scope/geometry that keeps this one's tags."""
+
+    def world(self, x: float, y: float, z: float) -> Vec: ...  # scope coordinates -> world
+
+    def contours(self) -> tuple: ...  # `poly`, or the scope rectangle when `poly` is None
+
+
+class BlockSlot(Protocol):
+    """One entry of an operation's `{ }` block, as `apply` receives it in `block`.
+
+    A block operation returns `[(child_shape, slot), ...]`; each child then runs the slot's
+    body (the engine gives each child its seed and `split.index`/`split.total`)."""
+
+    mode: str  # "abs", "rel", "float" (split sizes), "sel" (a selector), "repeat" (a group)
+    sel: str | None  # the selector name of a "sel" entry
+    items: tuple  # the entries of a "repeat" group
+    span: Any  # where the entry is written (for messages)
+
+    def size(self, shape: ShapeView) -> Any: ...  # the entry's size expression, on `shape`
+
+
+class OperationContext(Protocol):
+    """What a derivation offers an operation (`ctx` in `apply(ctx, shape, args, block)`).
+    One per derivation; derivations may run at once, so keep no state outside it."""
+
+    limits: Any  # grammarkit.split.Limits of this derivation
+    registries: "Registries"  # operations, functions, fits, ... in effect
+    base_dir: str | None  # folder of the grammar file (relative asset paths)
+    seed: int  # the run seed
+    cache: dict  # per-derivation memo for operations (keys: tuples starting with your op's name)
+
+    def attr(self, name: str) -> Any: ...  # an attr's or const's value in this derivation
+
+    @property
+    def attrs(self) -> dict: ...  # every attr and const value (a copy)
+
+    def add_solid(self, shape: ShapeView, name: str | None = None) -> None:
+        """Add a volume shape's solid to the model as a terminal, without ending the shape."""
+
+    def add_body(self, shape: ShapeView) -> None:
+        """Keep a volume that is decomposed into faces as the body its faces decorate."""
+
+    def recess(self, face: ShapeView, depth: float) -> ShapeView:
+        """Cut a face `depth` into the solid below it; returns the face at the recess bottom."""
+
+    def terminal(self, shape: ShapeView, name: str) -> None:
+        """Make `shape` a terminal named `name` (as `Name.` does)."""
+
+    def warn(self, message: str) -> None: ...  # a warning listed on the model
+
+
+Apply = Callable[[OperationContext, ShapeView, list, "tuple[BlockSlot, ...] | None"], Any]

@@ -1,22 +1,51 @@
 """The plugin manager: loads entry points of group ``grammarkit`` and collects what they provide.
 
-Each hook implementation is called on its own so that a broken plugin is reported with its
-name and skipped, and everything else keeps working (`grammarkit plugins` lists the failure).
+Hooks are called in pluggy's call order (`tryfirst`/`trylast`, then the later registered
+first), one implementation at a time, so that a broken plugin is reported with its name and
+skipped while everything else keeps working (`grammarkit plugins` lists the failure):
+
+- an entry point that fails to import, or a hook that raises (even `SystemExit`), is recorded
+  against its plugin; a `KeyboardInterrupt` raised there becomes a PluginError naming it;
+- every item a hook returns is checked against the hook's spec type (an OperationSpec from
+  `grammarkit_operations`, ...); a wrong item is reported and dropped, the rest is kept;
+- a name provided twice is an error naming both plugins. A built-in (an entry point of
+  grammarkit's own distribution) is never replaced; between other plugins the first in
+  pluggy's call order wins;
+- what plugins print while loading goes to stderr, so `--json` output stays valid.
+
+`GRAMMARKIT_DISABLE_PLUGINS=name,...` skips the named entry points; `GRAMMARKIT_NO_PLUGINS=1`
+(the CLI's `--no-plugins`) skips every entry point that is not a built-in.
+
+The core never reads the process-wide manager: it receives a `grammarkit.registry.Registries`.
+Only the CLI and the public API functions call `default_registries()` when given none.
 """
 from __future__ import annotations
 
+import contextlib
 import importlib.metadata as md
+import io
+import os
+import sys
 import threading
 from dataclasses import dataclass, field, replace
-from typing import Any, Callable, Iterable
+from typing import Any, Callable, Iterable, Iterator
 
 import pluggy
 
 from . import hookspecs
 from .errors import PluginError
-from .registry import BackendSpec, ConstraintSpec, ExporterSpec, FunctionSpec, OperationSpec, Registries
+from .registry import (
+    BackendSpec, ConstraintSpec, ExporterSpec, FitSpec, FunctionSpec, OperationSpec, Registries,
+)
 
 ENTRY_POINT_GROUP = "grammarkit"
+# Entry points of this distribution are the built-ins: never replaced by another plugin.
+BUILTIN_DISTRIBUTION = "grammarkit"
+DISABLE_ENV = "GRAMMARKIT_DISABLE_PLUGINS"
+NO_PLUGINS_ENV = "GRAMMARKIT_NO_PLUGINS"
+
+__all__ = ["DISABLE_ENV", "ENTRY_POINT_GROUP", "NO_PLUGINS_ENV", "PluginInfo", "PluginManager",
+           "default_registries", "get_plugin_manager", "iter_errors", "reset_plugin_manager"]
 
 
 @dataclass
@@ -27,46 +56,149 @@ class PluginInfo:
     module: str = ""
     provides: dict[str, list[str]] = field(default_factory=dict)
     errors: list[str] = field(default_factory=list)
+    builtin: bool = False
+    disabled: bool = False
 
     @property
     def ok(self) -> bool:
         return not self.errors
 
+    @property
+    def status(self) -> str:
+        return "disabled" if self.disabled else ("ok" if self.ok else "error")
+
+
+@dataclass(frozen=True)
+class _Kind:
+    """One kind of contribution: its hook, the spec type its items must have, their name."""
+
+    hook: str
+    label: str  # in messages and `provides`
+    spec: Any  # a type, or a callable returning it (click is imported only when needed)
+    key: Callable[[Any], Any]
+    callables: tuple[str, ...] = ()  # fields that must be callable (or None)
+
+
+def _click_command() -> type:
+    import click
+
+    return click.Command
+
+
+KINDS: dict[str, _Kind] = {
+    "operations": _Kind("grammarkit_operations", "operation", OperationSpec, lambda o: o.name, ("apply",)),
+    "functions": _Kind("grammarkit_functions", "function", FunctionSpec, lambda f: f.name, ("impl",)),
+    "constraints": _Kind("grammarkit_constraints", "constraint", ConstraintSpec, lambda c: c.name, ("check",)),
+    "backends": _Kind("grammarkit_backends", "backend", BackendSpec, lambda b: b.name, ("run",)),
+    "exporters": _Kind("grammarkit_exporters", "exporter", ExporterSpec, lambda e: e.format,
+                       ("encode", "check")),
+    "fits": _Kind("grammarkit_insert_fits", "fit", FitSpec, lambda f: f.name, ("fit",)),
+    "cli_commands": _Kind("grammarkit_cli_commands", "command", _click_command, lambda c: c.name),
+    "train_commands": _Kind("grammarkit_train_commands", "train command", _click_command, lambda c: c.name),
+}
+
+
+def _env_names(value: str | None) -> set[str]:
+    return {n.strip() for n in (value or "").split(",") if n.strip()}
+
+
+def _env_flag(value: str | None) -> bool:
+    return (value or "").strip().lower() in ("1", "true", "yes", "on")
+
+
+@contextlib.contextmanager
+def _plugin_output() -> Iterator[None]:
+    """What a plugin prints to stdout goes to stderr (stdout may be a JSON document)."""
+    target = sys.stderr if sys.stderr is not None else io.StringIO()
+    with contextlib.redirect_stdout(target):
+        yield
+
+
+def _describe(item: Any) -> str:
+    if isinstance(item, (str, bytes, int, float, bool)) or item is None:
+        text = repr(item)
+        return f"{type(item).__name__} {text if len(text) <= 40 else text[:37] + '...'}"
+    name = getattr(item, "name", None)
+    return f"a {type(item).__name__}" + (f" ({name!r})" if isinstance(name, str) else "")
+
+
+def _problem(item: Any, kind: _Kind) -> str | None:
+    """Why `item` cannot be a contribution of this kind (None: it can)."""
+    spec = kind.spec if isinstance(kind.spec, type) else kind.spec()
+    if not isinstance(item, spec):
+        article = "an" if spec.__name__[0] in "AEIOU" else "a"
+        return f"{_describe(item)} where {article} {spec.__name__} belongs"
+    try:
+        name = kind.key(item)
+    except Exception:  # noqa: BLE001 - a malformed object of the right type
+        name = None
+    if not isinstance(name, str) or not name.strip():
+        return f"{_describe(item)} whose name is {name!r}, not a non-empty string"
+    for attr in kind.callables:
+        value = getattr(item, attr, None)
+        if value is not None and not callable(value):
+            return f"{spec.__name__} {name!r} whose {attr} is {_describe(value)}, not a function"
+    return None
+
+
+def _items(result: Any) -> list:
+    """A hook's result as a list; a string, a mapping or a single spec is refused."""
+    if result is None:
+        return []
+    if isinstance(result, (str, bytes, dict)) or not isinstance(result, Iterable) \
+            or hasattr(result, "__dataclass_fields__"):
+        raise TypeError(f"returned {_describe(result)}, not a list of specs")
+    return list(result)
+
 
 class PluginManager:
     """Finds plugins and caches their contributions per kind."""
 
-    def __init__(self, *, load_entry_points: bool = True):
+    def __init__(self, *, load_entry_points: bool = True, disabled: Iterable[str] | None = None,
+                 builtins_only: bool | None = None):
         self._pm = pluggy.PluginManager(hookspecs.PROJECT)
         self._pm.add_hookspecs(hookspecs)
         self._infos: dict[str, PluginInfo] = {}
         self._cache: dict[str, dict[str, Any]] = {}
+        self._registries: Registries | None = None
+        self._reported: set[tuple[str, str]] = set()
         self._lock = threading.RLock()
+        self.disabled = set(disabled) if disabled is not None else _env_names(os.environ.get(DISABLE_ENV))
+        self.builtins_only = _env_flag(os.environ.get(NO_PLUGINS_ENV)) if builtins_only is None else builtins_only
         if load_entry_points:
             self._load_entry_points()
 
     # -- loading -------------------------------------------------------------------------
     def _load_entry_points(self) -> None:
+        found = set()
         for ep in sorted(md.entry_points(group=ENTRY_POINT_GROUP), key=lambda e: e.name):
-            dist = getattr(ep, "dist", None)
-            info = PluginInfo(
-                name=ep.name,
-                distribution=dist.metadata["Name"] if dist is not None else "",
-                version=dist.version if dist is not None else "",
-                module=ep.value,
-            )
             if ep.name in self._infos:  # the same plugin installed twice (e.g. editable + wheel)
                 continue
+            dist = getattr(ep, "dist", None)
+            dist_name = dist.metadata["Name"] if dist is not None else ""
+            info = PluginInfo(name=ep.name, distribution=dist_name or "",
+                              version=dist.version if dist is not None else "", module=ep.value,
+                              builtin=dist_name == BUILTIN_DISTRIBUTION)
             self._infos[ep.name] = info
+            found.add(ep.name)
+            if ep.name in self.disabled or (self.builtins_only and not info.builtin):
+                info.disabled = True
+                continue
             try:
-                obj = ep.load()
-            except Exception as exc:  # noqa: BLE001 - any import failure is the plugin's
+                with _plugin_output():
+                    obj = ep.load()
+            except KeyboardInterrupt:
+                raise PluginError(f"plugin {ep.name!r}: interrupted while importing {ep.value!r}") from None
+            except BaseException as exc:  # noqa: BLE001 - any import failure (even sys.exit) is the plugin's
                 info.errors.append(f"failed to load {ep.value!r}: {type(exc).__name__}: {exc}")
                 continue
             try:
                 self._pm.register(obj, name=ep.name)
             except Exception as exc:  # noqa: BLE001 - e.g. a hook with a wrong signature
                 info.errors.append(f"failed to register: {type(exc).__name__}: {exc}")
+        for name in sorted(self.disabled - found):
+            self._infos[name] = PluginInfo(name=name, disabled=True, errors=[
+                f"{DISABLE_ENV} names {name!r}, but no plugin of that name is installed"])
 
     def register(self, plugin: object, name: str, *, version: str = "") -> None:
         """Register a plugin object at run time (tests, notebooks). Clears the caches."""
@@ -74,7 +206,7 @@ class PluginManager:
             self._pm.register(plugin, name=name)
             self._infos[name] = PluginInfo(name=name, version=version,
                                            module=getattr(plugin, "__name__", type(plugin).__name__))
-            self._cache.clear()
+            self._clear()
 
     def unregister(self, name: str) -> None:
         with self._lock:
@@ -82,72 +214,116 @@ class PluginManager:
             if plugin is not None:
                 self._pm.unregister(plugin)
             self._infos.pop(name, None)
-            self._cache.clear()
+            self._clear()
+
+    def _clear(self) -> None:
+        self._cache.clear()
+        self._registries = None
+        for info in self._infos.values():  # recomputed on the next collection
+            info.provides.clear()
+            info.errors[:] = [e for e in info.errors if e.startswith(("failed to", DISABLE_ENV))]
 
     # -- collecting ----------------------------------------------------------------------
-    def _collect(self, hook_name: str, key: Callable[[Any], str], kind: str) -> dict[str, Any]:
-        with self._lock:
-            if kind in self._cache:
-                return self._cache[kind]
-            found: dict[str, Any] = {}
-            hook = getattr(self._pm.hook, hook_name)
-            # get_hookimpls() is in registration order (pluggy *calls* them in reverse); the
-            # first registered provider of a name wins, so entry points load sorted by name.
-            for impl in hook.get_hookimpls():
-                plugin_name = impl.plugin_name
-                info = self._infos.setdefault(plugin_name, PluginInfo(name=plugin_name))
-                try:
-                    items = list(impl.function() or ())
-                except Exception as exc:  # noqa: BLE001 - isolate the broken plugin
-                    info.errors.append(f"hook {hook_name} raised {type(exc).__name__}: {exc}")
+    def _call(self, kind: _Kind) -> list[tuple[PluginInfo, list]]:
+        """Every hook implementation's items, in pluggy's call order, validated."""
+        hook = getattr(self._pm.hook, kind.hook)
+        out = []
+        # get_hookimpls() lists implementations in the order pluggy sorted them (trylast ...
+        # tryfirst); pluggy calls them from the end of that list.
+        for impl in reversed(hook.get_hookimpls()):
+            if impl.hookwrapper or getattr(impl, "wrapper", False):
+                continue
+            info = self._infos.setdefault(impl.plugin_name, PluginInfo(name=impl.plugin_name))
+            try:
+                with _plugin_output():
+                    items = _items(impl.function())
+            except KeyboardInterrupt:
+                raise PluginError(f"plugin {info.name!r}: interrupted in hook {kind.hook}") from None
+            except TypeError as exc:
+                if str(exc).startswith("returned "):
+                    info.errors.append(f"hook {kind.hook} {exc}; ignored")
+                else:
+                    info.errors.append(f"hook {kind.hook} raised TypeError: {exc}")
+                continue
+            except BaseException as exc:  # noqa: BLE001 - isolate the broken plugin (sys.exit too)
+                info.errors.append(f"hook {kind.hook} raised {type(exc).__name__}: {exc}")
+                continue
+            good = []
+            for item in items:
+                problem = _problem(item, kind)
+                if problem is not None:
+                    info.errors.append(f"hook {kind.hook} returned {problem}; ignored")
                     continue
+                if hasattr(item, "plugin") and not getattr(item, "plugin"):
+                    try:
+                        item = replace(item, plugin=info.name)
+                    except TypeError:
+                        pass
+                good.append(item)
+            out.append((info, good))
+        return out
+
+    def _collect(self, name: str) -> dict[str, Any]:
+        kind = KINDS[name]
+        with self._lock:
+            if name in self._cache:
+                return self._cache[name]
+            calls = self._call(kind)
+            found: dict[str, Any] = {}
+            owner: dict[str, PluginInfo] = {}
+            # built-ins first: whatever order pluggy calls them in, they are never replaced
+            for info, items in sorted(calls, key=lambda c: not c[0].builtin):
                 for item in items:
-                    name = key(item)
-                    if hasattr(item, "plugin") and not getattr(item, "plugin"):
-                        try:
-                            item = replace(item, plugin=plugin_name)
-                        except TypeError:
-                            pass
-                    if name in found:
-                        other = getattr(found[name], "plugin", "?")
-                        info.errors.append(f"{kind} {name!r} already provided by plugin {other!r}; ignored")
+                    key = kind.key(item)
+                    if key in found:
+                        first = owner[key]
+                        if first.builtin and not info.builtin:
+                            info.errors.append(f"{kind.label} {key!r} is a built-in of grammarkit (plugin "
+                                               f"{first.name!r}) and cannot be replaced; ignored")
+                        else:
+                            info.errors.append(f"{kind.label} {key!r} is also provided by plugin "
+                                               f"{first.name!r}, which is used; this one is ignored")
+                            first.errors.append(f"{kind.label} {key!r} is also provided by plugin "
+                                                f"{info.name!r} (ignored; pluggy's call order decides)")
                         continue
-                    found[name] = item
-                    info.provides.setdefault(kind, []).append(name)
-            self._cache[kind] = found
+                    found[key] = item
+                    owner[key] = info
+                    info.provides.setdefault(kind.label, []).append(key)
+            self._cache[name] = found
             return found
 
     def operations(self) -> dict[str, OperationSpec]:
-        return self._collect("grammarkit_operations", lambda o: o.name, "operation")
+        return self._collect("operations")
 
     def functions(self) -> dict[str, FunctionSpec]:
-        return self._collect("grammarkit_functions", lambda f: f.name, "function")
+        return self._collect("functions")
 
     def constraints(self) -> dict[str, ConstraintSpec]:
-        return self._collect("grammarkit_constraints", lambda c: c.name, "constraint")
+        return self._collect("constraints")
 
     def backends(self) -> dict[str, BackendSpec]:
-        return self._collect("grammarkit_backends", lambda b: b.name, "backend")
+        return self._collect("backends")
 
     def exporters(self) -> dict[str, ExporterSpec]:
-        return self._collect("grammarkit_exporters", lambda e: e.format, "exporter")
+        return self._collect("exporters")
 
     def cli_commands(self) -> dict[str, Any]:
-        return self._collect("grammarkit_cli_commands", lambda c: c.name, "command")
+        return self._collect("cli_commands")
 
-    def fits(self) -> dict[str, Any]:
-        return self._collect("grammarkit_insert_fits", lambda f: f.name, "fit")
+    def fits(self) -> dict[str, FitSpec]:
+        return self._collect("fits")
 
     def train_commands(self) -> dict[str, Any]:
-        return self._collect("grammarkit_train_commands", lambda c: c.name, "train command")
+        return self._collect("train_commands")
 
-    def registries(self) -> "Registries":
-        """What the plugins provide, as the core receives it; each kind loads on first use."""
-        from .registry import Registries
-
-        return Registries({"operations": self.operations, "functions": self.functions,
-                           "constraints": self.constraints, "exporters": self.exporters,
-                           "backends": self.backends, "fits": self.fits})
+    def registries(self) -> Registries:
+        """What the plugins provide, as the core receives it; each kind loads on first use.
+        The same object until a plugin is registered or unregistered (so caches keyed by it,
+        such as compiled grammars, are reused)."""
+        with self._lock:
+            if self._registries is None:
+                self._registries = Registries({k: getattr(self, k) for k in Registries.KINDS})
+            return self._registries
 
     def backend(self, name: str) -> BackendSpec:
         backends = self.backends()
@@ -164,10 +340,23 @@ class PluginManager:
 
     def plugins(self) -> list[PluginInfo]:
         """Every plugin with what it provides and any error, collecting all kinds first."""
-        for method in (self.operations, self.functions, self.constraints, self.backends,
-                       self.exporters, self.cli_commands, self.train_commands, self.fits):
-            method()
+        for kind in KINDS:
+            self._collect(kind)
+        with self._lock:
+            self._reported.update((i.name, e) for i in self._infos.values() for e in i.errors)
         return sorted(self._infos.values(), key=lambda i: i.name)
+
+    def new_errors(self) -> list[PluginError]:
+        """Errors of the kinds collected so far that were not reported yet (the CLI prints them
+        as warnings once per command)."""
+        with self._lock:
+            out = []
+            for info in sorted(self._infos.values(), key=lambda i: i.name):
+                for err in info.errors:
+                    if (info.name, err) not in self._reported:
+                        self._reported.add((info.name, err))
+                        out.append(PluginError(f"plugin {info.name!r}: {err}"))
+            return out
 
 
 _manager: PluginManager | None = None
@@ -183,11 +372,22 @@ def get_plugin_manager() -> PluginManager:
         return _manager
 
 
+def default_registries() -> Registries:
+    """The process-wide plugin manager's registries: what the public API functions use when
+    they are given none. The core never calls this (tests/core/test_registry_edges.py)."""
+    return get_plugin_manager().registries()
+
+
 def reset_plugin_manager() -> None:
     """Forget the cached manager (tests that install plugins at run time use this)."""
     global _manager
     with _manager_lock:
         _manager = None
+
+
+def manager_if_loaded() -> PluginManager | None:
+    """The process-wide manager if something has created it (the CLI reports its errors)."""
+    return _manager
 
 
 def iter_errors(infos: Iterable[PluginInfo]) -> Iterable[PluginError]:

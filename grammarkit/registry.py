@@ -9,7 +9,10 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any, Callable, Literal
 
-ArgType = Literal["number", "string", "axis", "selector", "any", "expr"]
+# number, string: a value of that type; color: a string '#rrggbb' or '#rgb' (checked when
+# constant); axis, selector: a bare name among `choices`; name: a bare name of the registry kind
+# `names` (e.g. a fit); any, expr: whatever the operation makes of it.
+ArgType = Literal["number", "string", "color", "axis", "selector", "name", "any", "expr"]
 BlockKind = Literal["none", "sizes", "selectors", "optional-selectors", "optional-sizes"]
 
 
@@ -21,6 +24,7 @@ class Param:
     default: Any = None
     choices: tuple[str, ...] = ()  # for axis/selector-like parameters
     doc: str = ""
+    names: str = ""  # for type "name": the Registries kind the name must be in ("fits")
 
 
 @dataclass(frozen=True)

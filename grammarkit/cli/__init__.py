@@ -2,54 +2,69 @@
 
 User errors (`GrammarkitError`) are printed as `file:line:col: error: message` with the
 source line and a caret, and the exit status is 1; no traceback is shown for them.
+
+Start-up is kept short: a subcommand's module is imported only when that command runs (or
+`--help` lists it), `--version` imports nothing of grammarkit's, and plugins are loaded only
+by commands that need what they provide (`fmt` and `--help` load none). Problems of plugins
+that were loaded are printed as warnings on stderr when the command ends.
 """
 from __future__ import annotations
 
-import sys
+import os
 from importlib import import_module
 
 import click
 
+from .. import __version__
 from ..errors import GrammarkitError
 
-# (module, command attribute) of the built-in subcommands; imported when the CLI starts.
-BUILTIN_COMMANDS = [
-    ("grammarkit.cli.lang", "check"),
-    ("grammarkit.cli.lang", "fmt"),
-    ("grammarkit.cli.lang", "plugins_command"),
-    ("grammarkit.cli.derive", "derive"),
-    ("grammarkit.cli.tiling", "learn"),
-    ("grammarkit.cli.tiling", "validate"),
-    ("grammarkit.cli.render", "render"),
-    ("grammarkit.cli.train", "train"),
-    ("grammarkit.cli.cga", "import_cga_command"),
-    ("grammarkit.cli.batch", "batch"),
-]
+# name -> (module, command attribute) of the built-in subcommands, imported on first use.
+BUILTIN_COMMANDS: dict[str, tuple[str, str]] = {
+    "check": ("grammarkit.cli.lang", "check"),
+    "fmt": ("grammarkit.cli.lang", "fmt"),
+    "plugins": ("grammarkit.cli.lang", "plugins_command"),
+    "derive": ("grammarkit.cli.derive", "derive"),
+    "learn": ("grammarkit.cli.tiling", "learn"),
+    "validate": ("grammarkit.cli.tiling", "validate"),
+    "render": ("grammarkit.cli.render", "render"),
+    "train": ("grammarkit.cli.train", "train"),
+    "import-cga": ("grammarkit.cli.cga", "import_cga_command"),
+    "batch": ("grammarkit.cli.batch", "batch"),
+}
 
 
 class GrammarkitGroup(click.Group):
-    """Adds plugin commands lazily and turns user errors into diagnostics."""
+    """Built-in commands imported lazily, plugin commands found on demand, user errors turned
+    into diagnostics, plugin problems reported."""
 
     def list_commands(self, ctx: click.Context) -> list[str]:
-        self._add_plugin_commands()
-        return super().list_commands(ctx)
+        # plugin commands are not listed here: finding them means importing every plugin,
+        # which `--help` must not do (`grammarkit plugins` lists them)
+        return sorted(set(BUILTIN_COMMANDS) | set(self.commands))
 
     def get_command(self, ctx: click.Context, name: str):  # noqa: ANN201
         cmd = super().get_command(ctx, name)
-        if cmd is None:
-            self._add_plugin_commands()
-            cmd = super().get_command(ctx, name)
-        return cmd
+        if cmd is not None:
+            return cmd
+        if name in BUILTIN_COMMANDS:
+            module, attr = BUILTIN_COMMANDS[name]
+            try:
+                cmd = getattr(import_module(module), attr)
+            except (ImportError, AttributeError) as exc:  # a half-installed tree still runs --help
+                click.echo(f"grammarkit: warning: command {name!r} unavailable: {exc}", err=True)
+                return None
+            self.add_command(cmd, name)
+            return cmd
+        return self._plugin_command(name)
 
-    def _add_plugin_commands(self) -> None:
-        if getattr(self, "_plugins_added", False):
-            return
-        self._plugins_added = True
+    def _plugin_command(self, name: str):  # noqa: ANN202
         from ..plugins import get_plugin_manager
 
-        for name, command in get_plugin_manager().cli_commands().items():
-            if name not in self.commands:
-                self.add_command(command, name)
+        command = get_plugin_manager().cli_commands().get(name)
+        if command is not None and name not in BUILTIN_COMMANDS:  # never shadow a built-in
+            self.add_command(command, name)
+            return command
+        return None
 
     def invoke(self, ctx: click.Context):  # noqa: ANN201
         try:
@@ -57,20 +72,41 @@ class GrammarkitGroup(click.Group):
         except GrammarkitError as exc:
             report_error(exc)
             ctx.exit(1)
+        finally:
+            report_plugin_problems()
 
 
 def report_error(exc: GrammarkitError) -> None:
     click.echo(exc.format(), err=True)
 
 
-@click.group(cls=GrammarkitGroup, context_settings={"help_option_names": ["-h", "--help"]})
-@click.version_option(package_name="grammarkit")
+def report_plugin_problems() -> None:
+    """Warn (stderr) about problems of the plugins this command loaded, once each."""
+    from ..plugins import manager_if_loaded
+
+    manager = manager_if_loaded()
+    if manager is None:
+        return
+    for err in manager.new_errors():
+        click.echo(f"grammarkit: warning: {err} (see `grammarkit plugins`)", err=True)
+
+
+def _no_plugins(ctx: click.Context, param: click.Parameter, value: bool) -> None:
+    """`--no-plugins`: load the built-ins only; the environment variable carries the choice
+    to worker processes too."""
+    if not value:
+        return
+    from ..plugins import NO_PLUGINS_ENV, reset_plugin_manager
+
+    os.environ[NO_PLUGINS_ENV] = "1"
+    reset_plugin_manager()
+
+
+@click.group(cls=GrammarkitGroup, context_settings={"help_option_names": ["-h", "--help"]},
+             epilog="Plugins may add commands: `grammarkit plugins` lists them.")
+@click.version_option(__version__, prog_name="grammarkit", message="%(prog)s, version %(version)s")
+@click.option("--no-plugins", is_flag=True, is_eager=True, expose_value=False, callback=_no_plugins,
+              help="load no third-party plugins (built-ins only; also GRAMMARKIT_NO_PLUGINS=1); "
+                   "GRAMMARKIT_DISABLE_PLUGINS=name,... disables single ones")
 def main() -> None:
     """grammarkit: split grammars and tiling grammars for 3D shape modeling."""
-
-
-for _module, _attr in BUILTIN_COMMANDS:
-    try:
-        main.add_command(getattr(import_module(_module), _attr))
-    except (ImportError, AttributeError) as _exc:  # a half-installed tree should still run `--help`
-        print(f"grammarkit: warning: command from {_module} unavailable: {_exc}", file=sys.stderr)

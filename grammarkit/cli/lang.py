@@ -113,17 +113,38 @@ def fmt(files: tuple[Path, ...], in_place: bool, check_only: bool, max_size: int
         sys.exit(1)
 
 
+def _backend_options(manager) -> dict[str, dict[str, list[dict]]]:  # noqa: ANN001
+    """plugin -> back end -> its options ([{name, type, default, doc}]), for `plugins`."""
+    from ..jsonable import to_jsonable
+    from ..run import describe_options
+
+    out: dict[str, dict[str, list[dict]]] = {}
+    for spec in manager.backends().values():
+        try:
+            options = describe_options(spec.options)
+        except Exception as exc:  # noqa: BLE001 - a malformed options model is the plugin's problem
+            options = [{"name": "?", "type": "?", "default": None,
+                        "doc": f"cannot describe the options: {type(exc).__name__}: {exc}"}]
+        out.setdefault(spec.plugin, {})[spec.name] = to_jsonable(options)
+    return out
+
+
 @click.command("plugins")
 @click.option("--json", "as_json", is_flag=True, help="print the plugin list as JSON")
 def plugins_command(as_json: bool) -> None:
-    """List every registered plugin: distribution, version, what it provides, and errors."""
+    """List every registered plugin: distribution, version, what it provides (with each back
+    end's --option settings), and errors."""
     from ..plugins import get_plugin_manager
 
-    infos = get_plugin_manager().plugins()
+    manager = get_plugin_manager()
+    infos = manager.plugins()
+    options = _backend_options(manager)
     if as_json:
         click.echo(json.dumps([
             {"name": i.name, "distribution": i.distribution, "version": i.version,
-             "module": i.module, "provides": i.provides, "errors": i.errors, "ok": i.ok}
+             "module": i.module, "builtin": i.builtin, "status": i.status, "provides": i.provides,
+             **({"backend_options": options[i.name]} if i.name in options else {}),
+             "errors": i.errors, "ok": i.ok}
             for i in infos], indent=2))
         return
     from rich.console import Console
@@ -136,9 +157,21 @@ def plugins_command(as_json: bool) -> None:
     table.add_column("provides")
     table.add_column("status")
     for i in infos:
-        provides = "\n".join(f"{kind}: {', '.join(names)}" for kind, names in sorted(i.provides.items()))
-        status = "ok" if i.ok else "[red]" + "\n".join(_escape(e) for e in i.errors) + "[/red]"
-        table.add_row(i.name, i.distribution or "-", i.version or "-", provides or "-", status)
+        lines = []
+        for kind, names in sorted(i.provides.items()):
+            lines.append(_escape(f"{kind}: {', '.join(names)}"))
+            if kind == "backend":
+                for backend, opts in options.get(i.name, {}).items():
+                    for o in opts:
+                        default = "" if o["default"] is None else f" = {o['default']}"
+                        doc = f": {o['doc']}" if o["doc"] else ""
+                        lines.append(_escape(f"  {backend} --option {o['name']} ({o['type']}{default}){doc}"))
+        name = i.name + (" (built-in)" if i.builtin else "")
+        if i.disabled:
+            status = "disabled"
+        else:
+            status = "ok" if i.ok else "[red]" + "\n".join(_escape(e) for e in i.errors) + "[/red]"
+        table.add_row(name, i.distribution or "-", i.version or "-", "\n".join(lines) or "-", status)
     Console(width=max(100, _terminal_width())).print(table)
     broken = [i.name for i in infos if not i.ok]
     if broken:

@@ -16,7 +16,8 @@ from typing import Any
 
 from ..errors import Diagnostic, GrammarError
 from ..ir import Grammar
-from .checker import BUILTIN_CONSTRAINTS, BUILTIN_REFS, Registries, check_grammar
+from ..registry import Registries
+from .checker import BUILTIN_CONSTRAINTS, BUILTIN_REFS, check_grammar
 from .frontend import Parsed, load_text, parse_source
 from .imports import resolve_calls, resolve_imports
 from .parser import DEFAULT_MAX_BYTES, KEYWORDS
@@ -80,6 +81,10 @@ def _check(source: Any, filename: str | None, max_bytes: int,
     diags.extend(import_diags)
     if any(d.severity == "error" for d in import_diags):
         return None, diags
+    if registries is None:  # the public API edge: the installed plugins' registries
+        from ..plugins import default_registries
+
+        registries = default_registries()
     diags.extend(_sorted(check_grammar(merged, registries, main_file)))
     return merged, diags
 

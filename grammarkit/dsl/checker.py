@@ -1,25 +1,28 @@
 """Semantic checks of a Grammar IR: every problem reported at once into a DiagnosticBag.
 
-Operations, functions and constraints are looked up in the plugin registries, so a plugin's
-new operation is checked exactly like a built-in one. The checker never evaluates geometry;
-it folds constant expressions only to compare ranges, enums and percentages.
+Operations, functions and constraints are looked up in the registries the caller passes
+(`grammarkit.registry.Registries`), so a plugin's new operation is checked exactly like a
+built-in one. Operation calls are bound by the compiler's own binder (binding.py), and
+constant expressions are folded by the engines' own evaluator (`grammarkit.expr_eval`), so
+`check` reports what deriving would refuse, with the same messages and codes. The checker
+never evaluates geometry.
 """
 from __future__ import annotations
 
-import difflib
-import functools
-import math
 from dataclasses import dataclass, field
 from typing import Any, Iterable, Mapping
 
 from ..errors import Diagnostic, DiagnosticBag
+from ..expr_eval import NOT_CONSTANT, arity_problem, fold_constant
 from ..ir import (
-    Attr, Binary, Bool, Branch, Call, Case, Choice, Const, Default, ExampleDef,
+    Attr, Binary, Branch, Call, Case, Choice, Const, Default, ExampleDef,
     Grammar, Nil, Num, OpCall, PartDef, Pattern, Push, Ref, Repeat, Rule, Seq, SiteDef,
-    Snippet, Str, Successor, Terminal, Unary, Use, Variants, Vector,
+    Snippet, Successor, Terminal, Unary, Use, Variants, Vector,
 )
 from ..ir.base import Span
-from ..registry import ConstraintSpec, FunctionSpec, OperationSpec
+from ..registry import OperationSpec, Registries
+from .binding import bind_operation, check_block, check_sequence, literal_kind
+from .suggest import closest_first, known_hint
 
 # Dotted names the engines provide while deriving (see docs/language.md).
 BUILTIN_REFS = frozenset({
@@ -31,27 +34,8 @@ BUILTIN_CONSTRAINTS = frozenset({"connected", "grounded", "path", "count"})
 START = "Start"
 
 
-def closest_first(name: str, known: Iterable[str]) -> list[str]:
-    return list(_closest_first(name, frozenset(known)))
-
-
-@functools.lru_cache(maxsize=4096)
-def _closest_first(name: str, known: frozenset[str]) -> tuple[str, ...]:
-    # cached: a file with many misspellings of one name against many known names stays fast
-    ordered = sorted(known)
-    close = difflib.get_close_matches(name, ordered, n=3, cutoff=0.5)
-    return tuple(close + [k for k in ordered if k not in close])
-
-
-def _known_hint(kind: str, name: str, known: Iterable[str], limit: int = 40) -> str | None:
-    ordered = closest_first(name, known)
-    if not ordered:
-        return f"there are no {kind}"
-    shown = ", ".join(ordered[:limit]) + (", ..." if len(ordered) > limit else "")
-    best = ordered[0]
-    close = difflib.SequenceMatcher(None, name, best).ratio() >= 0.5
-    prefix = f"did you mean '{best}'? " if close else ""
-    return f"{prefix}known {kind}: {shown}"
+_known_hint = known_hint
+__all__ = ["BUILTIN_CONSTRAINTS", "BUILTIN_REFS", "Checker", "Registries", "check_grammar", "closest_first"]
 
 
 def _where(span: Span | None) -> str:
@@ -59,35 +43,27 @@ def _where(span: Span | None) -> str:
 
 
 @dataclass
-class Registries:
-    operations: Mapping[str, OperationSpec]
-    functions: Mapping[str, FunctionSpec]
-    constraints: Mapping[str, ConstraintSpec]
-
-    @classmethod
-    def from_plugins(cls) -> "Registries":
-        from ..plugins import get_plugin_manager
-        pm = get_plugin_manager()
-        return cls(pm.operations(), pm.functions(), pm.constraints())
-
-
-@dataclass
 class _Scope:
     values: set[str]
     rules: dict[str, Rule]
     outer_rules: dict[str, Rule] = field(default_factory=dict)
-    string_values: set[str] = field(default_factory=set)
+    params: frozenset[str] = frozenset()  # rule parameters: never constant
+    local_attrs: Mapping[str, Attr] = field(default_factory=dict)  # a snippet's own attrs
 
 
 class Checker:
-    def __init__(self, grammar: Grammar, registries: Registries | None = None,
-                 main_file: str | None = None):
+    def __init__(self, grammar: Grammar, registries: Registries, main_file: str | None = None):
+        if registries is None:
+            raise TypeError("Checker: registries= is required (grammarkit.registry.Registries)")
         self.g = grammar
-        self.reg = registries or Registries.from_plugins()
+        self.reg = registries
         self.bag = DiagnosticBag()
         self.main_file = main_file if main_file is not None else grammar.source_path
         self._values: dict[str, Attr | Const] = {}
         self._const_cache: dict[str, Any] = {}
+        self._reported: set[tuple] = set()  # fold errors already reported (span, message)
+        self._functions = registries.functions  # looked up once: folding asks for every expression
+        self._memo: dict[tuple[int, int], tuple] = {}
 
     # -- entry -----------------------------------------------------------------------------
     def run(self) -> list[Diagnostic]:
@@ -95,16 +71,15 @@ class Checker:
         self.collect_definitions()
         self.check_value_cycles()
         top_values = set(self._values)
-        string_values = {n for n in top_values if isinstance(self.const_value(Ref(name=n)), str)}
         for a in g.attrs:
-            self.check_attr(a, _Scope(top_values, {}, string_values=string_values))
+            self.check_attr(a, _Scope(top_values, {}))
         for c in g.consts:
             self.check_expr(c.value, _Scope(top_values, {}))
         for r in g.rules:
             self.check_rule(r, _Scope(top_values | set(r.params), self.top_rules,
-                                      string_values=string_values - set(r.params)))
+                                      params=frozenset(r.params)))
         for s in g.snippets:
-            self.check_snippet(s, top_values, string_values)
+            self.check_snippet(s, top_values)
         self.check_snippet_bindings()
         self.check_reachability()
         self._unknown_part_uses: dict[str, list[Span | None]] = {}
@@ -232,58 +207,95 @@ class Checker:
                     color[node] = 2
                     path.pop()
 
-    def const_value(self, e: Any, local: Mapping[str, Any] | None = None, _depth: int = 0) -> Any:
-        """The value of a constant expression, or None when it depends on the derivation."""
-        if _depth > 200:
-            return None
-        if isinstance(e, Num):
-            return e.value
-        if isinstance(e, Str):
-            return e.value
-        if isinstance(e, Bool):
-            return e.value
-        if isinstance(e, Ref):
-            if local is not None and e.name in local:
-                return local[e.name]
-            if e.name in self._const_cache:
-                return self._const_cache[e.name]
-            v = self._values.get(e.name)
-            if v is None or e.name in getattr(self, "_cyclic", ()):
-                return None
-            self._const_cache[e.name] = None  # guard against cycles
-            value = self.const_value(v.value, None, _depth + 1)
-            self._const_cache[e.name] = value
-            return value
-        if isinstance(e, Unary):
-            x = self.const_value(e.operand, local, _depth + 1)
-            if e.op == "!" and isinstance(x, bool):
-                return not x
-            if isinstance(x, (int, float)) and not isinstance(x, bool) and e.op in "+-":
-                return -x if e.op == "-" else x
-            return None
-        if isinstance(e, Binary):
-            a = self.const_value(e.left, local, _depth + 1)
-            b = self.const_value(e.right, local, _depth + 1)
-            if not all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in (a, b)):
-                if e.op in ("==", "!=") and a is not None and b is not None:
-                    return (a == b) if e.op == "==" else (a != b)
-                return None
-            try:
-                r = {
-                    "+": lambda: a + b, "-": lambda: a - b, "*": lambda: a * b,
-                    "/": lambda: a / b, "%": lambda: math.fmod(a, b), "^": lambda: a ** b,
-                    "<": lambda: a < b, "<=": lambda: a <= b, ">": lambda: a > b,
-                    ">=": lambda: a >= b, "==": lambda: a == b, "!=": lambda: a != b,
-                }.get(e.op, lambda: None)()
-            except (ArithmeticError, ValueError, TypeError):
-                return None
-            if isinstance(r, complex) or (isinstance(r, float) and not math.isfinite(r)):
-                return None
-            return r
-        return None
+    def _lookup(self, name: str, scope: _Scope | None, used: list[str] | None = None) -> Any:
+        """A name's constant value for folding (NOT_CONSTANT for rule parameters, built-in
+        values and anything cyclic or unknown). Attrs count with their default values."""
+        if scope is not None:
+            if name in scope.params:
+                return NOT_CONSTANT
+            local = scope.local_attrs.get(name)
+            if local is not None and not isinstance(self._values.get(name), Attr):
+                if used is not None:
+                    used.append(name)
+                return self._fold(local.value, None, used)
+        if name in self._const_cache:
+            value = self._const_cache[name]
+        else:
+            v = self._values.get(name)
+            if v is None or name in getattr(self, "_cyclic", ()):
+                return NOT_CONSTANT
+            self._const_cache[name] = NOT_CONSTANT  # guard against cycles
+            value = self._fold(v.value, None, None)
+            self._const_cache[name] = value
+        if used is not None and value is not NOT_CONSTANT and (
+                isinstance(self._values.get(name), Attr) or name in self._attr_dependent()):
+            used.append(name)
+        return value
+
+    def _attr_dependent(self) -> set[str]:
+        """Consts whose value depends on an attr (so a `--set` may change it)."""
+        found = getattr(self, "_attr_deps", None)
+        if found is None:
+            found = set()
+            changed = True
+            while changed:
+                changed = False
+                for n, v in self._values.items():
+                    if n in found or isinstance(v, Attr):
+                        continue
+                    if any(isinstance(self._values.get(r.name), Attr) or r.name in found
+                           for r in self._refs(v.value)):
+                        found.add(n)
+                        changed = True
+            self._attr_deps = found
+        return found
+
+    def _fold(self, e: Any, scope: _Scope | None, used: list[str] | None, errors: list | None = None) -> Any:
+        if isinstance(e, Num):  # most arguments and sizes are plain numbers
+            v = e.value
+            return int(v) if float(v).is_integer() and abs(v) < 2 ** 53 else v
+        return fold_constant(e, lambda n: self._lookup(n, scope, used), self._functions, errors)
+
+    def _folded(self, e: Any, scope: _Scope | None) -> tuple[Any, tuple[str, ...], tuple]:
+        """(value or NOT_CONSTANT, attrs it used, evaluation errors) of `e` in `scope`, folded
+        once per expression and scope (the binder and the error report ask for the same ones)."""
+        key = (id(e), id(scope))
+        hit = self._memo.get(key)
+        if hit is None:
+            used: list[str] = []
+            errors: list = []
+            value = self._fold(e, scope, used, errors)
+            hit = self._memo[key] = (value, tuple(used), tuple(errors), e, scope)  # keeps ids alive
+        return hit[0], hit[1], hit[2]
+
+    def const_value(self, e: Any, scope: _Scope | None = None, fixed_only: bool = False) -> Any:
+        """The value of a constant expression (attrs at their defaults), or None when it
+        depends on the derivation (`fixed_only`: or on an attr, which `--set` may change).
+        Folded by the engines' evaluator (grammarkit.expr_eval)."""
+        value, used, _ = self._folded(e, scope)
+        return None if value is NOT_CONSTANT or (fixed_only and used) else value
+
+    def report_fold_errors(self, e: Any, scope: _Scope) -> None:
+        """Errors the engines would raise evaluating constant parts of `e` (`1 / 0`,
+        `9 ^ 9 ^ 9`, `"x" * 600000000`): errors, or warnings when an attr's default value is
+        involved (a `--set` may avoid them)."""
+        _, used, errors = self._folded(e, scope)
+        for exc in errors:
+            d = exc.diagnostics[0]
+            key = (d.span, d.message)
+            if key in self._reported:
+                continue
+            self._reported.add(key)
+            if used:
+                self.bag.warning(f"with the default value of {', '.join(sorted(set(used)))}: {d.message}",
+                                 d.span, code=d.code)
+            else:
+                self.bag.error(d.message, d.span, code=d.code)
 
     # -- expressions -----------------------------------------------------------------------
     def check_expr(self, e: Any, scope: _Scope) -> None:
+        if not isinstance(e, Ref):
+            self.report_fold_errors(e, scope)
         stack = [e]
         while stack:
             x = stack.pop()
@@ -320,16 +332,9 @@ class Checker:
                            hint=_known_hint("functions", c.func, self.reg.functions),
                            code="unknown-function")
             return
-        n = len(c.args)
-        if n < spec.min_args or (spec.max_args is not None and n > spec.max_args):
-            if spec.max_args is None:
-                want = f"at least {spec.min_args}"
-            elif spec.max_args == spec.min_args:
-                want = str(spec.min_args)
-            else:
-                want = f"{spec.min_args} to {spec.max_args}"
-            self.bag.error(f"function '{c.func}' takes {want} argument(s), got {n}", c.span,
-                           hint=spec.doc or None, code="function-arity")
+        problem = arity_problem(c.func, spec, len(c.args))
+        if problem is not None:
+            self.bag.error(problem, c.span, hint=spec.doc or None, code="function-arity")
 
     # -- attrs -----------------------------------------------------------------------------
     def check_attr(self, a: Attr, scope: _Scope) -> None:
@@ -337,9 +342,9 @@ class Checker:
         if a.range is not None:
             for x in a.range:
                 self.check_expr(x, scope)
-            lo, hi = (self.const_value(x) for x in a.range)
-            value = self.const_value(a.value) if a.name not in self._values or \
-                self._values.get(a.name) is a else self.const_value(a.value)
+            lo, hi = (self.const_value(x, scope) for x in a.range)
+            value = self.const_value(a.value, scope) if a.name not in self._values or \
+                self._values.get(a.name) is a else self.const_value(a.value, scope)
             if all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in (lo, hi)):
                 if lo > hi:
                     self.bag.error(f"@range of '{a.name}' is empty: {_num(lo)} > {_num(hi)}",
@@ -363,8 +368,8 @@ class Checker:
             if not a.enum:
                 self.bag.error(f"@enum of '{a.name}' lists no values", a.span, code="bad-enum")
             else:
-                values = [self.const_value(x) for x in a.enum]
-                value = self.const_value(a.value)
+                values = [self.const_value(x, scope) for x in a.enum]
+                value = self.const_value(a.value, scope)
                 if value is not None and all(v is not None for v in values) and \
                         not any(_same(value, v) for v in values):
                     shown = ", ".join(_show(v) for v in values)
@@ -384,6 +389,8 @@ class Checker:
         self.check_seq(r.body, scope)
 
     def check_seq(self, seq: Seq, scope: _Scope) -> None:
+        for d in check_sequence(seq):
+            self.bag.items.append(d)
         for item in seq.items:
             self.check_item(item, scope)
 
@@ -410,7 +417,7 @@ class Checker:
             known = True
             for arm in item.arms:
                 self.check_expr(arm.percent, scope)
-                v = self.const_value(arm.percent)
+                v = self.const_value(arm.percent, scope)
                 if isinstance(v, (int, float)) and not isinstance(v, bool):
                     if v < 0:
                         self.bag.error("a percentage cannot be negative", arm.percent.span or arm.span,
@@ -454,125 +461,39 @@ class Checker:
                 if not (isinstance(a.value, Ref) and "." not in a.value.name):
                     self.check_expr(a.value, scope)  # a bare name may be an axis or selector
             for it in op.block or ():
-                self.check_block_item(it, scope, None)
+                self.check_block_item(it, scope)
             return
-        params = spec.params
-        by_name = {p.name: p for p in params}
-        bound: dict[str, Any] = {}
-        positional = 0
-        for a in op.args:
-            if a.name is None:
-                if positional < len(params):
-                    p = params[positional]
-                    if p.name in bound:
-                        self.bag.error(f"argument '{p.name}' of {op.name} given twice", a.span,
-                                       code="bad-argument")
-                    bound[p.name] = a
-                    self.check_arg(op, p, a, scope)
-                elif not spec.variadic:
-                    self.bag.error(f"too many arguments: {op.name} takes at most {len(params)}"
-                                   f" ({_signature(spec)})", a.span or op.span,
-                                   code="operation-arity")
-                    self.check_expr(a.value, scope)
-                else:
-                    self.check_expr(a.value, scope)
-                positional += 1
-            else:
-                p = by_name.get(a.name)
-                if p is None:
-                    self.bag.error(f"{op.name} has no argument named '{a.name}'", a.span or op.span,
-                                   hint=_known_hint("arguments", a.name, by_name) if by_name
-                                   else f"{op.name} takes no named arguments",
-                                   code="unknown-argument")
-                    self.check_expr(a.value, scope)
-                    continue
-                if p.name in bound:
-                    self.bag.error(f"argument '{p.name}' of {op.name} given twice", a.span or op.span,
-                                   code="bad-argument")
-                bound[p.name] = a
-                self.check_arg(op, p, a, scope)
-        missing = [p.name for p in params if p.required and p.name not in bound]
-        if missing:
-            self.bag.error(f"{op.name} is missing argument(s): {', '.join(missing)} "
-                           f"({_signature(spec)})", op.span, code="operation-arity")
-        self.check_block(op, spec, scope)
+        binding = bind_operation(op, spec, fold=lambda e: self.const_value(e, scope), registries=self.reg,
+                                 fold_fixed=lambda e: self.const_value(e, scope, fixed_only=True))
+        self.bag.items.extend(binding.problems)
+        for bound in binding.arguments:
+            if bound.value is not None and bound.param.type not in ("axis", "selector", "name"):
+                self.check_expr(bound.value, scope)
+        for value in binding.extra:
+            self.check_expr(value, scope)
+        named = {p.name for p in spec.params}
+        for a in op.args:  # values of unknown named arguments are still expressions to check
+            if a.name is not None and a.name not in named:
+                self.check_expr(a.value, scope)
+        self.bag.items.extend(check_block(op, spec))
+        sizes = spec.block in ("sizes", "optional-sizes")
+        for it in op.block or ():
+            self.check_block_item(it, scope, sizes)
 
-    def check_arg(self, op: OpCall, p: Any, a: Any, scope: _Scope) -> None:
-        v = a.value
-        where = a.span or op.span
-        if p.type in ("axis", "selector"):
-            if not isinstance(v, Ref) or "." in v.name or (p.choices and v.name not in p.choices):
-                shown = "|".join(p.choices) if p.choices else "a name"
-                self.bag.error(f"argument '{p.name}' of {op.name} must be {shown}", where,
-                               code="bad-argument-type")
-            return
-        self.check_expr(v, scope)
-        if p.type == "number":
-            kind = _literal_kind(v)
-            if kind is None and isinstance(v, Ref) and v.name in scope.string_values:
-                kind = "a string"
-            if kind is not None and kind != "a number":
-                self.bag.error(f"argument '{p.name}' of {op.name} must be a number, not {kind}",
-                               where, code="bad-argument-type")
-        elif p.type == "string":
-            kind = _literal_kind(v)
-            if kind is not None and kind != "a string":
-                self.bag.error(f"argument '{p.name}' of {op.name} must be a string, not {kind}",
-                               where, code="bad-argument-type")
-
-    def check_block(self, op: OpCall, spec: OperationSpec, scope: _Scope) -> None:
-        kind = spec.block
-        block = op.block
-        if kind == "none":
-            if block is not None:
-                self.bag.error(f"{op.name} takes no {{ }} block", op.span, code="block-kind")
-                for it in block:
-                    self.check_block_item(it, scope, None)
-            return
-        if block is None:
-            if kind == "sizes":
-                self.bag.error(f"{op.name} needs a block of sizes, like {op.name}(...) "
-                               "{ 1: A | ~1: B }", op.span, code="block-kind")
-            elif kind == "selectors":
-                sel = spec.selectors[0] if spec.selectors else "name"
-                self.bag.error(f"{op.name} needs a block of selectors, like {op.name}(...) "
-                               f"{{ {sel}: A }}", op.span, code="block-kind")
-            return
-        selectors = kind in ("selectors", "optional-selectors")
-        for it in block:
-            self.check_block_item(it, scope, spec if selectors else None, op)
-
-    def check_block_item(self, it: Any, scope: _Scope, selector_spec: OperationSpec | None,
-                         op: OpCall | None = None) -> None:
+    def check_block_item(self, it: Any, scope: _Scope, sizes: bool = False) -> None:
+        """The expressions and bodies of a block entry (its key's kind is check_block's)."""
         if isinstance(it, Repeat):
-            if selector_spec is not None:
-                self.bag.error(f"a repeat group {{ ... }}* belongs in a split block, not in "
-                               f"{selector_spec.name}'s selector block", it.span, code="block-kind")
             for sub in it.items:
-                self.check_block_item(sub, scope, selector_spec, op)
+                self.check_block_item(sub, scope, sizes)
             return
         if not isinstance(it, Branch):
             return
-        if selector_spec is not None:
-            key = it.key
-            if it.mode != "abs" or not isinstance(key, Ref) or "." in key.name:
-                self.bag.error(f"{selector_spec.name} takes selectors ({', '.join(selector_spec.selectors)})"
-                               f", not sizes", it.span, code="block-kind")
-            elif selector_spec.selectors and key.name not in selector_spec.selectors:
-                self.bag.error(f"'{key.name}' is not a selector of {selector_spec.name}", key.span
-                               or it.span, hint=_known_hint("selectors", key.name,
-                                                            selector_spec.selectors),
-                               code="unknown-selector")
-        else:
+        if sizes:
             self.check_expr(it.key, scope)
-            kind = _literal_kind(it.key)
-            if kind is not None and kind != "a number":
-                self.bag.error(f"a split size must be a number, not {kind}", it.key.span or it.span,
-                               code="bad-argument-type")
         self.check_seq(it.body, scope)
 
     # -- snippets --------------------------------------------------------------------------
-    def check_snippet(self, s: Snippet, top_values: set[str], string_values: set[str]) -> None:
+    def check_snippet(self, s: Snippet, top_values: set[str]) -> None:
         local_rules: dict[str, Rule] = {}
         for r in s.rules:
             if r.name in local_rules:
@@ -589,11 +510,11 @@ class Checker:
             self.bag.error(f"snippet '{s.name}' has no `{START}` rule (its axiom)", s.span,
                            code="snippet-start")
         for a in s.attrs:
-            self.check_attr(a, _Scope(values, {}, string_values=string_values))
+            self.check_attr(a, _Scope(values, {}, local_attrs=names))
             self.check_attr_override(s, a)
         for r in s.rules:
             self.check_rule(r, _Scope(values | set(r.params), local_rules, self.top_rules,
-                                      string_values=string_values - set(r.params)))
+                                      params=frozenset(r.params), local_attrs=names))
         # unreachable rules inside the snippet
         reach = self._reachable_from([START], lambda n: local_rules.get(n))
         for r in s.rules:
@@ -675,6 +596,9 @@ class Checker:
                     known = False
             if known and total > 100 + 1e-9:
                 self.bag.error(f"variant weights add up to {_num(total)}%, more than 100%", v.span,
+                               code="bad-percent")
+            elif known and v.options and total <= 0:
+                self.bag.error(f"variants {v.object_type}: the weights add up to 0", v.span,
                                code="bad-percent")
 
     # -- reachability ----------------------------------------------------------------------
@@ -830,37 +754,18 @@ class Checker:
                                hint=_known_hint("constraints", c.name, known),
                                code="unknown-constraint")
             spec = self.reg.constraints.get(c.name)
-            bound: dict[int, Any] = {}  # argument index -> Param
+            axis_args: set[int] = set()  # arguments bound to axis/selector parameters
             if spec is not None:
-                params = list(spec.params)
-                by_name = {p.name: p for p in params}
-                npos = 0
-                for k, a in enumerate(c.args):
-                    if a.name is None:
-                        if npos < len(params):
-                            bound[k] = params[npos]
-                        else:
-                            self.bag.error(f"too many arguments: constraint {c.name} takes at "
-                                           f"most {len(params)}", a.span or c.span,
-                                           code="operation-arity")
-                        npos += 1
-                    elif a.name in by_name:
-                        bound[k] = by_name[a.name]
-                    else:
-                        self.bag.error(f"constraint {c.name} has no argument named '{a.name}'",
-                                       a.span or c.span,
-                                       hint=_known_hint("arguments", a.name, by_name) if by_name
-                                       else f"{c.name} takes no arguments",
-                                       code="unknown-argument")
-            for k, a in enumerate(c.args):
+                binding = bind_operation(c, spec, fold=lambda e: self.const_value(e, values),
+                                         label=f"constraint {c.name}")
+                self.bag.items.extend(binding.problems)
+                axis_args = {id(b.value) for b in binding.arguments
+                             if b.value is not None and b.param.type in ("axis", "selector")}
+            for a in c.args:
                 v = a.value
-                p = bound.get(k)
-                if p is not None and p.type in ("axis", "selector"):
-                    if not isinstance(v, Ref) or (p.choices and v.name not in p.choices):
-                        shown = "|".join(p.choices) if p.choices else "a name"
-                        self.bag.error(f"argument '{p.name}' of constraint {c.name} must be "
-                                       f"{shown}", a.span or c.span, code="bad-argument-type")
-                elif isinstance(v, Ref) and "." not in v.name:
+                if id(v) in axis_args:
+                    continue
+                if isinstance(v, Ref) and "." not in v.name:
                     # bare names in constraint arguments name part types (or values)
                     if v.name not in self.parts and v.name not in self._values:
                         self._part_ref(v.name, v.span or c.span, f"constraint {c.name}")
@@ -883,32 +788,6 @@ def _block_seqs(it: Any) -> list[Any]:
         elif isinstance(x, Repeat):
             stack.extend(x.items)
     return out
-
-
-def _literal_kind(v: Any) -> str | None:
-    if isinstance(v, Num):
-        return "a number"
-    if isinstance(v, Str):
-        return "a string"
-    if isinstance(v, Bool):
-        return "a boolean"
-    if isinstance(v, Vector):
-        return "a tuple"
-    if isinstance(v, (Unary, Binary)):
-        if isinstance(v, Binary) and v.op in ("==", "!=", "<", "<=", ">", ">=", "&&", "||"):
-            return "a boolean"
-        if isinstance(v, Unary) and v.op == "!":
-            return "a boolean"
-        return None
-    return None
-
-
-def _signature(spec: OperationSpec) -> str:
-    parts = []
-    for p in spec.params:
-        t = "|".join(p.choices) if p.choices else p.type
-        parts.append(f"{p.name}: {t}" + ("" if p.required else f" = {p.default!r}"))
-    return f"{spec.name}({', '.join(parts)})"
 
 
 def _num(v: float) -> str:

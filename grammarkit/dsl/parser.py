@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import contextvars
 import functools
+import os
 import re
 from dataclasses import dataclass, replace
 from importlib import resources
@@ -132,23 +133,57 @@ class StatementPostLexer:
                         end_column=last.end_column, end_pos=last.end_pos)
 
 
+CACHE_ENV = "GRAMMARKIT_CACHE_DIR"
+_PARSER_OPTIONS = dict(
+    parser="lalr",
+    lexer="contextual",
+    # Positions are computed by the transformer's own walk (transform.py), which is ~40%
+    # cheaper than Lark's propagate_positions; it needs every token, keywords included.
+    propagate_positions=False,
+    keep_all_tokens=True,
+    maybe_placeholders=False,
+)
+
+
+def cache_dir() -> Path:
+    """Where grammarkit keeps caches: $GRAMMARKIT_CACHE_DIR, else $XDG_CACHE_HOME/grammarkit,
+    else ~/.cache/grammarkit."""
+    explicit = os.environ.get(CACHE_ENV)
+    if explicit:
+        return Path(explicit)
+    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+    return Path(base) / "grammarkit"
+
+
+def parser_cache_path(text: str) -> Path:
+    """The parser-table cache file for this grammar text, Lark version and Python version:
+    any change of the three gives another file (and Lark checks the same hash inside it)."""
+    import hashlib
+    import sys
+
+    import lark
+
+    key = "\0".join([text, lark.__version__, ".".join(map(str, sys.version_info[:2])),
+                      repr(sorted(_PARSER_OPTIONS.items()))])
+    digest = hashlib.sha256(key.encode("utf-8")).hexdigest()[:24]
+    return cache_dir() / f"grammar-lalr-{digest}.lark"
+
+
 @functools.lru_cache(maxsize=None)
 def get_parser() -> Lark:
-    """The LALR parser, built once per process (building it costs ~100 ms)."""
+    """The LALR parser, built once per process. Building the tables costs ~100 ms, so they
+    are cached on disk (Lark's own `cache=` file, in `cache_dir()`): a stale file (another
+    grammar.lark, Lark or Python version) is never read, a broken one is rebuilt and
+    rewritten, and a missing or read-only cache folder just means building every time."""
     text = resources.files("grammarkit.dsl").joinpath("grammar.lark").read_text(encoding="utf-8")
-    return Lark(
-        text,
-        parser="lalr",
-        lexer="contextual",
-        # Positions are computed by the transformer's own walk (transform.py), which is ~40%
-        # cheaper than Lark's propagate_positions; it needs every token, keywords included.
-        propagate_positions=False,
-        keep_all_tokens=True,
-        maybe_placeholders=False,
-        postlex=StatementPostLexer(),
-        lexer_callbacks={"COMMENT": _collect_comment},
-        cache=False,
-    )
+    path = parser_cache_path(text)
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        cache: str | bool = str(path)
+    except OSError:
+        cache = False
+    return Lark(text, postlex=StatementPostLexer(), lexer_callbacks={"COMMENT": _collect_comment},
+                cache=cache, **_PARSER_OPTIONS)
 
 
 # -- reading files -------------------------------------------------------------------------

@@ -12,48 +12,110 @@ choices re-rolled and snippets swapped per the grammar's `variants` tables.
 from __future__ import annotations
 
 import threading
+import weakref
 from pathlib import Path
 from typing import Any, Iterator, Mapping
+
+from importlib import import_module
+from typing import TYPE_CHECKING
 
 from ..errors import DerivationError, GrammarError, ShapeError
 from ..ir.grammar import Grammar
 from .compile import CompiledGrammar, compile_grammar
-from .engine import Derivation, Limits
-from .model import Model, Part, TreeNode, compose
 from .shape import FACE, Shape
 
-__all__ = ["Limits", "Model", "Part", "Shape", "TreeNode", "check_attrs", "compile", "derive", "load_grammar",
-           "variations"]
+if TYPE_CHECKING:  # pragma: no cover
+    from .engine import Limits
+    from .model import Model, Part, TreeNode
 
-_lock = threading.RLock()
-_cache: dict[tuple, tuple[Grammar, CompiledGrammar]] = {}
+# The engine and the model need manifold3d and numpy: imported on first use, so that loading
+# the `split-operations` plugin (every `grammarkit check` does) stays light.
+_LAZY = {"Limits": "engine", "Derivation": "engine", "Model": "model", "Part": "model", "TreeNode": "model"}
+
+
+def __getattr__(name: str) -> Any:
+    module = _LAZY.get(name)
+    if module is None:
+        raise AttributeError(f"module 'grammarkit.split' has no attribute {name!r}")
+    value = getattr(import_module(f"{__name__}.{module}"), name)
+    globals()[name] = value
+    return value
+
+__all__ = ["Limits", "Model", "Part", "Shape", "TreeNode", "as_mapping", "check_attrs", "compile", "derive",
+           "load_grammar", "variations"]
+
 _CACHE_SIZE = 32
-_files: dict[tuple[str, int], Grammar] = {}
-_resolved: dict[int, tuple[Grammar, Grammar]] = {}  # id -> (parsed, imports inlined); keeps both alive
 
 DEFAULT_LOT = ((0.0, 0.0), (10.0, 0.0), (10.0, 10.0), (0.0, 10.0))
 
 
-def load_grammar(source: Any) -> Grammar:
-    """A Grammar from an IR object, a path, or grammar text (imports resolved by grammarkit.dsl)."""
+class IdentityCache:
+    """A small LRU cache keyed by the *identity* of objects (plus a hashable extra key).
+
+    Grammars compare by value ignoring spans, so a value-keyed cache could hand one grammar's
+    compilation (and its error locations) to another; a bare `id()` key could be reused by a
+    new object once the old one is gone. Here every entry holds weak references to its key
+    objects and is dropped when any of them dies, so a hit is always the very same objects."""
+
+    def __init__(self, size: int = _CACHE_SIZE):
+        self.size = size
+        self._entries: dict[tuple, tuple[tuple, Any]] = {}
+        self._lock = threading.Lock()
+
+    def get(self, objects: tuple, extra: Any = ()) -> Any:
+        key = (tuple(id(o) for o in objects), extra)
+        entry = self._entries.get(key)
+        if entry is None or any(r() is not o for r, o in zip(entry[0], objects)):
+            return None
+        return entry[1]
+
+    def put(self, objects: tuple, value: Any, extra: Any = ()) -> None:
+        key = (tuple(id(o) for o in objects), extra)
+        entries = self._entries
+
+        def forget(_ref: Any, _key: tuple = key) -> None:  # runs when a key object dies
+            entries.pop(_key, None)
+        refs = tuple(weakref.ref(o, forget) for o in objects)
+        with self._lock:
+            while len(entries) >= self.size:
+                try:
+                    entries.pop(next(iter(entries)), None)
+                except (StopIteration, RuntimeError):  # emptied (or changed) by a callback
+                    break
+            entries[key] = (refs, value)
+
+
+_resolved = IdentityCache()  # parsed grammar with imports (and registries) -> imports inlined
+_files = IdentityCache()  # registries + (path, mtime) -> the file's loaded grammar
+_compiled = IdentityCache()  # (grammar, registries) + (choices, start) -> CompiledGrammar
+
+
+def _registries(registries: Any) -> Any:
+    """The registries in effect: the caller's, or the plugin manager's at this API edge."""
+    if registries is not None:
+        return registries
+    from ..plugins import default_registries
+
+    return default_registries()
+
+
+def load_grammar(source: Any, registries: Any = None) -> Grammar:
+    """A Grammar from an IR object, a path, or grammar text (imports resolved by grammarkit.dsl,
+    checked against `registries`)."""
     try:
         from ..dsl import load
     except ImportError as exc:  # pragma: no cover - the DSL is part of the package
         raise GrammarError(f"the grammar parser is not available: {exc}") from None
+    registries = _registries(registries)
     if isinstance(source, Grammar):
         if not source.imports:
             return source
         # From `grammarkit.parse` (imports kept as written): inline them once per object.
-        with _lock:
-            hit = _resolved.get(id(source))
-        if hit is not None and hit[0] is source:
-            return hit[1]
-        resolved = load(source)
-        with _lock:
-            if len(_resolved) >= _CACHE_SIZE:
-                _resolved.pop(next(iter(_resolved)))
-            _resolved[id(source)] = (source, resolved)
-        return resolved
+        hit = _resolved.get((source, registries))
+        if hit is None:
+            hit = load(source, registries=registries)
+            _resolved.put((source, registries), hit)
+        return hit
     if isinstance(source, str) and "\n" not in source and source.endswith(".grammar"):
         source = Path(source)
     if isinstance(source, Path):
@@ -61,20 +123,16 @@ def load_grammar(source: Any) -> Grammar:
         try:
             key = (str(source.resolve()), source.stat().st_mtime_ns)
         except OSError:
-            return load(source)  # the loader reports the missing file with its name
-        with _lock:
-            hit = _files.get(key)
+            return load(source, registries=registries)  # the loader reports the missing file
+        hit = _files.get((registries,), key)
         if hit is None:
-            hit = load(source)
-            with _lock:
-                if len(_files) >= _CACHE_SIZE:
-                    _files.pop(next(iter(_files)))
-                _files[key] = hit
+            hit = load(source, registries=registries)
+            _files.put((registries,), hit, key)
         return hit
-    return load(source)
+    return load(source, registries=registries)
 
 
-def _mapping(value: Any, what: str) -> dict:
+def as_mapping(value: Any, what: str) -> dict:
     """A user-given mapping argument (attrs=, choices=) as a dict with string keys, or a
     GrammarError saying what was expected (never an AttributeError deep inside)."""
     if value is None:
@@ -110,24 +168,27 @@ def _check_choices(g: Grammar, compiled: CompiledGrammar, choices: Mapping[str, 
                                f"anchor {anchor!r} takes {want!r} snippets", None, code="snippet-type")
 
 
-def compile(grammar: Any, choices: Mapping[str, str] | None = None, start: str | None = None) -> CompiledGrammar:  # noqa: A001
-    """Compile (and cache) a grammar for a snippet binding; see grammarkit.split.compile."""
-    g = load_grammar(grammar)
-    choices = _mapping(choices, "choices")
+def compile(grammar: Any, choices: Mapping[str, str] | None = None, start: str | None = None,  # noqa: A001
+            *, registries: Any = None) -> CompiledGrammar:
+    """Compile (and cache) a grammar for a snippet binding; see grammarkit.split.compile.
+
+    The cache is keyed by the identity of the grammar and of the registries (never by a bare
+    `id()`), so the same objects always get the same, immutable, compiled grammar."""
+    registries = _registries(registries)
+    g = load_grammar(grammar, registries)
+    choices = as_mapping(choices, "choices")
     if start is not None and not isinstance(start, str):
         raise GrammarError(f"start= must be a rule name, got {start!r}", None, code="bad-argument")
-    key = (id(g), tuple(sorted(choices.items(), key=lambda kv: (kv[0], str(kv[1])))), start)
-    with _lock:
-        hit = _cache.get(key)
-        if hit is not None and hit[0] is g:
-            return hit[1]
-        compiled = compile_grammar(g, {k: v for k, v in choices.items() if isinstance(v, str)}, start)
-        if choices:
-            _check_choices(g, compiled, choices)
-        if len(_cache) >= _CACHE_SIZE:
-            _cache.pop(next(iter(_cache)))
-        _cache[key] = (g, compiled)
-        return compiled
+    extra = (tuple(sorted(choices.items(), key=lambda kv: (kv[0], str(kv[1])))), start)
+    hit = _compiled.get((g, registries), extra)
+    if hit is not None:
+        return hit
+    compiled = compile_grammar(g, registries, {k: v for k, v in choices.items() if isinstance(v, str)},
+                               start)
+    if choices:
+        _check_choices(g, compiled, choices)
+    _compiled.put((g, registries), compiled, extra)
+    return compiled
 
 
 def _seed(seed: Any) -> int:
@@ -151,17 +212,16 @@ def _lot(lot: Any) -> Any:
         raise ShapeError(f"lot=: {msg}", None, code="bad-lot") from None
 
 
-def check_attrs(grammar: Any, attrs: Mapping[str, Any] | None) -> dict[str, Any]:
+def check_attrs(grammar: Any, attrs: Mapping[str, Any] | None, *, registries: Any = None) -> dict[str, Any]:
     """Check attr overrides against the grammar (names, types, ranges, enums) without deriving;
     returns every attr's value. Raises GrammarError pointing at the attr's declaration."""
-    compiled = compile(grammar)
-    with _lock:
-        return compiled.set_values(_mapping(attrs, "attrs"), 0)
+    compiled = compile(grammar, registries=registries)
+    return compiled.attr_values(compiled.evaluate_values(as_mapping(attrs, "attrs"), 0))
 
 
 def derive(grammar: Any, *, seed: int = 0, attrs: Mapping[str, Any] | None = None,
            limits: Limits | None = None, start: str | None = None,
-           lot: Any = None, choices: Mapping[str, str] | None = None) -> Model:
+           lot: Any = None, choices: Mapping[str, str] | None = None, registries: Any = None) -> Model:
     """Derive one model.
 
     grammar: a Grammar, a path to a .grammar file, or grammar text.
@@ -172,31 +232,42 @@ def derive(grammar: Any, *, seed: int = 0, attrs: Mapping[str, Any] | None = Non
     start:   the axiom rule (default: the grammar's first rule).
     lot:     the axiom shape's footprint polygon (default: a 10 x 10 square face).
     choices: `{anchor: snippet}` bindings overriding the grammar's `use` statements.
+    registries: the operations/functions/fits to use (a grammarkit.registry.Registries);
+             default: the installed plugins'.
+
+    Re-entrant: any number of derivations (of one grammar or several) may run at once in
+    threads; each keeps its values, seed and limits to itself.
     """
+    from .engine import Derivation, Limits
+    from .model import Model, compose
+
     seed = _seed(seed)
-    attrs = _mapping(attrs, "attrs")
+    attrs = as_mapping(attrs, "attrs")
     if limits is None:
         limits = Limits()
     elif not isinstance(limits, Limits):
         raise DerivationError(f"limits= must be a grammarkit.split.Limits, got {type(limits).__name__}",
                               None, code="bad-argument")
-    compiled = compile(grammar, choices, start)
+    registries = _registries(registries)
+    compiled = compile(grammar, choices, start, registries=registries)
     norm, (x0, y0, x1, y1) = _lot(lot)
-    with _lock:  # compiled closures read compiled.values: one derivation at a time per process
-        values = compiled.set_values(attrs, seed)
-        ctx = Derivation(compiled, seed, limits, compiled.base_dir)
-        shape = Shape((x0, y0, 0.0), ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0)),
-                      (x1 - x0, y1 - y0, 0.0), FACE, None if lot is None else (norm,))
-        ctx.start(compiled.axiom, shape)
-        ctx.run()
-        manifold, mesh = compose(ctx, compiled.axiom.span)
+    values = compiled.evaluate_values(attrs, seed)
+    ctx = Derivation(compiled, seed, limits, values, registries, compiled.base_dir)
+    shape = Shape((x0, y0, 0.0), ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0)),
+                  (x1 - x0, y1 - y0, 0.0), FACE, None if lot is None else (norm,))
+    ctx.start(compiled.axiom, shape)
+    ctx.run()
+    manifold, mesh = compose(ctx, compiled.axiom.span)
     warnings = [f"{span}: {msg}" if span is not None and span.line else msg for msg, span in compiled.warnings]
     warnings += ctx.warnings
-    return Model(compiled.name, seed, values, ctx, manifold, mesh, warnings, dict(compiled.bindings))
+    return Model(compiled.name, seed, compiled.attr_values(values), ctx, manifold, mesh, warnings,
+                 dict(compiled.bindings))
 
 
 def variations(grammar: Any, n: int, *, seed: int = 0, attrs: Mapping[str, Any] | None = None,
-               limits: Limits | None = None, start: int = 0) -> Iterator[tuple[Any, Model]]:
+               limits: Limits | None = None, start: int = 0, registries: Any = None
+               ) -> Iterator[tuple[Any, Model]]:
     """(Variation, Model) pairs; see grammarkit.split.variation.variations."""
     from .variation import variations as _variations
-    return _variations(grammar, n, seed=seed, attrs=attrs, limits=limits, start=start)
+    return _variations(grammar, n, seed=seed, attrs=attrs, limits=limits, start=start,
+                       registries=_registries(registries))

@@ -11,22 +11,34 @@ Snippet combination (Nishida 2016):
   anchors. A name that resolves to nothing becomes a leaf (with a warning), as in CGA.
 - `variants T { ... }` tables are used by `variations()` to swap the snippet bound to anchors
   of object type T; `choices={anchor: snippet}` passed here overrides the bindings.
+
+Re-entrancy: a CompiledGrammar is immutable once built. The values of one derivation (attrs
+with their overrides, consts, evaluated with the run seed) are a dict made by
+`evaluate_values` and carried by the derivation's shapes (`shape.values`); compiled closures
+read attrs from the shape they are evaluated on. So one compiled grammar serves any number
+of derivations at once, in threads or interleaved.
+
+Operation calls are bound by `grammarkit.dsl.binding`, the binder `grammarkit check` uses, so
+both refuse the same text with the same codes.
 """
 from __future__ import annotations
 
 import math
 import random
+import weakref
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Mapping
 
+from ..dsl.binding import bind_operation, check_block, check_sequence, parse_color
 from ..errors import GrammarError, GrammarkitError
-from ..expr_eval import compile_expr, is_constant
+from ..expr_eval import compile_expr, constant, is_constant
 from ..ir import expr as E
 from ..ir import split as S
 from ..ir.base import Span
 from ..ir.grammar import Grammar
-from .engine import fail, label_of
+from .seeds import label_of
+from .shape import fail
 
 BUILTIN_NAMES = {
     "scope.sx": 0, "scope.sy": 1, "scope.sz": 2,
@@ -76,34 +88,45 @@ class AttrInfo:
     choices: tuple[Callable, ...] | None = field(repr=False, default=None)
 
 
-class _ValueEnv:
-    """Environment for attr/const values: no scope, a generator seeded by the run seed."""
+class ValueEnv:
+    """What attr and const expressions are evaluated on: no scope, the derivation's values so
+    far (`values`), and a generator seeded by the run seed (for `rand` in attr defaults)."""
 
     sz = (0.0, 0.0, 0.0)
+    o = (0.0, 0.0, 0.0)
     params: tuple = ()
     si, st = 0, 1
 
-    def __init__(self, seed: int):
+    def __init__(self, seed: int, values: dict | None = None):
         self._rng = random.Random(seed ^ 0x5EED)
+        self.values: dict[str, Any] = {} if values is None else values
 
     def rng(self) -> random.Random:
         return self._rng
 
 
 class CompiledGrammar:
-    """The runnable form of a split grammar (one snippet binding)."""
+    """The runnable form of a split grammar (one snippet binding, one set of registries).
+    Immutable once compiled: per-derivation values live in the derivation (see module doc)."""
 
     def __init__(self, grammar: Grammar):
-        self.grammar = grammar
+        # no strong reference to the grammar or the registries: compile caches are keyed by
+        # them weakly, and an entry must not keep its own key alive
+        self._grammar = weakref.ref(grammar)
         self.name = grammar.name
         self.rules: dict[str, CRule] = {}
         self.axiom: CRule | None = None
         self.attrs: dict[str, AttrInfo] = {}
         self.consts: dict[str, Callable] = {}
-        self.values: dict[str, Any] = {}  # filled per derivation by set_values()
         self.warnings: list[tuple[str, Span | None]] = []
         self.bindings: dict[str, str] = {}  # anchor -> snippet name
         self.base_dir = str(Path(grammar.source_path).parent) if grammar.source_path else None
+        self._defaults: dict[str, Any] | None = None
+
+    @property
+    def grammar(self) -> Grammar | None:
+        """The grammar this was compiled from (None once nothing else holds it)."""
+        return self._grammar()
 
     # -- values ----------------------------------------------------------------------------
     def resolve_attr_keys(self, name: str) -> list[str]:
@@ -112,25 +135,44 @@ class CompiledGrammar:
             return [name]
         return [k for k, a in self.attrs.items() if a.name == name]
 
-    def set_values(self, overrides: Mapping[str, Any] | None, seed: int) -> dict[str, Any]:
-        """Evaluate attrs (with overrides) and consts into `self.values`; returns attr values."""
-        env = _ValueEnv(seed)
-        V = self.values
-        V.clear()
+    def default_values(self) -> dict[str, Any]:
+        """Every attr and const at its default (run seed 0): what overrides are checked
+        against (types, ranges and enums whose bounds may use other values)."""
+        found = self._defaults
+        if found is None:
+            found = self._evaluate({}, 0)
+            self._defaults = found  # a benign race: every thread computes the same dict
+        return found
+
+    def evaluate_values(self, overrides: Mapping[str, Any] | None, seed: int) -> dict[str, Any]:
+        """The values of one derivation: attrs (with `overrides`, checked) and consts, as a new
+        dict. Nothing is stored in the compiled grammar."""
+        checked: dict[str, Any] = {}
+        if overrides:
+            env = None
+            for name, value in overrides.items():
+                keys = self.resolve_attr_keys(name)
+                if not keys:
+                    known = ", ".join(sorted(self.attrs)) or "none"
+                    raise GrammarError(f"unknown attr {name!r} (known attrs: {known})", None,
+                                       code="unknown-attr")
+                if env is None:
+                    env = ValueEnv(0, dict(self.default_values()))
+                for key in keys:
+                    checked[key] = check_attr_value(self.attrs[key], value, env)
+        return self._evaluate(checked, seed)
+
+    def _evaluate(self, fixed: Mapping[str, Any], seed: int) -> dict[str, Any]:
+        env = ValueEnv(seed)
+        V = env.values
         pending: dict[str, Callable] = {}
         for key, info in self.attrs.items():
             pending[key] = info.default
         for name, f in self.consts.items():
             pending[name] = f
-        for name, value in (overrides or {}).items():
-            keys = self.resolve_attr_keys(name)
-            if not keys:
-                known = ", ".join(sorted(self.attrs)) or "none"
-                raise GrammarError(f"unknown attr {name!r} (known attrs: {known})", None,
-                                   code="unknown-attr")
-            for key in keys:
-                V[key] = check_attr_value(self.attrs[key], value, env)
-                pending.pop(key, None)
+        for key, value in fixed.items():
+            V[key] = value
+            pending.pop(key, None)
         # evaluate in dependency order: retry what needed a value not computed yet
         while pending:
             progress = False
@@ -147,12 +189,17 @@ class CompiledGrammar:
                 span = info.attr.span if info else None
                 raise GrammarError(f"cannot evaluate {key!r}: its value depends on itself "
                                    f"(a cycle among {', '.join(sorted(pending))})", span, code="cycle")
-        return {k: V[k] for k in self.attrs}
+        return V
+
+    def attr_values(self, values: Mapping[str, Any]) -> dict[str, Any]:
+        """The attrs (not the consts) of a derivation's values, in declaration order."""
+        return {k: values[k] for k in self.attrs}
 
 
 def check_attr_value(info: AttrInfo, value: Any, env: Any = None) -> Any:
-    """Convert and check a user value against the attr's type, range or enum."""
-    env = env or _ValueEnv(0)
+    """Convert and check a user value against the attr's type, range or enum (`env` holds the
+    other values the attr's default and bounds may refer to)."""
+    env = env or ValueEnv(0)
     default = info.default(env)
     if isinstance(value, str) and not isinstance(default, str):
         text = value.strip()
@@ -197,12 +244,13 @@ def check_attr_value(info: AttrInfo, value: Any, env: Any = None) -> Any:
 
 
 # ---------------------------------------------------------------------------------------------
-def compile_grammar(grammar: Grammar, choices: Mapping[str, str] | None = None,
+def compile_grammar(grammar: Grammar, registries: Any, choices: Mapping[str, str] | None = None,
                     start: str | None = None) -> CompiledGrammar:
-    from ..plugins import get_plugin_manager
-
-    pm = get_plugin_manager()
-    return _Compiler(grammar, pm.operations(), pm.functions(), choices or {}).run(start)
+    """Compile `grammar` with the operations and functions of `registries` (a
+    grammarkit.registry.Registries); no cache here (grammarkit.split.compile caches)."""
+    if registries is None:
+        raise TypeError("compile_grammar: registries= is required (grammarkit.registry.Registries)")
+    return _Compiler(grammar, registries, choices or {}).run(start)
 
 
 class _Scope:
@@ -225,11 +273,11 @@ class _Scope:
 
 
 class _Compiler:
-    def __init__(self, grammar: Grammar, ops: Mapping[str, Any], functions: Mapping[str, Any],
-                 choices: Mapping[str, str]):
+    def __init__(self, grammar: Grammar, registries: Any, choices: Mapping[str, str]):
         self.g = grammar
-        self.ops = ops
-        self.functions = functions
+        self.registries = registries
+        self.ops = registries.operations
+        self.functions = registries.functions
         self.out = CompiledGrammar(grammar)
         self.top = {}
         for r in grammar.rules:
@@ -342,7 +390,6 @@ class _Compiler:
 
     # -- expressions ---------------------------------------------------------------------------
     def _expr(self, e: Any, scope: _Scope, params: tuple[str, ...]) -> Callable:
-        V = self.out.values
         glob = self.global_names
         grammar_attrs = self.grammar_attrs
 
@@ -360,11 +407,12 @@ class _Compiler:
                 return lambda s: s.si
             if name in ("split.total", "comp.total"):
                 return lambda s: s.st
+            # attrs and consts: the derivation's values, carried by the shape evaluated on
             if name in scope.local_attrs and name not in grammar_attrs:
                 key = f"{scope.anchor}.{name}"
-                return lambda s, _k=key: V[_k]
+                return lambda s, _k=key: s.values[_k]
             if name in glob:
-                return lambda s, _k=name: V[_k]
+                return lambda s, _k=name: s.values[_k]
             return None
         f = compile_expr(e, resolve, self.functions)
         try:
@@ -375,6 +423,7 @@ class _Compiler:
 
     # -- sequences -----------------------------------------------------------------------------
     def _seq(self, seq: S.Seq, scope: _Scope, params: tuple[str, ...], rule: CRule) -> tuple:
+        _raise_first(check_sequence(seq))
         items = list(seq.items)
         steps: list[Callable] = []
         i = 0
@@ -383,22 +432,10 @@ class _Compiler:
             item = items[i]
             last = i == n - 1
             if isinstance(item, S.OpCall) and item.name == "repeat":
-                nxt = items[i + 1] if i + 1 < n else None
-                if not isinstance(nxt, S.Pattern):
-                    raise GrammarError("repeat(...) must be followed by a pattern such as (A)* or (A B)* A",
-                                       item.span, code="repeat-without-pattern")
-                steps.append(self._repeat(item, nxt, scope, params, rule, len(steps)))
+                steps.append(self._repeat(item, items[i + 1], scope, params, rule, len(steps)))
                 i += 2
-                if i < n:
-                    raise GrammarError("nothing may follow a repeat pattern", items[i].span)
                 continue
-            if isinstance(item, S.Pattern):
-                raise GrammarError("a pattern (A)* needs a repeat(axis, size) before it", item.span,
-                                   code="pattern-without-repeat")
             steps.append(self._item(item, scope, params, rule, last, len(steps)))
-            if isinstance(item, S.OpCall) and item.block is not None and not last:
-                raise GrammarError(f"nothing may follow {item.name}(...) {{ ... }}: its block consumes "
-                                   "the shape", items[i + 1].span, code="item-after-block")
             i += 1
         return tuple(steps)
 
@@ -438,8 +475,8 @@ class _Compiler:
             self.out.warnings.append((f"no rule for {name!r}: it becomes a leaf", span))
             return _terminal_step(name, last)
         if len(args) != len(target.params):
-            raise GrammarError(f"rule {name!r} takes {len(target.params)} argument(s), got {len(args)}",
-                               span, code="bad-arity")
+            raise GrammarError(f"rule '{name}' takes {len(target.params)} argument(s), got {len(args)}",
+                               span, code="successor-arity")
         fns = tuple(self._expr(a, scope, params) for a in args)
         if last:
             def succ_last(ctx: Any, s: Any) -> None:
@@ -453,44 +490,38 @@ class _Compiler:
         return succ
 
     def _args(self, call: S.OpCall, spec: Any, scope: _Scope, params: tuple[str, ...]) -> list:
-        ps = spec.params
-        positional = [a for a in call.args if a.name is None]
-        named = {a.name: a for a in call.args if a.name is not None}
-        if len(positional) > len(ps) and not spec.variadic:
-            raise GrammarError(f"{call.name}() takes at most {len(ps)} argument(s), got {len(positional)}",
-                               call.span, code="bad-arity")
+        """Compiled arguments in the spec's parameter order (defaults filled in, variadic extras
+        appended), bound by the binder `grammarkit check` uses."""
+        binding = bind_operation(call, spec, registries=self.registries)
+        _raise_first(binding.problems)
         fns: list[Callable] = []
-        for i, p in enumerate(ps):
-            arg = positional[i] if i < len(positional) else named.pop(p.name, None)
-            if arg is None:
-                if p.required:
-                    raise GrammarError(f"{call.name}() is missing argument {p.name!r}", call.span,
-                                       code="missing-argument")
-                fns.append(_const_fn(p.default))
-                continue
-            fns.append(self._arg(arg.value, p, call, scope, params))
-        if named:
-            bad = next(iter(named.values()))
-            raise GrammarError(f"{call.name}() has no parameter {bad.name!r}; parameters: "
-                               f"{', '.join(p.name for p in ps)}", bad.span, code="unknown-parameter")
-        for arg in positional[len(ps):]:
-            fns.append(self._expr(arg.value, scope, params))
+        for bound in binding.arguments:
+            p = bound.param
+            if bound.value is None:
+                fns.append(constant(p.default))
+            else:
+                fns.append(self._arg(bound.value, p, call, bound.span, scope, params))
+        fns.extend(self._expr(v, scope, params) for v in binding.extra)
         return fns
 
-    def _arg(self, value: Any, p: Any, call: S.OpCall, scope: _Scope, params: tuple[str, ...]) -> Callable:
-        if p.type in ("axis", "selector") and isinstance(value, E.Ref) and (
-                not p.choices or value.name in p.choices):
-            return _const_fn(value.name)
-        if p.type in ("axis", "selector") and isinstance(value, E.Ref):
-            raise GrammarError(f"{call.name}(): {p.name} must be one of {', '.join(p.choices)}, "
-                               f"got {value.name!r}", value.span, code="bad-argument")
-        return self._expr(value, scope, params)
+    def _arg(self, value: Any, p: Any, call: S.OpCall, span: Span | None, scope: _Scope,
+             params: tuple[str, ...]) -> Callable:
+        if p.type in ("axis", "selector", "name"):
+            return constant(value.name)  # the binder checked it is a bare name it accepts
+        f = self._expr(value, scope, params)
+        if p.type == "color" and is_constant(f):
+            color = parse_color(f._value)  # type: ignore[attr-defined]
+            if color is None:
+                raise GrammarError(f"argument '{p.name}' of {call.name} must be a colour '#rrggbb' or "
+                                   f"'#rgb', got {f._value!r}", span, code="bad-argument-value")  # type: ignore[attr-defined]
+            return constant(color)
+        return f
 
     def _op(self, call: S.OpCall, scope: _Scope, params: tuple[str, ...], rule: CRule, index: int) -> Callable:
         spec = self.ops.get(call.name)
         if spec is None:
             known = ", ".join(sorted(self.ops))
-            raise GrammarError(f"unknown operation {call.name!r}", call.span, hint=f"known operations: {known}",
+            raise GrammarError(f"unknown operation '{call.name}'", call.span, hint=f"known operations: {known}",
                                code="unknown-operation")
         apply = spec.apply
         if apply is None:
@@ -501,14 +532,11 @@ class _Compiler:
         if call.name == "i" and fns and is_constant(fns[0]):
             base = Path(call.span.file).parent if call.span and call.span.file else (
                 Path(self.out.base_dir) if self.out.base_dir else Path("."))
-            fns[0] = _const_fn(str((base / str(fns[0](None))).resolve()))
+            fns[0] = constant(str((base / str(fns[0](None))).resolve()))
+        _raise_first(check_block(call, spec))
         block = None
         if call.block is not None:
-            if spec.block == "none":
-                raise GrammarError(f"{call.name}() takes no {{ }} block", call.span, code="unexpected-block")
             block = self._block(call, spec, scope, params, rule, index)
-        elif spec.block in ("sizes", "selectors"):
-            raise GrammarError(f"{call.name}() needs a {{ ... }} block", call.span, code="missing-block")
         return _op_step(apply, tuple(fns), block, call.span, call.name)
 
     def _block(self, call: S.OpCall, spec: Any, scope: _Scope, params: tuple[str, ...], rule: CRule,
@@ -520,22 +548,13 @@ class _Compiler:
             for j, it in enumerate(items):
                 lab = label_of(rule.key, index, path, j) << 12
                 if isinstance(it, S.Repeat):
-                    if not sizes:
-                        raise GrammarError("repeat groups {...}* are only allowed in split blocks", it.span)
                     out.append(Slot("repeat", items=build(it.items, f"{path}.{j}"), label=lab, span=it.span))
                     continue
                 body = self._seq(it.body, scope, params, rule)
                 if sizes:
                     out.append(Slot(it.mode, size=self._expr(it.key, scope, params), body=body,
                                     label=lab, span=it.span))
-                else:
-                    if not isinstance(it.key, E.Ref) or it.mode != "abs":
-                        raise GrammarError(f"{call.name}() block entries must be selectors "
-                                           f"({', '.join(spec.selectors)})", it.span, code="bad-selector")
-                    if spec.selectors and it.key.name not in spec.selectors:
-                        raise GrammarError(f"{call.name}(): unknown selector {it.key.name!r}; expected one of "
-                                           f"{', '.join(spec.selectors)}", it.key.span or it.span,
-                                           code="bad-selector")
+                else:  # check_block made sure the key is one of the spec's selectors
                     out.append(Slot("sel", sel=it.key.name, body=body, label=lab, span=it.span))
             return tuple(out)
         return _make_block(build(call.block or (), ""))
@@ -606,14 +625,14 @@ def _make_block(slots: Any) -> Block:
     return b
 
 
-# -- step factories -------------------------------------------------------------------------------
-def _const_fn(value: Any) -> Callable:
-    def f(env: Any, _v=value) -> Any:
-        return _v
-    f._const = True  # type: ignore[attr-defined]
-    f._value = value  # type: ignore[attr-defined]
-    return f
+def _raise_first(problems: list) -> None:
+    """The compiler stops at the first problem the binder found (`check` lists them all)."""
+    if problems:
+        d = problems[0]
+        raise GrammarError(d.message, d.span, hint=d.hint, code=d.code)
 
+
+# -- step factories -------------------------------------------------------------------------------
 
 def _nil_step(ctx: Any, s: Any) -> None:
     return None
@@ -637,7 +656,8 @@ def _op_step(apply: Callable, fns: tuple, block: tuple | None, span: Span | None
 
     def step(ctx: Any, s: Any) -> Any:
         try:
-            r = apply(ctx, s, const if const is not None else [f(s) for f in fns], block)
+            # operations see the derivation's OperationContext only, never the Derivation
+            r = apply(ctx.context, s, const if const is not None else [f(s) for f in fns], block)
         except GrammarkitError as exc:
             if exc.span is not None or span is None:
                 raise
@@ -690,4 +710,4 @@ def _choice_step(arms: tuple, other: tuple | None, span: Span | None) -> Callabl
     return choice
 
 
-__all__ = ["AttrInfo", "CRule", "CompiledGrammar", "Slot", "check_attr_value", "compile_grammar"]
+__all__ = ["AttrInfo", "CRule", "CompiledGrammar", "Slot", "ValueEnv", "check_attr_value", "compile_grammar"]

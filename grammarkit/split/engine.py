@@ -15,7 +15,7 @@ final union can be traced back to the terminal (or body) they came from.
 from __future__ import annotations
 
 import math
-import zlib
+import weakref
 from dataclasses import dataclass
 from typing import Any
 
@@ -24,10 +24,10 @@ import manifold3d
 from ..errors import DerivationError, LimitError
 from ..geometry.footprints import cross_section
 from ..geometry.solids import frame_matrix as frame
-from .shape import FACE, Shape
+from .seeds import M64, label_of, mix  # noqa: F401 - label_of re-exported
+from .shape import FACE, Shape, fail  # noqa: F401 - fail re-exported
 
 Manifold = manifold3d.Manifold
-M64 = (1 << 64) - 1
 
 # How far a recess cut reaches out of its face, so that the cut's opening never lies exactly
 # in the facade plane (coplanar faces would make the boolean's result depend on round-off).
@@ -68,21 +68,6 @@ class Limits:
                                   None, code="bad-argument")
 
 
-def mix(a: int, b: int) -> int:
-    """A per-shape seed from the parent's seed and a path label.
-
-    Python's hash of a tuple of ints is deterministic across processes (only str/bytes hashing
-    is randomised) and costs ~0.1 us, against ~2 us for a splitmix64 in pure Python; the
-    generator seeded with it (`random.Random`) scrambles the bits anyway.
-    """
-    return hash((a, b)) & M64
-
-
-def label_of(*parts: Any) -> int:
-    """A stable (process-independent) 32-bit label for a derivation path step."""
-    return zlib.crc32("\x1f".join(map(str, parts)).encode())
-
-
 class Tag:
     """Semantic tags of one solid or face terminal."""
 
@@ -99,12 +84,18 @@ class Tag:
 
 
 class Derivation:
-    """Mutable state of one derivation. Operations may call the public methods."""
+    """Mutable state of one derivation: everything one run needs lives here (and in its
+    shapes), nothing in the compiled grammar, so derivations of one grammar may run at once.
 
-    def __init__(self, compiled: Any, seed: int, limits: Limits, base_dir: str | None):
+    Operations never see this object: they get its `context` (an OperationContext)."""
+
+    def __init__(self, compiled: Any, seed: int, limits: Limits, values: dict | None = None,
+                 registries: Any = None, base_dir: str | None = None):
         self.compiled = compiled
         self.seed = int(seed) & M64
         self.limits = limits
+        self.values = values if values is not None else {}
+        self.registries = registries
         self.base_dir = base_dir
         self.stack: list[tuple[Shape, tuple]] = []
         # tree: (parent, rule name, kind, origin, axes, size, seed, span, via)
@@ -118,7 +109,7 @@ class Derivation:
         self.leaves: list[tuple] = []  # (tag, origin, axes, size) of each terminal, in order
         self.warnings: list[str] = []
         self.est_tris = 0
-        self.layouts: dict[tuple, list] = {}  # split layouts of fixed-size blocks, by length
+        self.context = OperationContext(self)
 
     # -- bookkeeping --------------------------------------------------------------------
     def _node(self, s: Shape, parent: int, via: str) -> None:
@@ -132,6 +123,7 @@ class Derivation:
         nodes.append((parent, s.rule.name, s.kind, s.o, s.ax, s.sz, s.seed, s.rule.span, via))
 
     def start(self, rule: Any, shape: Shape) -> None:
+        shape.values = self.values
         shape.rule = rule
         shape.seed = mix(self.seed, rule.label)
         shape.entry = (shape.o, shape.ax, shape.sz)
@@ -165,9 +157,11 @@ class Derivation:
         parent = s.node
         seed = s.seed
         pending = []
+        total = len(children)
         for i, (c, slot) in enumerate(children):
             c.depth = depth
             c.seed = mix(seed, slot.label + i)
+            c.si, c.st = i, total  # split.index / split.total of the child
             c._rng = None
             self._node(c, parent, via)
             pending.append((c, slot.body))
@@ -269,9 +263,13 @@ class Derivation:
         """A volume decomposed by comp(f) stays as the solid body its faces decorate."""
         self._add(s, self._tag(s, s.rule.name, "body"))
 
-    def add_solid(self, s: Shape, name: str | None = None) -> None:
-        """Add a volume shape's solid without ending the shape (plugins may use this)."""
-        self._add(s, self._tag(s, name or s.rule.name, "volume"))
+    def recess(self, s: Shape, depth: float) -> Shape:
+        """Cut face `s` `depth` into the solid below it; the face moved to the recess bottom."""
+        c = s.copy()
+        c.cut = self.add_cut(s, depth)
+        z = s.ax[2]
+        c.o = (s.o[0] - z[0] * depth, s.o[1] - z[1] * depth, s.o[2] - z[2] * depth)
+        return c
 
     def add_cut(self, s: Shape, depth: float) -> int:
         """Subtract the prism of face `s` from z = -depth to just above its plane."""
@@ -302,6 +300,57 @@ class Derivation:
         if n > self.limits.max_triangles:
             raise LimitError(f"triangle limit exceeded: {n} > {self.limits.max_triangles}", where,
                              code="limit-triangles")
+
+
+class OperationContext:
+    """What an operation's `apply(ctx, shape, args, block)` receives as `ctx`: the small,
+    documented part of a derivation operations may use (grammarkit.hookspecs.OperationContext
+    lists it; docs/plugins.md shows it in use). One per derivation."""
+
+    __slots__ = ("_derivation", "limits", "registries", "base_dir", "seed", "cache")
+
+    def __init__(self, derivation: Derivation):
+        # a weak reference: the derivation holds its context, and a reference cycle would keep
+        # every finished derivation (its solids, tags, tree) alive until the cycle collector runs
+        self._derivation = weakref.proxy(derivation)
+        self.limits: Limits = derivation.limits
+        self.registries = derivation.registries
+        self.base_dir: str | None = derivation.base_dir
+        self.seed: int = derivation.seed
+        # per-derivation memo for operations (the split op keeps layouts of fixed blocks here)
+        self.cache: dict = {}
+
+    def attr(self, name: str) -> Any:
+        """The value of attr or const `name` in this derivation (KeyError if there is none)."""
+        return self._derivation.values[name]
+
+    @property
+    def attrs(self) -> dict:
+        """Every attr and const value of this derivation (a copy)."""
+        return dict(self._derivation.values)
+
+    def add_solid(self, shape: Shape, name: str | None = None) -> None:
+        """Add a volume shape's solid to the model as a terminal named `name` (default: the
+        rule's name), without ending the shape."""
+        d = self._derivation
+        d._add(shape, d._tag(shape, name or shape.rule.name, "volume"))
+
+    def add_body(self, shape: Shape) -> None:
+        """Keep a volume decomposed into faces as the body solid its faces decorate."""
+        self._derivation.add_body(shape)
+
+    def recess(self, face: Shape, depth: float) -> Shape:
+        """Cut face `face` `depth` into the solid below it; returns the face moved to the
+        bottom of the recess, whose terminal colours the cut."""
+        return self._derivation.recess(face, depth)
+
+    def terminal(self, shape: Shape, name: str) -> None:
+        """Make `shape` (a face or a volume) a terminal named `name`, as `Name.` does."""
+        self._derivation.leaf(shape, name)
+
+    def warn(self, message: str) -> None:
+        """A warning of the derivation (listed on the model and by the CLI)."""
+        self._derivation.warnings.append(message)
 
 
 def weld_of(n: int) -> float:
@@ -361,8 +410,3 @@ def rotation(rx: float, ry: float, rz: float) -> tuple:
         (sz_ * cy, sz_ * sy_ * sx_ + cz * cx, sz_ * sy_ * cx - cz * sx_),
         (-sy_, cy * sx_, cy * cx),
     )
-
-
-def fail(s: Shape, message: str, span: Any = None, **kw: Any) -> DerivationError:
-    rule = getattr(s.rule, "name", "?")
-    return DerivationError(f"in rule {rule!r} (shape #{s.node}): {message}", span or getattr(s.rule, "span", None), **kw)

@@ -7,18 +7,14 @@ validates against. Each spec's `apply` is bound to its implementation in
 from __future__ import annotations
 
 from dataclasses import replace
-from typing import Iterable
-
 from importlib import import_module
-from typing import Any
+from typing import Any, Iterable
 
 from ..hookspecs import hookimpl
-from ..registry import OperationSpec, Param
+from ..registry import FitSpec, OperationSpec, Param
 
 AXES = ("x", "y", "z")
 FACE_SELECTORS = ("top", "bottom", "side", "front", "back", "left", "right", "all")
-
-
 
 class LazyApply:
     """`apply` of a built-in operation: imports grammarkit.split.ops when first called.
@@ -77,8 +73,11 @@ _SPECS: tuple[OperationSpec, ...] = (
     OperationSpec("center", (Param("axes", "axis", required=False, default="xyz",
                                   choices=("x", "y", "z", "xy", "xz", "yz", "xyz")),),
                   doc="Center the scope in its parent's scope along the given axes."),
-    OperationSpec("i", (Param("path", "string"),), doc="Insert a mesh file fitted to the scope."),
-    OperationSpec("color", (Param("value", "string"),), doc="Tag the shape with a colour (#rrggbb)."),
+    OperationSpec("i", (Param("path", "string"),
+                        Param("fit", "name", required=False, default="scale", names="fits",
+                              doc="how the asset is fitted to the scope (a fit from the registry)")),
+                  doc="Insert a mesh file fitted to the scope (`fit=scale`: scaled to it)."),
+    OperationSpec("color", (Param("value", "color"),), doc="Tag the shape with a colour (#rrggbb)."),
     OperationSpec("material", (Param("name", "string"),), doc="Tag the shape with a material name."),
 )
 
@@ -89,3 +88,24 @@ SPECS: tuple[OperationSpec, ...] = tuple(replace(spec, apply=LazyApply(spec.name
 @hookimpl
 def grammarkit_operations() -> Iterable[OperationSpec]:
     return SPECS
+
+
+def fit_scale(mesh: Any, size: tuple[float, float, float]) -> Any:
+    """The built-in fit: the asset scaled (per axis) so its bounding box is `size`."""
+    import numpy as np
+
+    ext = mesh.extents
+    scale = [s / e if e > 1e-12 else 1.0 for s, e in zip(size, ext)]
+    out = mesh.copy()
+    out.apply_transform(np.diag([*scale, 1.0]))
+    return out
+
+
+FITS: tuple[FitSpec, ...] = (
+    FitSpec("scale", "scale the asset to the scope (a zero scope size keeps its proportion)", fit_scale),
+)
+
+
+@hookimpl
+def grammarkit_insert_fits() -> Iterable[FitSpec]:
+    return FITS

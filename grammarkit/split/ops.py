@@ -1,12 +1,14 @@
 """Implementations of the built-in split operations (bound to the specs in operations.py).
 
-Contract shared with plugins: `apply(ctx, shape, args, block)` where `ctx` is the
-`Derivation`, `args` the evaluated arguments in the spec's parameter order (defaults filled
-in; variadic extras appended), and `block` the compiled block slots or None. A non-block
-operation returns the (new or modified) shape to continue with, or None to delete it. A
-block operation returns a list of `(child_shape, slot)`; each child then runs its slot's body.
-Raise ValueError for bad arguments: the engine turns it into a DerivationError naming the
-rule and the call's source position.
+The contract is the plugins' one (grammarkit.hookspecs: OperationContext, ShapeView,
+BlockSlot), and these functions use nothing else: `apply(ctx, shape, args, block)` where
+`ctx` is the derivation's OperationContext, `args` the evaluated arguments in the spec's
+parameter order (defaults filled in; variadic extras appended), and `block` the compiled block
+slots or None. A non-block operation returns the (new or modified) shape to continue with, or
+None to delete it. A block operation returns a list of `(child_shape, slot)`; each child then
+runs its slot's body (the engine numbers them: `split.index`, `split.total`). Raise
+ValueError for bad arguments: the engine turns it into a DerivationError naming the rule and
+the call's source position.
 """
 from __future__ import annotations
 
@@ -17,9 +19,11 @@ from typing import Any
 
 import manifold3d
 
+from ..dsl.binding import parse_color
 from ..geometry import footprints as fp
 from ..geometry import roofs
 from ..geometry.solids import insert_fitted, taper as taper_solid
+from .assets import load_asset_mesh, load_asset_solid
 from .engine import rotation
 from .shape import FACE, VOLUME, Shape
 
@@ -61,8 +65,8 @@ def _rect_or_poly(poly: Any, sx: float, sy: float) -> Any:
 def _piece(s: Shape, cs: manifold3d.CrossSection, kind: str, extra_o: tuple[float, float] = (0.0, 0.0)):
     """A child shape from a CrossSection given in `s`'s scope coordinates (normalized bbox)."""
     contours = []
-    for c in cs.to_polygons():
-        poly = tuple(map(tuple, c.tolist()))
+    for ring in cs.to_polygons():
+        poly = tuple(map(tuple, ring.tolist()))
         if abs(fp.area(poly)) > 1e-9:
             contours.append(poly)
     if not contours:
@@ -115,11 +119,7 @@ def op_recess(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
     _face_only(s, "recess")
     if d <= 0:
         raise ValueError(f"recess depth must be > 0, got {d:g}")
-    c = s.copy()
-    c.cut = ctx.add_cut(s, d)
-    z = s.ax[2]
-    c.o = (s.o[0] - z[0] * d, s.o[1] - z[1] * d, s.o[2] - z[2] * d)
-    return c
+    return ctx.recess(s, d)
 
 
 # -- comp ------------------------------------------------------------------------------------
@@ -172,9 +172,6 @@ def op_comp(ctx: Any, s: Shape, args: Any, block: Any) -> list:
             if slot.sel in sel:
                 out.append((face, slot))
                 break
-    total = len(out)
-    for i, (face, _) in enumerate(out):
-        face.si, face.st = i, total
     return out
 
 
@@ -264,8 +261,8 @@ def _expand(ctx: Any, s: Shape, items: tuple, avail: float, total: float, flat: 
             from ..errors import LimitError
             raise LimitError(
                 f"repeat limit exceeded: {n} repetitions > {ctx.limits.max_repeat} "
-                f"(in rule {s.rule.name!r}, length {avail:g} / group size {nominal:g})",
-                reps[0][0].span or s.rule.span, code="limit-repeat")
+                f"(in rule {s.rule_name!r}, length {avail:g} / group size {nominal:g})",
+                reps[0][0].span, code="limit-repeat")
         for it, nom, _ in reps:
             counts[id(it)] = n
         share = {id(it): (room * nom / nominal / n if n else 0.0) for it, nom, _ in reps}
@@ -285,15 +282,15 @@ def _split_geometry(s: Shape, a: int, start: float, size: float) -> Shape | None
     if s.solid is not None:
         normal = [0.0, 0.0, 0.0]
         normal[a] = 1.0
-        piece = s.solid.trim_by_plane(tuple(normal), start)
+        trimmed = s.solid.trim_by_plane(tuple(normal), start)
         normal[a] = -1.0
-        piece = piece.trim_by_plane(tuple(normal), -(start + size))
+        trimmed = trimmed.trim_by_plane(tuple(normal), -(start + size))
         shift = [0.0, 0.0, 0.0]
         shift[a] = -start
-        piece = piece.translate(tuple(shift))
-        if piece.is_empty():
+        trimmed = trimmed.translate(tuple(shift))
+        if trimmed.is_empty():
             return None
-        return s.derived(o, tuple(sz), None, s.kind, solid=piece)
+        return s.derived(o, tuple(sz), None, s.kind, solid=trimmed)
     if s.poly is None or a == 2:
         return s.derived(o, tuple(sz), s.poly)
     x0, y0, x1, y1 = (start, 0.0, start + size, s.sz[1]) if a == 0 else (0.0, start, s.sz[0], start + size)
@@ -315,10 +312,10 @@ def op_split(ctx: Any, s: Shape, args: Any, block: Any) -> list:
                          + (" (faces are flat: split them along x or y)" if a == 2 and s.kind == FACE else ""))
     if getattr(block, "fixed", False):
         # sizes read only attrs/consts: the layout depends on the length alone (floors of a facade)
-        key = (id(block), length)
-        parts = ctx.layouts.get(key)
+        key = ("split-layout", id(block), length)
+        parts = ctx.cache.get(key)
         if parts is None:
-            parts = ctx.layouts[key] = layout(ctx, s, block, length)
+            parts = ctx.cache[key] = layout(ctx, s, block, length)
     else:
         parts = layout(ctx, s, block, length)
     out = []
@@ -326,9 +323,6 @@ def op_split(ctx: Any, s: Shape, args: Any, block: Any) -> list:
         c = _split_geometry(s, a, start, size)
         if c is not None:
             out.append((c, slot))
-    total = len(out)
-    for i, (c, _) in enumerate(out):
-        c.si, c.st = i, total
     return out
 
 
@@ -368,9 +362,6 @@ def op_offset(ctx: Any, s: Shape, args: Any, block: Any) -> Any:
             out.append((inside, slot))
         elif slot.sel == "border":
             out.extend((b.copy() if i else b, slot) for i, b in enumerate(border))
-    total = len(out)
-    for i, (c, _) in enumerate(out):
-        c.si, c.st = i, total
     return out
 
 
@@ -479,44 +470,51 @@ def op_center(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
     return c
 
 
-@lru_cache(maxsize=64)
-def _load_part(path: str) -> manifold3d.Manifold:
-    from ..geometry.convert import to_manifold
-    try:
-        from ..geometry.meshio import load_mesh
-    except ImportError:  # pragma: no cover - the geometry helper's loader is the normal path
-        import trimesh
-
-        def load_mesh(p: str):  # type: ignore[no-redef]
-            return trimesh.load(p, force="mesh", process=False)
-    mesh = load_mesh(path)
-    if not hasattr(mesh, "faces"):  # a Scene (GLB, OBJ): all its nodes in world coordinates
-        import trimesh
-        mesh = trimesh.util.concatenate(mesh.dump()) if mesh.geometry else None
-        if mesh is None:
-            raise ValueError(f"i(): {path} contains no mesh")
-    return to_manifold(mesh, what=path)
+def fitted_size(extent: tuple, size: tuple) -> tuple[float, float, float]:
+    """The size an asset of bounding box `extent` gets in a scope of `size`: the scope's size,
+    except that a zero size keeps the asset's proportion on that axis (scaled like the others),
+    as CGA's `i()` does (the same rule as grammarkit.geometry.solids.insert_fitted)."""
+    given = [s / e for s, e in zip(size, extent) if s > 1e-12 and e > 1e-12]
+    default = sum(given) / len(given) if given else 1.0
+    return tuple(s if (s > 1e-12 and e > 1e-12) else e * default  # type: ignore[return-value]
+                 for s, e in zip(size, extent))
 
 
 def op_insert(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
     rel = str(args[0])  # the compiler made constant paths absolute (relative to their file)
+    fit = str(args[1]) if len(args) > 1 else "scale"
     path = Path(rel) if Path(rel).is_absolute() else (Path(ctx.base_dir or ".") / rel).resolve()
     if not path.is_file():
         raise ValueError(f"i(): mesh file not found: {path}")
-    solid, size = insert_fitted(_load_part(str(path)), s.sz)
-    return s.derived(s.o, size, None, VOLUME, solid=solid)
+    if fit == "scale":  # the built-in fit, on the manifold directly (no mesh round trip)
+        solid, size = insert_fitted(load_asset_solid(str(path)), s.sz)
+        return s.derived(s.o, size, None, VOLUME, solid=solid)
+    fits = ctx.registries.fits if ctx.registries is not None else {}
+    spec = fits.get(fit)
+    if spec is None or spec.fit is None:
+        raise ValueError(f"i(): unknown fit {fit!r}; known fits: {', '.join(sorted(fits)) or 'none'}")
+    from ..geometry.convert import to_manifold
+
+    mesh = load_asset_mesh(str(path)).copy()
+    lo = mesh.bounds[0]
+    mesh.apply_translation(-lo)  # the asset's bounding box minimum at the origin
+    target = fitted_size(tuple(float(e) for e in mesh.extents), s.sz)
+    out = spec.fit(mesh, target)
+    solid = to_manifold(out, what=f"{path.name} fitted by {fit!r} (plugin {spec.plugin or '?'})")
+    x0, y0, z0, x1, y1, z1 = solid.bounding_box()
+    size = (x1 - x0, y1 - y0, z1 - z0)
+    if not all(math.isfinite(v) for v in size) or min(size) < 0:
+        raise ValueError(f"fit {fit!r} returned an empty or broken mesh for {path.name}")
+    return s.derived(s.o, size, None, VOLUME, solid=solid.translate((-x0, -y0, -z0)))
 
 
 # -- tags ------------------------------------------------------------------------------------
 @lru_cache(maxsize=1024)
 def _hex_color(v: Any) -> str:
-    text = str(v).strip()
-    h = text[1:] if text.startswith("#") else ""
-    if len(h) == 3:
-        h = "".join(ch * 2 for ch in h)
-    if len(h) != 6 or any(ch not in "0123456789abcdefABCDEF" for ch in h):
-        raise ValueError(f"color must be '#rrggbb' or '#rgb', got {text!r}")
-    return "#" + h.lower()
+    color = parse_color(v)
+    if color is None:
+        raise ValueError(f"color must be '#rrggbb' or '#rgb', got {str(v).strip()!r}")
+    return color
 
 
 def op_color(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:

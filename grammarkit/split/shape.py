@@ -11,12 +11,17 @@ and pure-Python tuples are much cheaper than numpy for 3-vectors. The geometry i
   that footprint extruded over [0, sz], and `solid` set is a general manifold3d solid in scope
   coordinates (roofs, tapers, inserted meshes).
 
-Plugins' operations receive and return Shapes (see `grammarkit.split.engine`).
+Operations (built-in and plugins') receive and return Shapes, through the members listed in
+`grammarkit.hookspecs.ShapeView` only. A shape also carries its derivation's attr/const
+values (`values`), so one compiled grammar serves many derivations at once: compiled
+expressions read attrs from the shape they are evaluated on, never from shared state.
 """
 from __future__ import annotations
 
 import random
 from typing import Any
+
+from ..errors import DerivationError
 
 Vec = tuple[float, float, float]
 
@@ -27,7 +32,7 @@ VOLUME = "V"
 class Shape:
     __slots__ = (
         "o", "ax", "sz", "kind", "poly", "solid", "color", "material", "rule", "params",
-        "seed", "node", "depth", "si", "st", "entry", "cut", "_rng",
+        "seed", "node", "depth", "si", "st", "entry", "cut", "values", "_rng",
     )
 
     def __init__(self, o: Vec, ax: tuple[Vec, Vec, Vec], sz: Vec, kind: str = FACE,
@@ -49,6 +54,7 @@ class Shape:
         self.st = 1  # split.total
         self.entry: tuple | None = None  # scope when the current rule was entered (for center)
         self.cut = -1  # tag id of a recess cut made from this face, coloured by its terminal
+        self.values: dict | None = None  # the derivation's attr/const values (set by the engine)
         self._rng: random.Random | None = None
 
     def copy(self) -> "Shape":
@@ -56,7 +62,7 @@ class Shape:
         c.o, c.ax, c.sz, c.kind, c.poly, c.solid = self.o, self.ax, self.sz, self.kind, self.poly, self.solid
         c.color, c.material, c.rule, c.params = self.color, self.material, self.rule, self.params
         c.seed, c.node, c.depth, c.si, c.st = self.seed, self.node, self.depth, self.si, self.st
-        c.entry, c.cut, c._rng = self.entry, self.cut, None
+        c.entry, c.cut, c.values, c._rng = self.entry, self.cut, self.values, None
         return c
 
     def derived(self, o: Vec, sz: Vec, poly: Any = None, kind: str | None = None,
@@ -68,7 +74,7 @@ class Shape:
         c.poly, c.solid = poly, solid
         c.color, c.material, c.rule, c.params = self.color, self.material, self.rule, self.params
         c.seed, c.node, c.depth, c.si, c.st = self.seed, self.node, self.depth, self.si, self.st
-        c.entry, c.cut, c._rng = self.entry, self.cut, None
+        c.entry, c.cut, c.values, c._rng = self.entry, self.cut, self.values, None
         return c
 
     def rng(self) -> random.Random:
@@ -86,6 +92,21 @@ class Shape:
     def is_face(self) -> bool:
         return self.kind == FACE
 
+    @property
+    def rule_name(self) -> str:
+        """The rule being applied to the shape (for messages)."""
+        return getattr(self.rule, "name", "?")
+
+    @property
+    def index(self) -> int:
+        """`split.index`: this shape's position among its parent block's children."""
+        return self.si
+
+    @property
+    def total(self) -> int:
+        """`split.total`: how many children its parent block made."""
+        return self.st
+
     def contours(self) -> tuple:
         """The face/footprint contours in scope coordinates (the rectangle if `poly` is None)."""
         if self.poly is not None:
@@ -102,3 +123,9 @@ class Shape:
     def __repr__(self) -> str:
         name = getattr(self.rule, "name", "?")
         return f"Shape({name}, kind={self.kind}, o={self.o}, size={self.sz})"
+
+
+def fail(s: Shape, message: str, span: Any = None, **kw: Any) -> DerivationError:
+    """A DerivationError naming the shape's rule and node, located at `span` (or the rule)."""
+    rule = getattr(s.rule, "name", "?")
+    return DerivationError(f"in rule {rule!r} (shape #{s.node}): {message}", span or getattr(s.rule, "span", None), **kw)

@@ -17,8 +17,8 @@ from dataclasses import dataclass
 from typing import Any, Iterator, Mapping
 
 from ..errors import DerivationError, GrammarError
-from ..expr_eval import compile_expr
-from .compile import CompiledGrammar, _ValueEnv
+from ..expr_eval import fold_constant
+from .compile import CompiledGrammar, ValueEnv
 from .engine import Limits
 
 
@@ -33,14 +33,18 @@ class Variation:
         return {"index": self.index, "seed": self.seed, "attrs": self.attrs, "bindings": self.bindings}
 
 
-def _weights(grammar: Any) -> dict[str, list[tuple[str, float]]]:
+def _weights(grammar: Any, functions: Any, values: Mapping[str, Any]) -> dict[str, list[tuple[str, float]]]:
+    from ..expr_eval import NOT_CONSTANT
+
     tables: dict[str, list[tuple[str, float]]] = {}
     for v in grammar.variants:
         opts = []
         for opt in v.options:
-            w = compile_expr(opt.weight, lambda name, span: None)(None)
+            w = fold_constant(opt.weight, lambda name: values.get(name, NOT_CONSTANT), functions)
             if isinstance(w, bool) or not isinstance(w, (int, float)) or w < 0:
-                raise GrammarError(f"variant weight must be a number >= 0, got {w!r}", opt.span)
+                shown = "an expression of the derivation" if w is NOT_CONSTANT else repr(w)
+                raise GrammarError(f"variant weight must be a constant number >= 0, got {shown}", opt.span,
+                                   code="bad-percent")
             opts.append((opt.snippet, float(w)))
         if sum(w for _, w in opts) <= 0:
             raise GrammarError(f"variants {v.object_type}: the weights add up to 0", v.span)
@@ -49,7 +53,8 @@ def _weights(grammar: Any) -> dict[str, list[tuple[str, float]]]:
 
 
 def sample_attrs(compiled: CompiledGrammar, rng: random.Random, fixed: Mapping[str, Any]) -> dict[str, Any]:
-    env = _ValueEnv(0)
+    """Attrs drawn in their ranges and enums (bounds that use other values see the defaults)."""
+    env = ValueEnv(0, dict(compiled.default_values()))
     fixed_keys = set()
     for name in fixed:
         fixed_keys.update(compiled.resolve_attr_keys(name))
@@ -70,24 +75,23 @@ def sample_attrs(compiled: CompiledGrammar, rng: random.Random, fixed: Mapping[s
 
 
 def variations(grammar: Any, n: int, *, seed: int = 0, attrs: Mapping[str, Any] | None = None,
-               limits: Limits | None = None, start: int = 0) -> Iterator[tuple[Variation, Any]]:
+               limits: Limits | None = None, start: int = 0, registries: Any
+               ) -> Iterator[tuple[Variation, Any]]:
     """Yield `n` (Variation, Model) pairs: variations start, start+1, ... (each depends only on
     `seed` and its index, so workers can derive disjoint index ranges)."""
+    from . import as_mapping, derive, load_grammar
     from . import compile as compile_split
-    from . import derive, load_grammar
 
     for what, v, lo in (("n", n, 0), ("start", start, 0), ("seed", seed, None)):
         if isinstance(v, bool) or not isinstance(v, int) or (lo is not None and v < lo):
             raise DerivationError(f"variations(): {what}= must be an integer"
                                   + (f" >= {lo}" if lo is not None else "") + f", got {v!r}",
                                   None, code="bad-argument")
-    g = load_grammar(grammar)
-    base = compile_split(g)
-    tables = _weights(g)
+    g = load_grammar(grammar, registries)
+    base = compile_split(g, registries=registries)
+    tables = _weights(g, registries.functions, base.default_values())
     snippets = {s.name: s for s in g.snippets}
-    from . import _mapping
-
-    fixed = _mapping(attrs, "attrs")
+    fixed = as_mapping(attrs, "attrs")
     for i in range(start, start + n):
         rng = random.Random(hash((seed, i)) & ((1 << 64) - 1))
         choices: dict[str, str] = {}
@@ -97,8 +101,9 @@ def variations(grammar: Any, n: int, *, seed: int = 0, attrs: Mapping[str, Any] 
             if table:
                 names = [s for s, _ in table]
                 choices[anchor] = rng.choices(names, weights=[w for _, w in table])[0]
-        compiled = compile_split(g, choices or None)
+        compiled = compile_split(g, choices or None, registries=registries)
         sampled = sample_attrs(compiled, rng, fixed)
         run_seed = rng.getrandbits(32)
-        model = derive(g, seed=run_seed, attrs=sampled, limits=limits, choices=choices or None)
+        model = derive(g, seed=run_seed, attrs=sampled, limits=limits, choices=choices or None,
+                       registries=registries)
         yield Variation(i, run_seed, model.attrs, dict(compiled.bindings)), model

@@ -16,6 +16,10 @@ What each statement means for validation (see docs/tiling.md):
   `grounded`, `path(from=A, to=B)`, `count(T, lo, hi)`, or a plugin's).
 
 `Rules` is a plain picklable dataclass, so worker processes (the graph sampler) can share it.
+
+Expressions are evaluated by the language's one evaluator (`grammarkit.expr_eval`), so `%`,
+`^`, division by zero and the power guard behave exactly as in split grammars and `check`.
+Constraint arguments are bound by the binder `check` uses (`grammarkit.dsl.binding`).
 """
 from __future__ import annotations
 
@@ -25,7 +29,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ..errors import GrammarError
+from ..errors import GrammarError, GrammarkitError
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..ir import Grammar
@@ -114,64 +118,60 @@ def format_ranges(ranges: dict[str, tuple[int, int | None]]) -> str:
 
 
 # --------------------------------------------------------------------------------------------
-# small evaluators (tiling statements only need numbers, names and vectors)
+# values (tiling statements need numbers, names and vectors)
 # --------------------------------------------------------------------------------------------
-def _env(grammar: "Grammar | None") -> dict[str, Any]:
+def builtin_functions() -> dict[str, Any]:
+    """The built-in expression functions, for callers that have no registries (reading an
+    assembly's part sizes needs `sqrt`, never a plugin's function)."""
+    from ..functions import BUILTIN_FUNCTIONS
+
+    return {f.name: f for f in BUILTIN_FUNCTIONS}
+
+
+class _Failed:
+    """An attr or const whose value could not be computed: its error, raised where it is used
+    (an unused one, e.g. a split grammar's `scope.sx` in a mixed file, does no harm)."""
+
+    __slots__ = ("error",)
+
+    def __init__(self, error: GrammarError):
+        self.error = error
+
+
+def _env(grammar: "Grammar | None", functions: Any = None) -> dict[str, Any]:
     env: dict[str, Any] = {}
     if grammar is None:
         return env
+    functions = functions if functions is not None else builtin_functions()
     for st in (*grammar.attrs, *grammar.consts):
         try:
-            env[st.name] = eval_value(st.value, env)
-        except GrammarError:
-            pass
+            env[st.name] = eval_value(st.value, env, functions)
+        except GrammarError as exc:
+            env[st.name] = _Failed(exc)
     return env
 
 
-def eval_value(expr, env: dict[str, Any] | None = None) -> Any:  # noqa: ANN001, C901
-    """Value of a constant expression; a bare name not in `env` is a type name (a str)."""
-    from ..ir import expr as E
+def eval_value(expr, env: dict[str, Any] | None = None, functions: Any = None) -> Any:  # noqa: ANN001
+    """Value of a constant expression; a bare name not in `env` is a type name (a str).
+    Errors are GrammarErrors located at the failing operator or call."""
+    from ..expr_eval import evaluate
 
     env = env or {}
-    if isinstance(expr, E.Num):
-        v = expr.value
-        return int(v) if float(v).is_integer() else v
-    if isinstance(expr, (E.Str, E.Bool)):
-        return expr.value
-    if isinstance(expr, E.Ref):
-        return env.get(expr.name, expr.name)
-    if isinstance(expr, E.Vector):
-        return tuple(eval_value(i, env) for i in expr.items)
-    if isinstance(expr, E.Unary):
-        v = eval_value(expr.operand, env)
-        if expr.op == "!":
-            return not v
-        _need_number(v, expr)
-        return -v if expr.op == "-" else v
-    if isinstance(expr, E.Binary):
-        a, b = eval_value(expr.left, env), eval_value(expr.right, env)
-        op = expr.op
-        if op in ("&&", "||"):
-            return (a and b) if op == "&&" else (a or b)
-        if op in ("==", "!="):
-            return (a == b) if op == "==" else (a != b)
-        _need_number(a, expr)
-        _need_number(b, expr)
-        try:
-            return {"+": lambda: a + b, "-": lambda: a - b, "*": lambda: a * b, "/": lambda: a / b,
-                    "%": lambda: a % b, "^": lambda: a ** b, "<": lambda: a < b, "<=": lambda: a <= b,
-                    ">": lambda: a > b, ">=": lambda: a >= b}[op]()
-        except ZeroDivisionError:
-            raise GrammarError("division by zero", expr.span) from None
-    if isinstance(expr, E.Call):
-        import math as m
+    variables = {k: v for k, v in env.items() if not isinstance(v, _Failed)}
 
-        fns = {"sqrt": m.sqrt, "sin": lambda d: m.sin(m.radians(d)), "cos": lambda d: m.cos(m.radians(d)),
-               "min": min, "max": max, "abs": abs}
-        if expr.func in fns:
-            return fns[expr.func](*[eval_value(a, env) for a in expr.args])
-    raise GrammarError(f"cannot evaluate this expression here ({type(expr).__name__})",
-                       getattr(expr, "span", None))
+    def names(name: str) -> Any:
+        failed = env.get(name)
+        if isinstance(failed, _Failed):
+            raise failed.error
+        return name if "." not in name else None
+    try:
+        return evaluate(expr, variables, functions=functions if functions is not None else builtin_functions(),
+                        names=names)
+    except GrammarError:
+        raise
+    except GrammarkitError as exc:  # a DerivationError/LimitError of the evaluator: the grammar's fault here
+        d = exc.diagnostics[0]
+        raise GrammarError(d.message, d.span, hint=d.hint, code=d.code) from None
 
 
 def _need_number(v: Any, expr) -> None:  # noqa: ANN001
@@ -179,8 +179,8 @@ def _need_number(v: Any, expr) -> None:  # noqa: ANN001
         raise GrammarError(f"expected a number, got {v!r}", getattr(expr, "span", None))
 
 
-def eval_number(expr, grammar: "Grammar | None" = None) -> float:  # noqa: ANN001
-    v = eval_value(expr, _env(grammar))
+def eval_number(expr, grammar: "Grammar | None" = None, functions: Any = None) -> float:  # noqa: ANN001
+    v = eval_value(expr, _env(grammar, functions), functions)
     _need_number(v, expr)
     return float(v)
 
@@ -209,10 +209,11 @@ def euler_degrees(R: np.ndarray) -> tuple[float, float, float]:
     return tuple(math.degrees(a) for a in (rx, ry, rz))  # type: ignore[return-value]
 
 
-def placement_matrix(placement: "Placement", grammar: "Grammar | None" = None) -> np.ndarray:
-    env = _env(grammar)
-    at = [float(eval_value(e, env)) for e in placement.at]
-    rot = [float(eval_value(e, env)) for e in placement.rot] if placement.rot else [0.0, 0.0, 0.0]
+def placement_matrix(placement: "Placement", grammar: "Grammar | None" = None,
+                     functions: Any = None) -> np.ndarray:
+    env = _env(grammar, functions)
+    at = [_num(e, env, functions) for e in placement.at]
+    rot = [_num(e, env, functions) for e in placement.rot] if placement.rot else [0.0, 0.0, 0.0]
     T = np.eye(4)
     T[:3, :3] = rotation_matrix(rot)
     T[:3, 3] = at
@@ -228,12 +229,20 @@ def known_types(grammar: "Grammar") -> frozenset[str]:
 
 
 def rules_from_grammar(grammar: "Grammar", *, resolve_constraints: bool = True,
-                       site_placements: bool = True) -> Rules:
+                       site_placements: bool = True, registries: Any = None) -> Rules:
     """Compile a tiling grammar's statements into `Rules` (raises GrammarError with spans).
 
     `site_placements=False` skips turning `dock A.s -- B.t` into placements (which needs the
-    parts' geometry)."""
+    parts' geometry). `registries` (a grammarkit.registry.Registries) gives the constraints
+    and functions; default: the installed plugins' (without `resolve_constraints`, no plugin
+    is consulted and the built-in functions are used)."""
     from ..ir.grammar import Grammar
+
+    if registries is None and resolve_constraints:
+        from ..plugins import default_registries  # the public API edge
+
+        registries = default_registries()
+    functions = registries.functions if registries is not None else builtin_functions()
 
     if not isinstance(grammar, Grammar):
         raise GrammarError(f"expected a tiling Grammar (grammarkit.dsl.load), got {type(grammar).__name__}",
@@ -244,7 +253,7 @@ def rules_from_grammar(grammar: "Grammar", *, resolve_constraints: bool = True,
         raise GrammarError(f"{where}: this is {what}; tiling rules come from "
                            "`part`, `dock`, `neighbors` and `constraint` statements", None,
                            code="not-tiling")
-    env = _env(grammar)
+    env = _env(grammar, functions)
     rules = Rules(name=grammar.name)
     types: set[str] = {p.name for p in grammar.parts}
     for nr in grammar.neighbor_rules:
@@ -268,8 +277,8 @@ def rules_from_grammar(grammar: "Grammar", *, resolve_constraints: bool = True,
         types.update((d.a, d.b))
         pairs.add(tuple(sorted((d.a, d.b))))  # type: ignore[arg-type]
         for pl in d.placements:
-            at = tuple(float(_num(e, env)) for e in pl.at)
-            rot = tuple(float(_num(e, env)) for e in pl.rot) if pl.rot else (0.0, 0.0, 0.0)
+            at = tuple(_num(e, env, functions) for e in pl.at)
+            rot = tuple(_num(e, env, functions) for e in pl.rot) if pl.rot else (0.0, 0.0, 0.0)
             fwd = DockPlacement(at, rot)  # type: ignore[arg-type]
             docks.setdefault((d.a, d.b), []).append(fwd)
             # the same docking seen from B (for A == B both directions are allowed placements)
@@ -280,7 +289,7 @@ def rules_from_grammar(grammar: "Grammar", *, resolve_constraints: bool = True,
         types.add(s.part)
     for d in grammar.docks:
         if site_placements and d.a_site is not None and d.b_site is not None:
-            for fwd in _site_placements(grammar, d, env):
+            for fwd in _site_placements(grammar, d, env, functions):
                 docks.setdefault((d.a, d.b), []).append(fwd)
                 inv = np.linalg.inv(fwd.matrix())
                 back = DockPlacement(tuple(float(x) for x in inv[:3, 3]), euler_degrees(inv[:3, :3]))  # type: ignore[arg-type]
@@ -289,7 +298,7 @@ def rules_from_grammar(grammar: "Grammar", *, resolve_constraints: bool = True,
     rules.docks = {k: tuple(v) for k, v in docks.items()}
     compiled = []
     for c in grammar.constraints:
-        args = _constraint_args(c, env, resolve_constraints)
+        args = _constraint_args(c, env, functions, registries if resolve_constraints else None)
         for v in args.values():
             if isinstance(v, str) and c.name in ("path", "count"):
                 types.add(v)
@@ -304,7 +313,8 @@ def rules_from_grammar(grammar: "Grammar", *, resolve_constraints: bool = True,
 _AXES = {"+x": (1, 0, 0), "-x": (-1, 0, 0), "+y": (0, 1, 0), "-y": (0, -1, 0), "+z": (0, 0, 1), "-z": (0, 0, -1)}
 
 
-def _site_frames(grammar: "Grammar", part: str, site: str, env: dict[str, Any], span) -> list[np.ndarray]:  # noqa: ANN001
+def _site_frames(grammar: "Grammar", part: str, site: str, env: dict[str, Any], span,  # noqa: ANN001
+                 functions: Any) -> list[np.ndarray]:
     """The site's frame(s) in the part's modelling frame: origin at the site, x = facing,
     z = up (+z, or +y for sites facing up or down); `mirror AXIS` adds the mirror image."""
     defs = [s for s in grammar.sites if s.part == part and s.name == site]
@@ -312,7 +322,7 @@ def _site_frames(grammar: "Grammar", part: str, site: str, env: dict[str, Any], 
         raise GrammarError(f"part '{part}' has no site '{site}'", span)
     out = []
     for sd in defs:
-        pos = np.array([_num(e, env) for e in sd.position])
+        pos = np.array([_num(e, env, functions) for e in sd.position])
         facing = np.array(_AXES[sd.facing], dtype=np.float64)
         variants = [(pos, facing)]
         if sd.mirror is not None:
@@ -329,7 +339,7 @@ def _site_frames(grammar: "Grammar", part: str, site: str, env: dict[str, Any], 
     return out
 
 
-def _site_placements(grammar: "Grammar", d, env: dict[str, Any]) -> list[DockPlacement]:  # noqa: ANN001
+def _site_placements(grammar: "Grammar", d, env: dict[str, Any], functions: Any) -> list[DockPlacement]:  # noqa: ANN001
     """`dock A.s -- B.t`: B placed so that its site t meets A's site s face to face (t's facing
     opposite to s's, up kept), converted from the parts' modelling frames (the frames their
     `part` geometry is defined in) to their Kalojanov frames, in which validation compares."""
@@ -346,48 +356,36 @@ def _site_placements(grammar: "Grammar", d, env: dict[str, Any]) -> list[DockPla
     Fb = local_frame(np.asarray(protos[d.b].vertices, dtype=np.float64), np.asarray(protos[d.b].faces))
     turn = np.diag([-1.0, -1.0, 1.0, 1.0])  # half a turn about the site's up axis: facings oppose
     out = []
-    for Sa in _site_frames(grammar, d.a, d.a_site, env, d.span):
-        for Sb in _site_frames(grammar, d.b, d.b_site, env, d.span):
+    for Sa in _site_frames(grammar, d.a, d.a_site, env, d.span, functions):
+        for Sb in _site_frames(grammar, d.b, d.b_site, env, d.span, functions):
             model = Sa @ turn @ np.linalg.inv(Sb)  # B's modelling frame in A's
             rel = np.linalg.inv(Fa) @ model @ Fb  # B's Kalojanov frame in A's
             out.append(DockPlacement(tuple(float(x) for x in rel[:3, 3]), euler_degrees(rel[:3, :3])))  # type: ignore[arg-type]
     return out
 
 
-def _num(expr, env) -> float:  # noqa: ANN001
-    v = eval_value(expr, env)
+def _num(expr, env, functions: Any = None) -> float:  # noqa: ANN001
+    v = eval_value(expr, env, functions)
     _need_number(v, expr)
     return float(v)
 
 
-def _constraint_args(c, env: dict[str, Any], resolve: bool) -> dict[str, Any]:  # noqa: ANN001
-    """Bind positional and named arguments to the constraint's declared parameters."""
-    raw = [(a.name, eval_value(a.value, env)) for a in c.args]
-    if not resolve:
-        return {(n if n else str(i)): v for i, (n, v) in enumerate(raw)}
-    from ..plugins import get_plugin_manager
+def _constraint_args(c, env: dict[str, Any], functions: Any, registries: Any) -> dict[str, Any]:  # noqa: ANN001
+    """Bind positional and named arguments to the constraint's declared parameters (the
+    binder `check` uses), then evaluate them. Without registries: by position or name."""
+    if registries is None:
+        return {(a.name if a.name else str(i)): eval_value(a.value, env, functions)
+                for i, a in enumerate(c.args)}
+    from ..dsl.binding import bind_operation
 
-    specs = get_plugin_manager().constraints()
+    specs = registries.constraints
     spec = specs.get(c.name)
     if spec is None:
-        raise GrammarError(f"unknown constraint {c.name!r}", c.span,
+        raise GrammarError(f"unknown constraint '{c.name}'", c.span, code="unknown-constraint",
                            hint=f"known constraints: {', '.join(sorted(specs)) or 'none'}")
-    params = [p.name for p in spec.params]
-    out: dict[str, Any] = {}
-    for i, (name, value) in enumerate(raw):
-        if name is None:
-            if i >= len(params):
-                raise GrammarError(f"constraint {c.name} takes at most {len(params)} argument(s)", c.span)
-            name = params[i]
-        elif name not in params:
-            raise GrammarError(f"constraint {c.name} has no parameter {name!r} "
-                               f"(parameters: {', '.join(params) or 'none'})", c.span)
-        if name in out:
-            raise GrammarError(f"constraint {c.name}: argument {name!r} given twice", c.span)
-        out[name] = value
-    for p in spec.params:
-        if p.name not in out:
-            if p.required:
-                raise GrammarError(f"constraint {c.name} needs argument {p.name!r}", c.span)
-            out[p.name] = p.default
-    return out
+    binding = bind_operation(c, spec, label=f"constraint {c.name}")
+    if binding.problems:
+        d = binding.problems[0]
+        raise GrammarError(d.message, d.span, hint=d.hint, code=d.code)
+    return {b.param.name: (b.param.default if b.value is None else eval_value(b.value, env, functions))
+            for b in binding.arguments}

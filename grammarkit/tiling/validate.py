@@ -71,11 +71,14 @@ class Report:
 
 
 def validate(grammar_or_rules: "Grammar | Rules", assembly: Assembly, *, tolerance: float | None = None,
-             graph: nx.Graph | None = None, docks: bool = True, max_violations: int = 1000) -> Report:
+             graph: nx.Graph | None = None, docks: bool = True, max_violations: int = 1000,
+             registries: Any = None) -> Report:
     """Check `assembly` against the grammar's rules; `graph` (if given) must be its shape graph.
 
     `docks=False` skips the docking-placement check (type pairs and neighbourhoods are still
-    checked). At most `max_violations` are listed (a broken 10,000-part model stays readable)."""
+    checked). At most `max_violations` are listed (a broken 10,000-part model stays readable).
+    `registries` (a grammarkit.registry.Registries) gives the global constraints; default: the
+    installed plugins'."""
     from ..errors import GrammarError, ShapeError
     from ..ir.grammar import Grammar
 
@@ -84,7 +87,12 @@ def validate(grammar_or_rules: "Grammar | Rules", assembly: Assembly, *, toleran
                            f"got {type(grammar_or_rules).__name__}", None, code="bad-argument")
     if not isinstance(assembly, Assembly):
         raise ShapeError(f"validate: expected an Assembly (see read_assembly), got {type(assembly).__name__}")
-    rules = grammar_or_rules if isinstance(grammar_or_rules, Rules) else rules_from_grammar(grammar_or_rules)
+    if registries is None:
+        from ..plugins import default_registries  # the public API edge
+
+        registries = default_registries()
+    rules = grammar_or_rules if isinstance(grammar_or_rules, Rules) else rules_from_grammar(
+        grammar_or_rules, registries=registries)
     if graph is None:
         graph = shape_graph(assembly, tolerance)
     report = Report(assembly.name, graph.number_of_nodes(), graph.number_of_edges(),
@@ -120,9 +128,7 @@ def validate(grammar_or_rules: "Grammar | Rules", assembly: Assembly, *, toleran
             if not add(v):
                 return report
     if rules.constraints:
-        from ..plugins import get_plugin_manager
-
-        specs = get_plugin_manager().constraints()
+        specs = registries.constraints
         for name, args, where in rules.constraints:
             spec = specs.get(name)
             if spec is None or spec.check is None:

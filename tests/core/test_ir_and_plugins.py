@@ -80,12 +80,16 @@ def test_broken_plugin_is_reported_and_others_still_work():
     assert infos["good"].provides["operation"] == ["twist"]
 
 
-def test_duplicate_contribution_is_reported_first_wins():
+def test_duplicate_contribution_is_an_error_naming_both_and_pluggy_order_decides():
+    # issue 8: hooks go through pluggy's call order (the later registered first, unless
+    # tryfirst/trylast say otherwise); the clash is reported on both plugins
     pm = PluginManager(load_entry_points=False)
     pm.register(_GoodPlugin(), "first")
     pm.register(_GoodPlugin(), "second")
-    assert pm.operations()["twist"].plugin == "first"
-    assert any("already provided" in e for e in {i.name: i for i in pm.plugins()}["second"].errors)
+    assert pm.operations()["twist"].plugin == "second"
+    infos = {i.name: i for i in pm.plugins()}
+    assert any("also provided by plugin 'second'" in e for e in infos["first"].errors)
+    assert any("also provided by plugin 'first'" in e for e in infos["second"].errors)
 
 
 def test_builtin_features_come_from_entry_points():

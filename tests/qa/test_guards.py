@@ -7,7 +7,7 @@ import time
 import pytest
 
 import grammarkit
-from grammarkit.errors import DerivationError, GrammarkitError, LimitError, ShapeError
+from grammarkit.errors import DerivationError, GrammarError, GrammarkitError, LimitError, ShapeError
 from grammarkit.split import Limits
 
 FACADE_1KM = """Lot --> s(1000, 10, 0) extrude(10) comp(f) { side: F | top: NIL | bottom: NIL }
@@ -37,18 +37,27 @@ def test_runaway_grammars_stop_with_a_limit_error(text, rule, words):
     assert info.value.span is not None and info.value.span.line >= 1
 
 
+# Constant expressions that cannot be evaluated are caught by `check` (issue 8), so deriving the
+# text fails with the GrammarError of loading it; with a rule parameter the derivation fails.
 @pytest.mark.parametrize("expr", ["9 ^ 9 ^ 9", "2 ^ (2 ^ 40)", "10 ^ 1000"])
 def test_huge_powers_fail_fast(expr):
     t0 = time.perf_counter()
-    with pytest.raises(DerivationError) as info:
+    with pytest.raises(GrammarError) as info:
         grammarkit.derive(f"Lot --> extrude({expr}) X.\n")
     assert time.perf_counter() - t0 < 5
     assert info.value.span is not None and info.value.span.line == 1
+    first, rest = expr.split(" ", 1)  # the same power with its base a rule parameter
+    with pytest.raises(DerivationError) as info:
+        grammarkit.derive(f"Lot --> A({first})\nA(n) --> extrude(n {rest}) X.\n")
+    assert time.perf_counter() - t0 < 10
+    assert info.value.span is not None and info.value.span.line == 2
 
 
 def test_power_with_a_complex_result_is_an_error():
-    with pytest.raises(DerivationError, match="not a real number"):
+    with pytest.raises(GrammarError, match="not a real number"):
         grammarkit.derive("Lot --> extrude((-8) ^ 0.5) X.\n")
+    with pytest.raises(DerivationError, match="not a real number"):
+        grammarkit.derive("Lot --> A(-8)\nA(n) --> extrude(n ^ 0.5) X.\n")
 
 
 def test_max_extent_is_a_limit_the_caller_can_set():

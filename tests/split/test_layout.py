@@ -14,9 +14,7 @@ class Ctx:
 
 
 class S:
-    class rule:
-        name = "R"
-        span = None
+    rule_name = "R"  # what operations may read of a shape (grammarkit.hookspecs.ShapeView)
 
 
 def abs_(v, name="A"):
