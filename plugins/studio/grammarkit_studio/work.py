@@ -177,7 +177,7 @@ class Analysis:
             from grammarkit.split import check_attrs
 
             try:
-                self.values = check_attrs(self.grammar, {})
+                self.values = check_attrs(self.grammar, {}, registries=registries)
             except GrammarkitError as exc:
                 self.diagnostics += [d.to_json() for d in _diagnostics_of(exc)]
                 self.grammar = None
@@ -277,13 +277,17 @@ class Work:
                     "error": {"message": "the grammar has no rules, parts or examples yet: nothing to show",
                               "diagnostics": []}}
         if a.grammar.family == "split":
-            from grammarkit.split import derive, variations
+            from grammarkit.split import Limits, derive, variations
 
+            # the engine's limits guard depth, shapes, repeats, triangles and solids; the
+            # worker's time budget (worker.py) guards the time
+            limits = Limits()
             if variation is not None:
-                (var, model), = variations(a.grammar, 1, seed=seed, attrs=attrs, start=int(variation))
+                (var, model), = variations(a.grammar, 1, seed=seed, attrs=attrs, start=int(variation),
+                                           limits=limits, registries=self.registries)
                 facts["variation"] = var.to_dict()
             else:
-                model = derive(a.grammar, seed=seed, attrs=attrs)
+                model = derive(a.grammar, seed=seed, attrs=attrs, limits=limits, registries=self.registries)
             facts.update(seed=model.seed, triangles=model.triangle_count, terminals=len(model.parts),
                          shapes=model.shape_count, warnings=list(model.warnings), attrs=model.attrs,
                          bindings=model.bindings)
