@@ -418,7 +418,7 @@ function status(text) { $("status").textContent = text; }
 // edits up to `rev` that will bring no model (errors): no longer waited for
 function forget(rev) { if (typeof rev === "number") for (const r of [...S.sent.keys()]) if (r <= rev) S.sent.delete(r); }
 function showFacts(f, ms) {
-  const what = f.kind === "split" ? `${f.triangles} triangles · ${f.terminals} parts` : `${f.parts} parts · example ${f.example}`;
+  const what = f.kind === "split" ? `${f.triangles} triangles · ${f.shapes} shapes` : `${f.parts} parts · example ${f.example}`;
   status(`${what} · derive ${f.derive_ms} ms · export ${f.export_ms} ms · shown in ${ms.toFixed(0)} ms`);
 }
 function setError(m) {
