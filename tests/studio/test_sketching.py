@@ -1,8 +1,13 @@
-"""The sketch canvas's server side: strokes become a line drawing, a recognised snippet and its
-parameters become grammar text through grammarkit's printer (the text checks and derives with
-the new binding and values), and without the recognizer plugin the page is told so."""
+"""The sketch canvas's server side: each object type's canvas has the recognizer's aspect ratio
+and shows the anchor's outline, strokes drawn on it become a line drawing the recognizer reads
+(a drawing of the wrong shape is a clear error), a recognised snippet and its parameters become
+grammar text through grammarkit's printer (the text checks and derives with the new binding and
+values), and without the recognizer plugin the page is told so."""
 from __future__ import annotations
 
+import base64
+import io
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -10,7 +15,10 @@ import pytest
 
 import grammarkit
 from grammarkit.dsl import load
-from grammarkit_studio.sketching import SketchError, apply_snippet, recognize_sketch, strokes_to_image
+from grammarkit.errors import GrammarkitError
+from grammarkit_studio.sketching import (CANVAS_LONGEST, SketchError, apply_snippet, recognize_sketch,
+                                         sketch_canvas, strokes_to_image)
+from grammarkit_studio.work import Work
 
 ROOT = Path(__file__).resolve().parents[2]
 PARIS = ROOT / "grammars" / "paris.grammar"
@@ -45,12 +53,85 @@ def test_apply_snippet_rebinds_and_sets_values_through_the_printer():
         apply_snippet(text, PARIS, merged, "Roof", "window_framed", {})
 
 
-def test_without_the_recognizer_the_page_is_told():
+# a gable over the roof anchor, in fractions of the canvas (x right, y down)
+GABLE = [[(0.3, 0.6), (0.5, 0.3), (0.7, 0.6)]]
+
+
+def on_canvas(strokes, width: int, height: int) -> list:
+    return [[[x * width, y * height] for x, y in s] for s in strokes]
+
+
+@pytest.fixture(scope="module")
+def recognizer():
+    pytest.importorskip("torch", reason="the sketch recognizer needs the learning extra")
+    return pytest.importorskip("grammarkit_sketch")
+
+
+def test_each_type_has_its_canvas_with_the_anchor_outline(recognizer):
+    from PIL import Image
+
+    merged = load(PARIS)
+    models = recognizer.get_recognizer().models
+    for t in ("Roof", "Floor", "Mass"):
+        out = sketch_canvas(t, merged)
+        w, h = models.type_model(t).stage.canvas_size()
+        assert out["object_type"] == t and out["stage_canvas"] == [w, h]
+        assert max(out["width"], out["height"]) == CANVAS_LONGEST
+        assert abs(out["width"] / out["height"] - w / h) < 0.01  # the recognizer's aspect
+        assert out["png"].startswith("data:image/png;base64,")
+        img = np.asarray(Image.open(io.BytesIO(base64.b64decode(out["png"].split(",", 1)[1]))).convert("L"))
+        assert img.shape == (out["height"], out["width"])
+        outline = (img < 235) & (img > 120)  # the anchor's outline, light grey on white paper
+        assert 0.001 < outline.mean() < 0.05 and (img > 250).mean() > 0.9
+    assert sketch_canvas("Floor", merged)["width"] > 3 * sketch_canvas("Floor", merged)["height"]
+    with pytest.raises(SketchError, match="no 'Chimney' snippets.*Roof"):
+        sketch_canvas("Chimney", merged)
+
+
+def test_strokes_on_the_types_canvas_are_recognised_into_grammar_text(recognizer):
+    merged = load(PARIS)
+    text = PARIS.read_text()
+    c = sketch_canvas("Roof", merged)
+    out = recognize_sketch(on_canvas(GABLE, c["width"], c["height"]), c["width"], c["height"], "Roof",
+                           text, PARIS, merged)
+    roofs = {s.name for s in merged.snippets if s.object_type == "Roof"}
+    cands = out["candidates"]
+    assert 1 <= len(cands) <= 3 and {c["snippet"] for c in cands} <= roofs
+    probs = [c["probability"] for c in cands]
+    assert probs == sorted(probs, reverse=True) and 0 < sum(probs) <= 1 + 1e-6
+    best = cands[0]
+    assert best["text"] and f"use {best['snippet']} as Roof" in best["text"] and 0 < best["score"] <= 1
+    for name, value in best["params"].items():
+        assert f"attr {name} = " in best["text"]
+    model = grammarkit.derive(load(best["text"], filename=str(PARIS)))
+    assert model.bindings["Roof"] == best["snippet"]
+
+
+def test_a_drawing_of_the_wrong_shape_is_a_clear_error(recognizer):
+    merged = load(PARIS)
+    # the studio's old square canvas: the recognizer names both shapes
+    with pytest.raises(GrammarkitError, match=r"256x256.*aspect 1\.00.*256x228.*aspect 1\.12"):
+        recognize_sketch(on_canvas(GABLE, 256, 256), 256, 256, "Roof", PARIS.read_text(), PARIS, merged)
+    with pytest.raises(SketchError, match="draw between 1 and"):
+        recognize_sketch([], 512, 456, "Roof", PARIS.read_text(), PARIS, merged)
+
+
+def test_the_worker_operations_answer_through_work(recognizer):
+    work = Work(str(PARIS), str(PARIS.parent))
+    c = work.sketch_canvas("Window", PARIS.read_text())
+    assert c["width"] < c["height"]  # a window's canvas is upright
+    with pytest.raises(GrammarkitError, match="split grammar without errors"):
+        work.sketch_canvas("Roof", "grammar broken\nLot --> nope(")
+
+
+def test_without_the_recognizer_the_page_is_told(monkeypatch):
     pytest.importorskip("PIL")
-    try:
-        import grammarkit_sketch  # noqa: F401
-        pytest.skip("the sketch recognizer is installed; tests/sketch covers it")
-    except ImportError:
-        pass
+    # as if grammarkit_sketch were not installed: `import grammarkit_sketch` raises ImportError
+    monkeypatch.setitem(sys.modules, "grammarkit_sketch", None)
+    merged = load(PARIS)
     with pytest.raises(SketchError, match="sketch recognizer is not installed"):
-        recognize_sketch([[[1, 1], [50, 50]]], 100, 100, "Roof", PARIS.read_text(), PARIS, load(PARIS))
+        recognize_sketch([[[1, 1], [50, 50]]], 100, 100, "Roof", PARIS.read_text(), PARIS, merged)
+    with pytest.raises(SketchError, match="sketch recognizer is not installed"):
+        sketch_canvas("Roof", merged)
+    with pytest.raises(SketchError, match="sketch recognizer is not installed"):
+        Work(str(PARIS), str(PARIS.parent)).sketch_canvas("Roof", PARIS.read_text())

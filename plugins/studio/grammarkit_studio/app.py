@@ -310,6 +310,10 @@ class Studio:
                                        height=msg.get("height"), object_type=str(msg.get("object_type")),
                                        text=_text(msg.get("text")))
                 await conn.send_json({"type": "sketch", **out})
+            elif op == "sketch-canvas":
+                out = await self._call("sketch_canvas", object_type=str(msg.get("object_type")),
+                                       text=_text(msg.get("text")))
+                await conn.send_json({"type": "sketch-canvas", **out})
             else:
                 await conn.send_json({"type": "error", "message": f"unknown op {op!r}"})
         except CallFailed as exc:

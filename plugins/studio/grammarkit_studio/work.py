@@ -477,6 +477,15 @@ class Work:
             raise StudioError("sketching needs a split grammar without errors")
         return recognize_sketch(strokes, width, height, object_type, text, self.path, a.grammar)
 
+    def sketch_canvas(self, object_type: str, text: str) -> dict:
+        """The canvas an object type is drawn on (size and anchor outline; see sketching.py)."""
+        from .sketching import sketch_canvas
+
+        a = self.analysis(text)
+        if not a.ok or a.grammar.family != "split":
+            raise StudioError("sketching needs a split grammar without errors")
+        return sketch_canvas(object_type, a.grammar)
+
 
 def _jsonable(value: Any) -> Any:
     from grammarkit.jsonable import to_jsonable

@@ -98,7 +98,7 @@ class Worker:
     """One child process running `Work`, used by one call at a time (calls queue on a lock)."""
 
     OPS = frozenset({"warm", "check", "derive", "export", "tree", "pick", "node_box", "format",
-                     "gallery", "backends", "sketch"})
+                     "gallery", "backends", "sketch", "sketch_canvas"})
 
     def __init__(self, path: str, root: str, name: str = "worker"):
         self.path, self.root, self.name = path, root, name

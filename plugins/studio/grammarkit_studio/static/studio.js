@@ -307,7 +307,10 @@ function connect() {
   ws.binaryType = "arraybuffer";
   S.ws = ws;
   ws.onopen = () => status("connected");
-  ws.onclose = () => { status("disconnected: restart `grammarkit studio` and reload"); };
+  ws.onclose = () => {
+    status("disconnected: restart `grammarkit studio` and reload");
+    if (S.sketchBusy) { S.sketchBusy = false; sketchResult("disconnected before the recognizer answered", "error"); }
+  };
   ws.onmessage = (ev) => (typeof ev.data === "string" ? onJSON(JSON.parse(ev.data)) : onBinary(ev.data));
 }
 
@@ -405,8 +408,11 @@ function onJSON(m) {
       break;
     case "sketch":
       onSketch(m); break;
+    case "sketch-canvas":
+      onSketchCanvas(m); break;
     case "error":
-      if (m.op === "sketch") { $("sketch-result").textContent = m.message; break; }
+      if (m.op === "sketch") { onSketchError(m); break; }
+      if (m.op === "sketch-canvas") { sketchResult(m.message, "error"); break; }
       if (m.op === "pick" || m.op === "node" || m.op === "tree") status(m.message);
       else setError(m);
       break;
@@ -683,46 +689,107 @@ function addCard(h, glb, png) {
 }
 
 // ---------------------------------------------------------------------------------------------
-// sketch canvas (needs the grammarkit_sketch plugin on the server)
+// sketch canvas (needs the grammarkit_sketch plugin on the server). As in Nishida et al.'s
+// interface, each object type is drawn on its own canvas: the type's camera framed on the anchor
+// (the part already built), whose outline the server sends as the paper. The canvas keeps the
+// type's aspect ratio (the recognizer refuses other shapes); strokes are kept and sent in the
+// canvas's own pixels, whatever size it is shown at.
 const sketch = $("sketch");
+const sketchPaper = new Image();
 let strokes = [], drawing = null;
 Object.defineProperty(S, "strokes", { get: () => strokes });
+S.sketchCanvas = null; // {object_type, width, height, png} of the type shown
+S.sketchBusy = false; // a recognition asked for and not answered yet
+function sketchResult(text, cls) {
+  const box = $("sketch-result");
+  box.textContent = text || ""; box.className = cls || "";
+}
+function sketchButtons() {
+  $("sketch-recognize").disabled = !S.sketchCanvas || S.sketchBusy;
+}
+function askSketchCanvas() {
+  strokes = []; drawing = null; S.sketchCanvas = null; sketch.hidden = true; sketchButtons();
+  const t = $("sketch-type").value;
+  if (!t) { sketchResult("this grammar has no object types to sketch", "error"); return; }
+  sketchResult(`loading the ${t} canvas…`);
+  send({ op: "sketch-canvas", object_type: t, text: S.text });
+}
 $("sketch-toggle").onclick = () => {
-  const on = sketch.hidden;
-  sketch.hidden = !on; $("sketch-tools").hidden = !on;
-  if (on) {
-    sketch.width = view.clientWidth; sketch.height = view.clientHeight;
-    const sel = $("sketch-type");
-    sel.textContent = "";
-    for (const t of (S.lastCheck && S.lastCheck.object_types) || []) sel.appendChild(Object.assign(document.createElement("option"), { value: t, textContent: t }));
-    drawStrokes();
-  }
+  const on = $("sketch-tools").hidden;
+  $("sketch-tools").hidden = !on;
+  if (!on) { sketch.hidden = true; return; }
+  const sel = $("sketch-type"), was = sel.value;
+  sel.textContent = "";
+  for (const t of (S.lastCheck && S.lastCheck.object_types) || []) sel.appendChild(Object.assign(document.createElement("option"), { value: t, textContent: t }));
+  if (was && [...sel.options].some((o) => o.value === was)) sel.value = was;
+  askSketchCanvas();
 };
-sketch.addEventListener("pointerdown", (e) => { drawing = [[e.offsetX, e.offsetY]]; strokes.push(drawing); });
-sketch.addEventListener("pointermove", (e) => { if (drawing) { drawing.push([e.offsetX, e.offsetY]); drawStrokes(); } });
+$("sketch-type").onchange = askSketchCanvas;
+function onSketchCanvas(m) {
+  if ($("sketch-tools").hidden || m.object_type !== $("sketch-type").value) return; // an old answer
+  sketchPaper.onload = () => {
+    S.sketchCanvas = m;
+    sketch.width = m.width; sketch.height = m.height;
+    sketch.hidden = false;
+    layoutSketch(); drawStrokes(); sketchButtons();
+    sketchResult(`draw the ${m.object_type} over the grey outline of its anchor`);
+  };
+  sketchPaper.src = m.png;
+}
+function layoutSketch() {
+  // the largest box of the canvas's aspect that fits the view beside the tools panel
+  if (!S.sketchCanvas) return;
+  const tools = $("sketch-tools").getBoundingClientRect();
+  const W = view.clientWidth, H = view.clientHeight, margin = 10;
+  const aside = W > 2.2 * tools.width ? tools.width + margin : 0;
+  const aw = Math.max(32, W - aside - 2 * margin), ah = Math.max(32, H - 2 * margin);
+  const k = Math.min(aw / sketch.width, ah / sketch.height);
+  const w = Math.round(sketch.width * k), h = Math.round(sketch.height * k);
+  Object.assign(sketch.style, { width: w + "px", height: h + "px",
+    left: Math.round(margin + (aw - w) / 2) + "px", top: Math.round(margin + (ah - h) / 2) + "px" });
+}
+new ResizeObserver(layoutSketch).observe(view);
+function canvasPoint(e) { // CSS pixels of the shown canvas -> the canvas's own pixels
+  return [e.offsetX * sketch.width / sketch.clientWidth, e.offsetY * sketch.height / sketch.clientHeight];
+}
+sketch.addEventListener("pointerdown", (e) => { drawing = [canvasPoint(e)]; strokes.push(drawing); drawStrokes(); });
+sketch.addEventListener("pointermove", (e) => { if (drawing) { drawing.push(canvasPoint(e)); drawStrokes(); } });
 window.addEventListener("pointerup", () => { drawing = null; });
-$("sketch-clear").onclick = () => { strokes = []; drawStrokes(); $("sketch-result").textContent = ""; };
+$("sketch-clear").onclick = () => { strokes = []; drawStrokes(); sketchResult(""); };
 $("sketch-recognize").onclick = () => {
-  send({ op: "sketch", object_type: $("sketch-type").value, strokes, width: sketch.width, height: sketch.height,
-         text: S.text, camera: cameraState() });
+  const c = S.sketchCanvas;
+  if (!c) return;
+  S.sketchBusy = true; sketchButtons();
+  sketchResult(`recognising the ${c.object_type}…`);
+  send({ op: "sketch", object_type: c.object_type, strokes, width: c.width, height: c.height, text: S.text });
 };
 function drawStrokes() {
   const g = sketch.getContext("2d");
   g.clearRect(0, 0, sketch.width, sketch.height);
-  g.strokeStyle = "#ffd36a"; g.lineWidth = 2.5; g.lineCap = "round"; g.lineJoin = "round";
-  for (const s of strokes) { g.beginPath(); s.forEach(([x, y], i) => (i ? g.lineTo(x, y) : g.moveTo(x, y))); g.stroke(); }
+  if (S.sketchCanvas) g.drawImage(sketchPaper, 0, 0, sketch.width, sketch.height);
+  // the pen the server rasterises with: 2 px per 256 px of the canvas
+  g.strokeStyle = "#1d1d1d"; g.lineWidth = Math.max(1, 2 * Math.min(sketch.width, sketch.height) / 256);
+  g.lineCap = "round"; g.lineJoin = "round";
+  for (const s of strokes) {
+    g.beginPath(); s.forEach(([x, y], i) => (i ? g.lineTo(x, y) : g.moveTo(x, y)));
+    if (s.length === 1) g.lineTo(s[0][0] + 0.01, s[0][1]);
+    g.stroke();
+  }
 }
-function cameraState() {
-  return { position: camera.position.toArray(), target: controls.target.toArray(), fov: camera.fov };
+function onSketchError(m) {
+  S.sketchBusy = false; sketchButtons();
+  sketchResult(m.message, "error");
 }
 function onSketch(m) {
+  S.sketchBusy = false; sketchButtons();
+  sketchResult("");
   const box = $("sketch-result");
-  box.textContent = "";
   for (const [i, c] of (m.candidates || []).entries()) {
     const b = document.createElement("button");
     b.textContent = `${i + 1}. ${c.snippet} (${Math.round(100 * c.probability)}%) ` +
       Object.entries(c.params || {}).map(([k, v]) => `${k}=${Number(v).toPrecision(3)}`).join(" ");
-    b.onclick = () => { if (c.text) cm.setValue(c.text); };
+    if (c.text) b.onclick = () => cm.setValue(c.text);
+    else { b.disabled = true; b.title = c.note || ""; }
     box.appendChild(b);
   }
 }
