@@ -101,3 +101,13 @@ def screenshot(page, name: str, tmp: Path, **kwargs) -> Path:
     image = Image.open(io.BytesIO(page.screenshot(**kwargs))).convert("RGB")
     image.quantize(colors=128, method=Image.Quantize.MEDIANCUT).save(path, optimize=True)
     return path
+
+
+def gable_roof(lift: float = 0.22) -> list[list[tuple[float, float]]]:
+    """Strokes of a gable roof drawn on the Roof canvas over its anchor's outline, in fractions
+    of the canvas (x right, y down): the eaves, the two gable ends and the ridge, `lift` of the
+    canvas height above the anchor (a higher ridge is a steeper roof)."""
+    a, b, c, d = (0.176, 0.533), (0.449, 0.408), (0.8125, 0.59), (0.539, 0.825)  # the anchor's corners
+    r1 = ((a[0] + b[0]) / 2, (a[1] + b[1]) / 2 - lift)
+    r2 = ((c[0] + d[0]) / 2, (c[1] + d[1]) / 2 - lift)
+    return [[a, r1, b], [d, r2, c], [r1, r2], [a, d], [b, c]]

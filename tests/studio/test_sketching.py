@@ -20,6 +20,8 @@ from grammarkit_studio.sketching import (CANVAS_LONGEST, SketchError, apply_snip
                                          sketch_canvas, strokes_to_image)
 from grammarkit_studio.work import Work
 
+from _studio import gable_roof
+
 ROOT = Path(__file__).resolve().parents[2]
 PARIS = ROOT / "grammars" / "paris.grammar"
 
@@ -51,10 +53,6 @@ def test_apply_snippet_rebinds_and_sets_values_through_the_printer():
     assert model.attrs["roof_deg"] == 41.5 and "Roof.roof_deg" not in model.attrs and model.attrs["mass_h"] == 44
     with pytest.raises(SketchError, match="not a Roof snippet"):
         apply_snippet(text, PARIS, merged, "Roof", "window_framed", {})
-
-
-# a gable over the roof anchor, in fractions of the canvas (x right, y down)
-GABLE = [[(0.3, 0.6), (0.5, 0.3), (0.7, 0.6)]]
 
 
 def on_canvas(strokes, width: int, height: int) -> list:
@@ -92,27 +90,32 @@ def test_strokes_on_the_types_canvas_are_recognised_into_grammar_text(recognizer
     merged = load(PARIS)
     text = PARIS.read_text()
     c = sketch_canvas("Roof", merged)
-    out = recognize_sketch(on_canvas(GABLE, c["width"], c["height"]), c["width"], c["height"], "Roof",
-                           text, PARIS, merged)
     roofs = {s.name for s in merged.snippets if s.object_type == "Roof"}
-    cands = out["candidates"]
-    assert 1 <= len(cands) <= 3 and {c["snippet"] for c in cands} <= roofs
-    probs = [c["probability"] for c in cands]
-    assert probs == sorted(probs, reverse=True) and 0 < sum(probs) <= 1 + 1e-6
-    best = cands[0]
-    assert best["text"] and f"use {best['snippet']} as Roof" in best["text"] and 0 < best["score"] <= 1
-    for name, value in best["params"].items():
-        assert f"attr {name} = " in best["text"]
+    angles = []
+    for lift in (0.13, 0.22, 0.31):  # a gable over the anchor, its ridge higher each time
+        out = recognize_sketch(on_canvas(gable_roof(lift), c["width"], c["height"]), c["width"], c["height"],
+                               "Roof", text, PARIS, merged)
+        cands = out["candidates"]
+        assert len(cands) == 3 and {c["snippet"] for c in cands} <= roofs
+        probs = [c["probability"] for c in cands]
+        assert probs == sorted(probs, reverse=True) and 0 < sum(probs) <= 1 + 1e-6
+        best = cands[0]
+        assert best["snippet"] == "roof_gable" and best["probability"] > 0.9, cands
+        assert best["text"] and "use roof_gable as Roof" in best["text"] and 0 < best["score"] <= 1
+        for name, value in best["params"].items():
+            assert f"attr {name} = " in best["text"]
+        angles.append(best["params"]["roof_deg"])
+    assert angles == sorted(angles) and angles[-1] - angles[0] > 8  # steeper drawn, steeper recognised
     model = grammarkit.derive(load(best["text"], filename=str(PARIS)))
-    assert model.bindings["Roof"] == best["snippet"]
+    assert model.bindings["Roof"] == "roof_gable" and model.attrs["roof_deg"] == pytest.approx(angles[-1])
 
 
 def test_a_drawing_of_the_wrong_shape_is_a_clear_error(recognizer):
     merged = load(PARIS)
     # the studio's old square canvas: the recognizer names both shapes
     with pytest.raises(GrammarkitError, match=r"256x256.*aspect 1\.00.*256x228.*aspect 1\.12"):
-        recognize_sketch(on_canvas(GABLE, 256, 256), 256, 256, "Roof", PARIS.read_text(), PARIS, merged)
-    with pytest.raises(SketchError, match="draw between 1 and"):
+        recognize_sketch(on_canvas(gable_roof(), 256, 256), 256, 256, "Roof", PARIS.read_text(), PARIS, merged)
+    with pytest.raises(SketchError, match="nothing to recognise"):
         recognize_sketch([], 512, 456, "Roof", PARIS.read_text(), PARIS, merged)
 
 

@@ -46,8 +46,12 @@ def strokes_to_image(strokes: Any, width: int, height: int, line_width: float | 
     if not (isinstance(width, int) and isinstance(height, int) and 16 <= width <= MAX_CANVAS
             and 16 <= height <= MAX_CANVAS):
         raise SketchError(f"sketch canvas must be 16..{MAX_CANVAS} pixels wide and high")
-    if not isinstance(strokes, list) or not strokes or len(strokes) > MAX_STROKES:
-        raise SketchError(f"draw between 1 and {MAX_STROKES} strokes")
+    if not isinstance(strokes, list):
+        raise SketchError("strokes must be a list of strokes")
+    if not strokes:
+        raise SketchError("nothing to recognise: draw some strokes on the canvas first")
+    if len(strokes) > MAX_STROKES:
+        raise SketchError(f"draw at most {MAX_STROKES} strokes")
     image = Image.new("L", (width, height), 255)
     draw = ImageDraw.Draw(image)
     points = 0

@@ -737,22 +737,25 @@ function onSketchCanvas(m) {
   sketchPaper.src = m.png;
 }
 function layoutSketch() {
-  // the largest box of the canvas's aspect that fits the view beside the tools panel
+  // the largest box of the canvas's aspect that fits the view below the tools
   if (!S.sketchCanvas) return;
-  const tools = $("sketch-tools").getBoundingClientRect();
-  const W = view.clientWidth, H = view.clientHeight, margin = 10;
-  const aside = W > 2.2 * tools.width ? tools.width + margin : 0;
-  const aw = Math.max(32, W - aside - 2 * margin), ah = Math.max(32, H - 2 * margin);
+  const v = view.getBoundingClientRect(), tools = $("sketch-tools").getBoundingClientRect();
+  const margin = 10, top = tools.bottom - v.top + margin;
+  const aw = Math.max(32, v.width - 2 * margin), ah = Math.max(32, v.height - top - margin);
   const k = Math.min(aw / sketch.width, ah / sketch.height);
   const w = Math.round(sketch.width * k), h = Math.round(sketch.height * k);
   Object.assign(sketch.style, { width: w + "px", height: h + "px",
-    left: Math.round(margin + (aw - w) / 2) + "px", top: Math.round(margin + (ah - h) / 2) + "px" });
+    left: Math.round(margin + (aw - w) / 2) + "px", top: Math.round(top) + "px" });
 }
 new ResizeObserver(layoutSketch).observe(view);
+new ResizeObserver(layoutSketch).observe($("sketch-tools"));
 function canvasPoint(e) { // CSS pixels of the shown canvas -> the canvas's own pixels
   return [e.offsetX * sketch.width / sketch.clientWidth, e.offsetY * sketch.height / sketch.clientHeight];
 }
-sketch.addEventListener("pointerdown", (e) => { drawing = [canvasPoint(e)]; strokes.push(drawing); drawStrokes(); });
+sketch.addEventListener("pointerdown", (e) => {
+  drawing = [canvasPoint(e)]; strokes.push(drawing); drawStrokes();
+  if ($("sketch-result").className === "error") sketchResult("");
+});
 sketch.addEventListener("pointermove", (e) => { if (drawing) { drawing.push(canvasPoint(e)); drawStrokes(); } });
 window.addEventListener("pointerup", () => { drawing = null; });
 $("sketch-clear").onclick = () => { strokes = []; drawStrokes(); sketchResult(""); };
