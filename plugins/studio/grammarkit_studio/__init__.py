@@ -3,7 +3,8 @@
 A local web app (Starlette + uvicorn, the optional extra `grammarkit[studio]`): an editor with
 highlighting and inline diagnostics, a three.js view that re-derives on every valid edit,
 sliders for `@range`/`@enum` attrs, the derivation tree linked both ways to the 3D parts, seeds
-and variations, GLB/OBJ/STL export, and a gallery of sampled variants. See docs/studio.md.
+and variations, GLB/OBJ/STL export, a gallery of sampled variants, and a sketch canvas per
+object type read by the sketch recognizer (the grammarkit_sketch plugin). See docs/studio.md.
 
     from grammarkit_studio import serve, running
     serve("grammars/paris.grammar")                       # blocks; prints the URL
