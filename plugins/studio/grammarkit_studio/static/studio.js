@@ -734,6 +734,7 @@ function onSketchCanvas(m) {
     layoutSketch(); drawStrokes(); sketchButtons();
     sketchResult(`draw the ${m.object_type} over the grey outline of its anchor`);
   };
+  sketchPaper.onerror = () => sketchResult(`the ${m.object_type} canvas could not be shown`, "error");
   sketchPaper.src = m.png;
 }
 function layoutSketch() {
