@@ -99,13 +99,13 @@ class _Shape:
     def __init__(self, assembly: Assembly, graph: nx.Graph):
         self.assembly = assembly
         self.graph = graph
-        nodes = list(graph.nodes)
-        index = nx.get_node_attributes(graph, "index")
-        if len(index) == len(nodes):
-            nodes.sort(key=index.__getitem__)
+        # one pass over the node data (NodeView lookups cost ~1 us each: 10 per part on 100k parts)
+        data = dict(graph.nodes(data=True))
+        nodes = list(data)
+        if all("index" in d for d in data.values()):
+            nodes.sort(key=lambda n: data[n]["index"])
         self.nodes = nodes
         self.pos = {n: i for i, n in enumerate(nodes)}
-        data = graph.nodes
         self.types = [data[n]["type"] for n in nodes]
         # type codes: per-part loops over 100,000 parts become numpy operations
         self.type_names = sorted(set(self.types))
