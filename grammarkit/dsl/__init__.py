@@ -20,7 +20,7 @@ from ..registry import Registries
 from .checker import BUILTIN_CONSTRAINTS, BUILTIN_REFS, check_grammar
 from .frontend import Parsed, load_text, parse_source
 from .imports import resolve_calls, resolve_imports
-from .parser import DEFAULT_MAX_BYTES, KEYWORDS
+from .parser import DEFAULT_MAX_BYTES, KEYWORDS, paused_gc
 
 __all__ = ["parse", "check", "load", "parse_with_header", "check_text", "KEYWORDS", "BUILTIN_REFS",
            "BUILTIN_CONSTRAINTS", "DEFAULT_MAX_BYTES", "Registries"]
@@ -28,7 +28,8 @@ __all__ = ["parse", "check", "load", "parse_with_header", "check_text", "KEYWORD
 
 def _parsed(source: Any, filename: str | None, max_bytes: int) -> Parsed:
     text, fname = load_text(source, filename, max_bytes=max_bytes)
-    return parse_source(text, fname, max_bytes=max_bytes)
+    with paused_gc():
+        return parse_source(text, fname, max_bytes=max_bytes)
 
 
 def _raise(diagnostics: list[Diagnostic]) -> None:
@@ -77,7 +78,8 @@ def _check(source: Any, filename: str | None, max_bytes: int,
             return None, diags
         grammar = parsed.grammar
     main_file = grammar.source_path
-    merged, import_diags = resolve_imports(grammar, max_bytes=max_bytes)
+    with paused_gc():
+        merged, import_diags = resolve_imports(grammar, max_bytes=max_bytes)
     diags.extend(import_diags)
     if any(d.severity == "error" for d in import_diags):
         return None, diags
@@ -85,7 +87,8 @@ def _check(source: Any, filename: str | None, max_bytes: int,
         from ..plugins import default_registries
 
         registries = default_registries()
-    diags.extend(_sorted(check_grammar(merged, registries, main_file)))
+    with paused_gc():
+        diags.extend(_sorted(check_grammar(merged, registries, main_file)))
     return merged, diags
 
 
