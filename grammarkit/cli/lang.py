@@ -45,7 +45,7 @@ def check(files: tuple[Path, ...], as_json: bool, emit_ir: bool, max_size: int |
           max_diagnostics: int) -> None:
     """Report every problem in the grammar FILES (`-`: standard input; exit status 1 if there
     are errors)."""
-    from ..dsl import DEFAULT_MAX_BYTES, check_text
+    from ..dsl import DEFAULT_MAX_BYTES
 
     results = []
     total_errors = total_warnings = 0
@@ -57,9 +57,9 @@ def check(files: tuple[Path, ...], as_json: bool, emit_ir: bool, max_size: int |
             except GrammarError as exc:
                 grammar, diags = None, list(exc.diagnostics)
             else:
-                grammar, diags = check_text(text, filename=name, max_bytes=limit)
+                grammar, diags = _check_lazily(text, name, limit)
         else:
-            grammar, diags = check_text(path, max_bytes=limit)
+            grammar, diags = _check_lazily(path, None, limit)
         e, w = _counts(diags)
         total_errors += e
         total_warnings += w
@@ -99,6 +99,20 @@ def check(files: tuple[Path, ...], as_json: bool, emit_ir: bool, max_size: int |
         click.echo(summary, err=True)
     if total_errors:
         sys.exit(1)
+
+
+def _check_lazily(source, filename: str | None, limit: int):  # noqa: ANN001, ANN202
+    """Check with grammarkit's own operations, functions and constraints first; load the
+    third-party plugins only if the grammar names something those do not provide. So `check`
+    of a grammar that needs no plugin never runs plugin code (issue 19)."""
+    from ..dsl import check_text
+    from ..plugins import NEEDS_PLUGINS, builtin_registries, third_party_plugins
+
+    grammar, diags = check_text(source, filename=filename, max_bytes=limit,
+                                registries=builtin_registries())
+    if any(d.code in NEEDS_PLUGINS for d in diags) and third_party_plugins():
+        grammar, diags = check_text(source, filename=filename, max_bytes=limit)
+    return grammar, diags
 
 
 def write_atomically(path: Path, text: str) -> None:
