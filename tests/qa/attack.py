@@ -372,7 +372,7 @@ def _missing_dependency(folder: Path) -> Setup:
 
 def _hip_roof(n: int) -> str:
     import math
-    pts = ", ".join(f"({10 * math.cos(2 * math.pi * k / n):.4f}, {10 * math.sin(2 * math.pi * k / n):.4f})"
+    pts = ", ".join(f"{10 * math.cos(2 * math.pi * k / n):.4f}, {10 * math.sin(2 * math.pi * k / n):.4f}"
                     for k in range(n))
     return (f"Lot --> footprint(polygon({pts})) extrude(5) comp(f) {{ top: R | side: W. | bottom: NIL }}\n"
             "R --> roofHip(30) Roof.\n")
