@@ -50,6 +50,7 @@ class Setup:
     env: dict[str, str] = dataclasses.field(default_factory=dict)
     keep: dict[Path, bytes] = dataclasses.field(default_factory=dict)  # files that must survive
     check: Callable[[Path], str | None] | None = None  # extra check of the folder: problem or None
+    fsize: int | None = None  # RLIMIT_FSIZE: writes past this many bytes fail (a full disk)
 
 
 @dataclasses.dataclass
@@ -57,7 +58,9 @@ class Case:
     name: str
     group: str
     setup: Callable[[Path], Setup]
-    status: int | None = 1  # expected exit status (None: 0 or 1, only time and memory matter)
+    # expected exit status: 1 for errors, 2 for command-line usage errors (click's convention),
+    # None for 0 or 1 (only time and memory matter)
+    status: int | None = 1
     words: str = ""  # regex the output must contain
     timeout: float = 30.0
     big: bool = False
@@ -70,6 +73,7 @@ class Outcome:
     status: int | None
     seconds: float
     peak_mb: float
+    cpu: float
     output: str
     detail: str = ""
 
@@ -87,8 +91,12 @@ def run_case(case: Case, folder: Path | None = None) -> Outcome:
         out_path, err_path = work / ".stdout", work / ".stderr"
         before = {p: p.read_bytes() if p.exists() else None for p in s.keep}
 
+        fsize = s.fsize
+
         def limits() -> None:
             resource.setrlimit(resource.RLIMIT_AS, (MEMORY_CAP, MEMORY_CAP))
+            if fsize is not None:  # Python ignores SIGXFSZ, so a write past it fails with EFBIG
+                resource.setrlimit(resource.RLIMIT_FSIZE, (fsize, fsize))
             os.setsid()
 
         with open(out_path, "wb") as out, open(err_path, "wb") as err:
@@ -125,6 +133,7 @@ def run_case(case: Case, folder: Path | None = None) -> Outcome:
         output = out_path.read_bytes().decode("utf-8", "replace") + "\n" + \
             err_path.read_bytes().decode("utf-8", "replace")
         peak_mb = usage.ru_maxrss / 1024 if usage else 0.0
+        cpu = usage.ru_utime + usage.ru_stime if usage else 0.0
         lost = [str(p.name) for p, data in before.items()
                 if data is not None and (not p.exists() or p.read_bytes() != data)]
         extra = s.check(work) if s.check else None
@@ -144,7 +153,7 @@ def run_case(case: Case, folder: Path | None = None) -> Outcome:
             verdict, detail = "wrong", f"output lacks /{case.words}/"
         else:
             verdict, detail = "clear", ""
-        return Outcome(case, verdict, status, seconds, peak_mb, output, detail)
+        return Outcome(case, verdict, status, seconds, peak_mb, cpu, output, detail)
     finally:
         if tmp:
             tmp.cleanup()
@@ -300,6 +309,11 @@ def _tree_same(folder: Path) -> Setup:
                  check=lambda f: "lost: x.glb written" if (f / "x.glb").exists() else None)
 
 
+def _keep_file(folder: Path, name: str, data: str | bytes, argv: list[str]) -> Setup:
+    p = _write(folder, name, data)
+    return Setup(argv, keep={p: p.read_bytes()})
+
+
 def _learn_same(folder: Path) -> Setup:
     src = ROOT / "grammars" / "tiling" / "castle" / "castle_small.glb"
     p = folder / "ex.glb"
@@ -338,12 +352,20 @@ def _fifo_insert(folder: Path) -> Setup:
     return Setup(["derive", "g.grammar", "-o", "o.glb"])
 
 
-def _temp_name(folder: Path) -> Setup:
-    _write(folder, "g.grammar", GOOD)
-    ro = folder / "ro"
-    ro.mkdir()
-    ro.chmod(0o500)
-    return Setup(["derive", "g.grammar", "-o", "ro/paris.glb"])
+FACADE = """Lot --> footprint(rect(40, 20)) extrude(30) comp(f) { side: F | top: T. | bottom: NIL }
+F --> split(y) { { ~1: split(x) { { ~1: W }* } }* }
+W --> extrude(0.3) X.
+"""
+
+
+def _full_disk(folder: Path) -> Setup:
+    """A write that fails half-way (RLIMIT_FSIZE stands for a full disk): the error names the
+    user's path, not the temporary file, and the model that was there stays whole."""
+    _write(folder, "g.grammar", FACADE)
+    old = _write(folder, "paris.glb", b"an earlier model")
+    return Setup(["derive", "g.grammar", "-o", "paris.glb"], fsize=64 * 1024,
+                 keep={old: old.read_bytes()},
+                 check=lambda f: "a temporary file was left behind" if list(f.glob(".paris*")) else None)
 
 
 def _folder_as_file(cmd: str) -> Callable[[Path], Setup]:
@@ -535,6 +557,15 @@ CASES: list[Case] = [
     Case("--tree and -o the same file", "data loss", _tree_same, words="same|both|twice|more than once"),
     Case("learn -o its own example", "data loss", _learn_same, words="input", timeout=90),
     Case("fmt -i through a symlink", "data loss", _fmt_symlink, status=0),
+    Case("import-cga -o its own CGA file", "data loss", lambda f: _keep_file(
+        f, "rules.cga", "Lot --> extrude(10) Mass\n", ["import-cga", "rules.cga", "-o", "rules.cga"]),
+        words="input"),
+    Case("import-cga --report over its -o", "data loss", lambda f: _keep_file(
+        f, "rules.cga", "Lot --> extrude(10) Mass\n",
+        ["import-cga", "rules.cga", "-o", "x.grammar", "--report", "x.grammar"]), words="same file"),
+    Case("render -o its own model", "data loss", lambda f: _keep_file(
+        f, "m.glb", (ROOT / "grammars/tiling/castle/castle_small.glb").read_bytes(),
+        ["render", "m.glb", "-o", "m.glb"]), status=2, words="image|png"),
     Case("plugin empty exporter over a good file", "data loss", _empty_exporter_over_good,
          words="void|empty"),
     Case("sampler re-run, another seed", "data loss", _sampler_rerun, status=1, timeout=120,
@@ -578,7 +609,7 @@ CASES: list[Case] = [
          _grammar(f'Lot --> extrude(3) i("{"a" * 5000}.glb") X.\n'), words="error"),
     Case("render --size <5000 digits>x2", "derive bomb",
          lambda f: Setup(["render", str(_write(f, "g.grammar", GOOD).name), "-o", "o.png",
-                          "--size", "9" * 5000 + "x2"]), words="size"),
+                          "--size", "9" * 5000 + "x2"]), status=2, words="size"),
     Case("full-width digits １０", "lenient numbers", _grammar("Lot --> extrude(１０) X.\n", cmd="check"),
          words=r"1:\d+: error"),
     Case("Arabic-Indic digits ١٢", "lenient numbers", _grammar("Lot --> extrude(١٢) X.\n", cmd="check"),
@@ -613,6 +644,9 @@ CASES: list[Case] = [
          _with_plugin(PLUGIN_IMPORT_HANGS, ["--version"]), status=0, timeout=20, words="version"),
     Case("plugin import hangs: fmt", "plugins",
          _with_plugin(PLUGIN_IMPORT_HANGS, ["fmt", "g.grammar"]), status=0, timeout=20, words="Lot"),
+    Case("check of a grammar that uses a plugin operation", "plugins",
+         _with_plugin(PLUGIN_OP_BAD_RESULT, ["check", "g.grammar"], text="Lot --> extrude(3) weird() X.\n"),
+         status=0, words="0 errors"),
     Case("plugin import hangs: check", "plugins",
          _with_plugin(PLUGIN_IMPORT_HANGS, ["check", "g.grammar"]), status=0, timeout=20,
          words="0 errors"),
@@ -629,13 +663,16 @@ CASES: list[Case] = [
          lambda f: _replaced(_with_plugin(PLUGIN_REPLACES_BUILTIN, ["derive", "g.grammar", "-o", "o.glb"])(f)),
          status=0, words="cannot be replaced"),
     # error messages
-    Case("unwritable folder names the user's path", "error messages", _temp_name,
-         words=r"ro/paris\.glb"),
-    Case("folder as grammar: check", "error messages", _folder_as_file("check"), words="folder|directory"),
-    Case("folder as grammar: derive", "error messages", _folder_as_file("derive"), words="folder|directory"),
-    Case("folder as grammar: fmt", "error messages", _folder_as_file("fmt"), words="folder|directory"),
-    Case("folder as model: render", "error messages", _folder_as_file("render"), words="folder|directory"),
+    Case("full disk names the user's path", "error messages", _full_disk,
+         words=r"paris\.glb: cannot write"),
+    Case("folder as grammar: check", "error messages", status=2, setup=_folder_as_file("check"), words="folder|directory"),
+    Case("folder as grammar: derive", "error messages", status=2, setup=_folder_as_file("derive"), words="folder|directory"),
+    Case("folder as grammar: fmt", "error messages", status=2, setup=_folder_as_file("fmt"), words="folder|directory"),
+    Case("folder as model: render", "error messages", status=2, setup=_folder_as_file("render"), words="folder|directory"),
     Case("folder as model: validate", "error messages", _folder_as_file("validate"), words="folder|directory"),
+    Case("U+2028, U+0085 and form feed in comments: the right source line", "error messages",
+         _grammar("# a\u2028b\u0085c\fd\nLot --> extrude(x) X.\n", cmd="check"),
+         words=r"g\.grammar:2:17: error[^\n]*\n    Lot --> extrude\(x\) X\."),
     Case("missing optional dependency", "error messages", _missing_dependency,
          words="trimesh|manifold3d"),
 ] + [Case(f"check, a file at the size limit of {kind}", "big files", _big(kind), timeout=60, big=True,
@@ -708,7 +745,7 @@ def main(argv: list[str]) -> int:
     for c in cases:
         o = run_case(c)
         outcomes.append(o)
-        print(f"{o.verdict:9s} {o.seconds:6.1f} s {o.peak_mb:7.0f} MB  {c.name}"
+        print(f"{o.verdict:9s} {o.seconds:6.1f} s {o.cpu:6.1f} s CPU {o.peak_mb:7.0f} MB  {c.name}"
               + (f"  -- {o.detail[:300]}" if o.detail else ""), flush=True)
         if args.v and o.verdict != "clear":
             print("    " + o.output.strip()[-1500:].replace("\n", "\n    "))
