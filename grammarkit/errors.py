@@ -19,6 +19,7 @@ if TYPE_CHECKING:  # pragma: no cover - spans are IR (pydantic); this module sta
     from .ir.base import Span
 
 Severity = Literal["error", "warning", "note"]
+SHOWN_COLUMNS = 200  # columns of a source line shown under a diagnostic
 
 
 @dataclass(frozen=True)
@@ -54,6 +55,14 @@ class Diagnostic:
             width = 1
             if self.span.end_line == self.span.line and self.span.end_column > self.span.column:
                 width = self.span.end_column - self.span.column
+            # a long line is shown as a window of at most SHOWN_COLUMNS around the column, so a
+            # one-line 500 KB file does not print half a megabyte per diagnostic
+            start = 0
+            if len(line_text) > SHOWN_COLUMNS:
+                start = max(0, min(caret_col - 1 - SHOWN_COLUMNS // 4, len(line_text) - SHOWN_COLUMNS))
+                line_text = ("..." if start else "") + line_text[start:start + SHOWN_COLUMNS] + (
+                    "..." if start + SHOWN_COLUMNS < len(line_text) else "")
+                caret_col = caret_col - start + (3 if start else 0)
             width = max(1, min(width, max(1, len(line_text) - caret_col + 1)))
             shown = line_text.expandtabs(1)
             out.append(f"    {shown}")
@@ -69,8 +78,7 @@ def _source_line(span: Span | None, source: str | None) -> str | None:
     lines = _lines_of(source) if source is not None else (
         _file_lines(span.file) if span.file else None)
     if lines is not None and 1 <= span.line <= len(lines):
-        line = lines[span.line - 1].rstrip("\r")
-        return line if len(line) <= 400 else line[:400]
+        return lines[span.line - 1].rstrip("\r")
     return None
 
 
