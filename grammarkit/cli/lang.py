@@ -19,8 +19,8 @@ def _read_input(path: Path, max_bytes: int) -> tuple[str, str]:
     from ..dsl.parser import decode_source, read_limited, read_source
 
     if str(path) == "-":
-        return decode_source(read_limited(click.get_binary_stream("stdin"), max_bytes, "<stdin>"),
-                             "<stdin>"), "<stdin>"
+        stream = getattr(sys.stdin, "buffer", sys.stdin)
+        return decode_source(read_limited(stream, max_bytes, "<stdin>"), "<stdin>"), "<stdin>"
     return read_source(path, max_bytes=max_bytes), str(path)
 
 

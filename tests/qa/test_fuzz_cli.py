@@ -95,6 +95,10 @@ def test_fuzz_check_and_derive(tmp_path_factory, text):
     folder = tmp_path_factory.mktemp("fuzz")
     g = folder / "g.grammar"
     g.write_text(text, encoding="utf-8", errors="surrogatepass")
+    import grammarkit
+
+    diags = grammarkit.check(text)  # the API never raises for bad input
+    assert isinstance(diags, list)
     status, _, _ = run_cli("check", g)
     run_cli("fmt", g)
     if status == 0:
