@@ -177,6 +177,25 @@ class GuardedConstraint:
         return messages
 
 
+class GuardedFunction:
+    """A third-party expression function: any exception it raises (even SystemExit) becomes a
+    ValueError naming the plugin, which the evaluator reports at the call in the grammar
+    (`g.grammar:2:18: error: boom(): plugin 'x' failed: RuntimeError: ...`)."""
+
+    def __init__(self, plugin: str, name: str, impl: Callable[..., Any]):
+        self.plugin, self.name, self.impl = plugin, name, impl
+
+    def __call__(self, *args: Any) -> Any:
+        from .errors import GrammarkitError
+
+        try:
+            return self.impl(*args)
+        except GrammarkitError:
+            raise
+        except (Exception, SystemExit) as exc:  # noqa: BLE001 - the plugin's fault, named
+            raise ValueError(f"plugin {self.plugin!r} failed: {type(exc).__name__}: {exc}") from None
+
+
 class PluginManager:
     """Finds plugins and caches their contributions per kind."""
 
@@ -290,6 +309,8 @@ class PluginManager:
                         pass
                 if isinstance(item, ConstraintSpec) and item.check is not None and not info.builtin:
                     item = replace(item, check=GuardedConstraint(info.name, item.name, item.check))
+                if isinstance(item, FunctionSpec) and item.impl is not None and not info.builtin:
+                    item = replace(item, impl=GuardedFunction(info.name, item.name, item.impl))
                 good.append(item)
             out.append((info, good))
         return out
