@@ -448,10 +448,13 @@ def builtin_registries() -> Registries:
 
 
 def third_party_plugins() -> list[str]:
-    """Names of the installed, enabled entry points that are not grammarkit's own (no import)."""
+    """Names of the installed, enabled entry points that are not grammarkit's own (no import),
+    and of those GRAMMARKIT_DISABLE_PLUGINS names (loading the manager reports unknown ones)."""
     if _env_flag(os.environ.get(NO_PLUGINS_ENV)):
         return []
     disabled = _env_names(os.environ.get(DISABLE_ENV))
+    if disabled:
+        return sorted(disabled)
     out = []
     for ep in md.entry_points(group=ENTRY_POINT_GROUP):
         dist = getattr(ep, "dist", None)
