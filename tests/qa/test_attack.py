@@ -47,7 +47,7 @@ def test_one_byte_over_the_limit_is_refused(tmp_path):
     from grammarkit.dsl import DEFAULT_MAX_BYTES, check
 
     p = tmp_path / "over.grammar"
-    p.write_text("A --> B.\n" + "#" * (DEFAULT_MAX_BYTES - 8) + "\n", encoding="utf-8")
+    p.write_text("A --> B.\n" + "#" * (DEFAULT_MAX_BYTES - 9) + "\n", encoding="utf-8")
     assert p.stat().st_size == DEFAULT_MAX_BYTES + 1
     (d,) = check(p)
     assert d.code == "too-large" and d.span.file == str(p)
