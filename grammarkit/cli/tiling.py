@@ -111,8 +111,11 @@ def learn(examples: tuple[Path, ...], output: Path | None, name: str | None, ban
     from ..printer import print_grammar
     from ..tiling import learn as learn_grammar
     from ..tiling import read_assembly
-    from ..run.writer import write_files
+    from ..run.writer import check_outputs, write_files
 
+    if output is not None:  # refuse, before any work, to write the grammar over an example
+        inputs = [q for p in examples for q in ([p] if not p.is_dir() else sorted(p.iterdir()))]
+        check_outputs({"-o": output}, inputs=inputs)
     base = output.parent if output else Path.cwd()
     with _stages() as stage:
         with warnings.catch_warnings(record=True) as caught:
