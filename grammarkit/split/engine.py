@@ -108,6 +108,7 @@ class Derivation:
         self.faces: list[tuple] = []  # face terminals: (tag, origin, axes, size, poly)
         self.leaves: list[tuple] = []  # (tag, origin, axes, size) of each terminal, in order
         self.warnings: list[str] = []
+        self.warned: set[str] = set()
         self.est_tris = 0
         self.context = OperationContext(self)
 
@@ -349,8 +350,12 @@ class OperationContext:
         self._derivation.leaf(shape, name)
 
     def warn(self, message: str) -> None:
-        """A warning of the derivation (listed on the model and by the CLI)."""
-        self._derivation.warnings.append(message)
+        """A warning of the derivation (listed on the model and by the CLI); a message already
+        given is not repeated (a split in a facade runs for every floor)."""
+        d = self._derivation
+        if message not in d.warned:
+            d.warned.add(message)
+            d.warnings.append(message)
 
 
 def weld_of(n: int) -> float:

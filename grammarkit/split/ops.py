@@ -213,7 +213,7 @@ def layout(ctx: Any, s: Shape, items: tuple, length: float) -> list[tuple[Any, f
     return out
 
 
-def _sizes(s: Shape, items: tuple, total: float) -> list[tuple[Any, str, float]]:
+def _sizes(ctx: Any, s: Shape, items: tuple, total: float) -> list[tuple[Any, str, float]]:
     out = []
     for it in items:
         if it.mode == "repeat":
@@ -222,19 +222,28 @@ def _sizes(s: Shape, items: tuple, total: float) -> list[tuple[Any, str, float]]
         v = it.size(s)
         if isinstance(v, bool) or not isinstance(v, (int, float)):
             raise ValueError(f"split size must be a number, got {v!r}")
+        if not math.isfinite(v):
+            raise ValueError(f"split size must be finite, got {v!r}")
+        if v < 0:
+            # CGA makes no part for a negative size and lays out the rest as if it were not
+            # there; so do we, but say so (it is almost always a mistake in the rule)
+            where = f"{it.span}: " if getattr(it, "span", None) is not None else ""
+            ctx.warn(f"{where}split size {v:g} is negative in rule {s.rule_name!r}: that part "
+                     "is skipped (as in CGA)")
+            v = 0.0
         if it.mode == "rel":
             v *= total
         out.append((it, it.mode, float(v)))
     return out
 
 
-def _nominal(s: Shape, items: tuple, total: float) -> tuple[float, bool]:
+def _nominal(ctx: Any, s: Shape, items: tuple, total: float) -> tuple[float, bool]:
     """Length of one instance of a repeat group at nominal sizes, and whether it can stretch."""
     n = 0.0
     stretch = False
-    for it, mode, v in _sizes(s, items, total):
+    for it, mode, v in _sizes(ctx, s, items, total):
         if mode == "repeat":
-            m, st = _nominal(s, it.items, total)
+            m, st = _nominal(ctx, s, it.items, total)
             n += m
             stretch = stretch or st
         else:
@@ -244,10 +253,10 @@ def _nominal(s: Shape, items: tuple, total: float) -> tuple[float, bool]:
 
 
 def _expand(ctx: Any, s: Shape, items: tuple, avail: float, total: float, flat: list) -> None:
-    sized = _sizes(s, items, total)
+    sized = _sizes(ctx, s, items, total)
     fixed = sum(v for _, mode, v in sized if mode in ("abs", "rel"))
     floating = sum(v for _, mode, v in sized if mode == "float")
-    reps = [(it, *_nominal(s, it.items, total)) for it, mode, _ in sized if mode == "repeat"]
+    reps = [(it, *_nominal(ctx, s, it.items, total)) for it, mode, _ in sized if mode == "repeat"]
     counts: dict[int, int] = {}
     if reps:
         room = avail - fixed - floating
@@ -255,8 +264,14 @@ def _expand(ctx: Any, s: Shape, items: tuple, avail: float, total: float, flat: 
         stretch = any(st for _, _, st in reps)
         if nominal <= EPS:
             raise ValueError("a repeat group needs a positive total size")
-        ratio = room / nominal
-        n = max(1, int(math.floor(ratio + 0.5)) if stretch else int(math.floor(ratio + 1e-9)))
+        ratio = room / nominal if room > 0 else 0.0
+        n = int(math.floor(ratio + 0.5)) if stretch else int(math.floor(ratio + 1e-9))
+        # CGA repeats zero times when the other parts of the block already fill the space
+        # (`{ ~w: W | d: Wall }* | ~w: W` on 1.5 w is one W); a block that is nothing but
+        # repeat groups still makes one instance (clipped), as CGA's `{ 2: A }*` on 1 does.
+        if n < 1 and len(reps) == len(sized):
+            n = 1
+        n = max(n, 0)
         if n > ctx.limits.max_repeat:
             from ..errors import LimitError
             raise LimitError(
@@ -265,7 +280,7 @@ def _expand(ctx: Any, s: Shape, items: tuple, avail: float, total: float, flat: 
                 reps[0][0].span, code="limit-repeat")
         for it, nom, _ in reps:
             counts[id(it)] = n
-        share = {id(it): (room * nom / nominal / n if n else 0.0) for it, nom, _ in reps}
+        share = {id(it): (max(room, 0.0) * nom / nominal / n if n else 0.0) for it, nom, _ in reps}
     for it, mode, v in sized:
         if mode == "repeat":
             for _ in range(counts[id(it)]):
