@@ -124,6 +124,14 @@ class ShapeView(Protocol):
     params: tuple  # the current rule's arguments
     seed: int  # the shape's seed (run seed mixed with its derivation path)
     entry: tuple | None  # (o, ax, sz) when the current rule was entered
+    # geometry id: copies keep it, derived shapes get a new one (see grammarkit/split/shape.py)
+    gid: int
+    # a face made by comp(f): (gid of the volume, its (o, ax, sz)); if that volume is emitted
+    # as a solid unmoved, the face is a view of its surface, else a surface of its own. An
+    # operation that moves a face off its plane sets it to None.
+    on: tuple | None
+    trims: tuple  # CGA trim planes ((world point, world normal), ...) that clip inserted meshes
+    uv: Any  # texturing state (projections, texture), grammarkit.split.texturing
 
     @property
     def rule_name(self) -> str: ...  # the rule being applied (for messages)

@@ -554,6 +554,8 @@ class _Compiler:
                 if sizes:
                     out.append(Slot(it.mode, size=self._expr(it.key, scope, params), body=body,
                                     label=lab, span=it.span))
+                elif isinstance(it.key, E.Num):  # an index selector (check_block checked it)
+                    out.append(Slot("sel", sel=int(it.key.value), body=body, label=lab, span=it.span))
                 else:  # check_block made sure the key is one of the spec's selectors
                     out.append(Slot("sel", sel=it.key.name, body=body, label=lab, span=it.span))
             return tuple(out)

@@ -15,6 +15,8 @@ from ..registry import FitSpec, OperationSpec, Param
 
 AXES = ("x", "y", "z")
 FACE_SELECTORS = ("top", "bottom", "side", "front", "back", "left", "right", "all")
+# comp's selectors (grammarkit/split/comp.py); "<index>" stands for the integer selectors 0, 1, ...
+COMP_SELECTORS = FACE_SELECTORS + ("vertical", "horizontal", "aslant", "nutant", "volume", "<index>")
 
 class LazyApply:
     """`apply` of a built-in operation: imports grammarkit.split.ops when first called.
@@ -42,7 +44,9 @@ _SPECS: tuple[OperationSpec, ...] = (
     OperationSpec("taper", (Param("height"), Param("top_scale", required=False, default=0.0)),
                   doc="Extrude a face, scaling the top about the centroid (0: to a point)."),
     OperationSpec("comp", (Param("mode", "axis", choices=("f",)),), block="selectors",
-                  selectors=FACE_SELECTORS, doc="Decompose a volume into its faces."),
+                  selectors=COMP_SELECTORS,
+                  doc="Decompose a shape into its faces (the shape is consumed unless `volume:` "
+                      "keeps it); selectors by orientation, `all`, an index, `volume`."),
     OperationSpec("split", (Param("axis", "axis", choices=AXES),), block="sizes",
                   doc="Split the scope along an axis into absolute, relative and floating parts."),
     OperationSpec("repeat", (Param("axis", "axis", choices=AXES), Param("size"),

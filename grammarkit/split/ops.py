@@ -97,8 +97,13 @@ def op_footprint(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
 def op_extrude(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
     h = _num(args[0], "extrude height")
     _face_only(s, "extrude")
-    if h <= 0:
-        raise ValueError(f"extrude height must be > 0, got {h:g} (use recess(d) to cut into a face)")
+    if h < 0:
+        # CGA extrudes against the normal: the volume lies below the face, [h, 0] along z
+        z = s.ax[2]
+        o = (s.o[0] + z[0] * h, s.o[1] + z[1] * h, s.o[2] + z[2] * h)
+        return s.derived(o, (s.sz[0], s.sz[1], -h), s.poly, VOLUME)
+    # extrude(0) makes a volume without thickness (comp(f) gives its faces; as a terminal it
+    # is left out of the solid with a warning)
     return s.derived(s.o, (s.sz[0], s.sz[1], h), s.poly, VOLUME)
 
 
@@ -122,57 +127,8 @@ def op_recess(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
     return ctx.recess(s, d)
 
 
-# -- comp ------------------------------------------------------------------------------------
-def _classify(nx: float, ny: float) -> str:
-    if abs(ny) >= abs(nx):
-        return "front" if ny < 0 else "back"
-    return "right" if nx > 0 else "left"
-
-
-def op_comp(ctx: Any, s: Shape, args: Any, block: Any) -> list:
-    if s.kind != VOLUME:
-        raise ValueError("comp(f) needs a volume (e.g. after extrude), got a face")
-    if s.solid is not None:
-        raise ValueError("comp(f) works on boxes and extruded footprints, not on roofs, tapers "
-                         "or inserted meshes")
-    sx, sy, h = s.sz
-    (ax, ay, az) = s.ax
-    ctx.add_body(s)
-    faces: list[tuple[frozenset, Shape]] = []
-    contours = s.contours()
-    # side faces: one per contour edge, x along the edge, y up, z outwards
-    for contour in contours:
-        n = len(contour)
-        hole = fp.area(contour) < 0
-        for i in range(n):
-            (x0, y0), (x1, y1) = contour[i], contour[(i + 1) % n]
-            dx, dy = x1 - x0, y1 - y0
-            ln = math.hypot(dx, dy)
-            if ln < 1e-9:
-                continue
-            ux, uy = dx / ln, dy / ln
-            ex = (ax[0] * ux + ay[0] * uy, ax[1] * ux + ay[1] * uy, ax[2] * ux + ay[2] * uy)
-            ez = (ex[1] * az[2] - ex[2] * az[1], ex[2] * az[0] - ex[0] * az[2], ex[0] * az[1] - ex[1] * az[0])
-            side = _classify(uy, -ux)  # outward normal of a CCW contour edge is (dy, -dx)
-            sel = frozenset(("side", "all", side, "hole") if hole else ("side", "all", side))
-            faces.append((sel, s.derived(s.world(x0, y0, 0.0), (ln, h, 0.0), None, FACE, ax=(ex, az, ez))))
-    top = s.derived(s.world(0.0, 0.0, h), (sx, sy, 0.0), s.poly, FACE)
-    faces.append((frozenset(("top", "all")), top))
-    if s.poly is None:
-        bpoly = None
-    else:
-        bpoly = tuple(tuple(reversed([(x, sy - y) for x, y in c])) for c in s.poly)
-    neg_y = (-ay[0], -ay[1], -ay[2])
-    neg_z = (-az[0], -az[1], -az[2])
-    bottom = s.derived(s.world(0.0, sy, 0.0), (sx, sy, 0.0), bpoly, FACE, ax=(ax, neg_y, neg_z))
-    faces.append((frozenset(("bottom", "all")), bottom))
-    out = []
-    for sel, face in faces:
-        for slot in block:
-            if slot.sel in sel:
-                out.append((face, slot))
-                break
-    return out
+# -- comp: grammarkit/split/comp.py --------------------------------------------------------
+from .comp import op_comp  # noqa: E402
 
 
 # -- split -----------------------------------------------------------------------------------
@@ -435,6 +391,8 @@ def op_t(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
     c = s
     c.o = (s.o[0] + a0 * x + b0 * y + c0 * z, s.o[1] + a1 * x + b1 * y + c1 * z,
            s.o[2] + a2 * x + b2 * y + c2 * z)
+    if c.on is not None and (x or y or z):
+        c.on = None  # a face moved off its volume is a surface of its own
     return c
 
 
@@ -446,6 +404,8 @@ def op_r(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
     new = tuple(tuple(sum(R[i][j] * ax[i][k] for i in range(3)) for k in range(3)) for j in range(3))
     c = s
     c.ax = new  # type: ignore[assignment]
+    if c.on is not None and (rx or ry or rz):
+        c.on = None
     return c
 
 
@@ -481,6 +441,8 @@ def op_center(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
         for k in range(3):
             o[k] += a[k] * t
     c = s
+    if c.on is not None and tuple(o) != s.o:
+        c.on = None
     c.o = tuple(o)  # type: ignore[assignment]
     return c
 

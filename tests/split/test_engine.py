@@ -46,8 +46,18 @@ def test_comp_face_frames(G):
     assert by["T"].axes[2] == pytest.approx((0, 0, 1)) and by["T"].origin == pytest.approx((0, 0, 4))
     assert by["D"].axes[2] == pytest.approx((0, 0, -1))
     assert by["F"].size[:2] == pytest.approx((10, 4)) and by["R"].size[:2] == pytest.approx((6, 4))
-    # the comp'd volume stays as the body: the mesh is the box
-    assert ok(m).volume == near(240.0)
+    # comp(f) consumes the volume (CGA): no solid, the six faces are the surface layer
+    assert len(m.faces) == 0 and len(m.surface_faces) == 12
+    surf = m.surface_mesh
+    assert surf.area == pytest.approx(2 * (10 * 6 + 10 * 4 + 6 * 4))
+    # ... and the faces, read as one surface, close the box with outward normals
+    welded = surf.copy()
+    welded.merge_vertices()
+    assert welded.is_watertight and welded.volume == pytest.approx(240.0)
+    # `volume:` keeps it: the solid is the box, the faces colour its surface
+    kept = derive(G(BOX.replace("Mass", "Mass\nMass --> comp(f) { top: T. | side: S. | volume: Body. }")))
+    assert ok(kept).volume == near(240.0) and len(kept.surface_faces) == 0
+    assert {t.name for t in kept.tags if t.role == "body"} == {"Body"}
 
 
 def test_side_selector_first_match_wins(G):
@@ -69,12 +79,12 @@ Bay(i, n) --> extrude(1 + i) color("#00ff00") Bay.
 
 def test_offset_inside_border_and_recess(G):
     g = G("""
-Lot --> footprint(rect(10, 10)) extrude(5) comp(f) { front: Win | all: NIL }
+Lot --> footprint(rect(10, 10)) extrude(5) comp(f) { front: Win | all: NIL | volume: Body. }
 Win --> offset(-1) { inside: recess(0.5) Glass. | border: Frame. }
 """)
     m = derive(g)
     names = sorted(p.name for p in m.parts)
-    assert names == ["Frame", "Glass"]
+    assert names == ["Body", "Frame", "Glass"]
     glass = next(p for p in m.parts if p.name == "Glass")
     assert glass.size[:2] == pytest.approx((8, 3))
     assert glass.origin[1] == pytest.approx(0.5)  # moved to the bottom of the recess (into +y)
@@ -82,11 +92,21 @@ Win --> offset(-1) { inside: recess(0.5) Glass. | border: Frame. }
     assert rep.volume == near(500 - 8 * 3 * 0.5)
 
 
-def test_extrude_negative_is_a_clear_error(G):
-    g = G("Lot --> footprint(rect(4, 4)) extrude(-1) A.")
-    with pytest.raises(DerivationError) as e:
-        derive(g)
-    assert "extrude" in str(e.value) and e.value.span is not None and e.value.span.line == 1
+def test_extrude_negative_goes_against_the_normal(G):
+    # CGA: extrude(-d) makes the volume below the face
+    m = derive(G("Lot --> footprint(rect(4, 4)) extrude(-1) A."))
+    assert ok(m).volume == pytest.approx(16.0, rel=5e-3)
+    assert m.mesh.bounds[0][2] == near(-1.0) and m.mesh.bounds[1][2] == near(0.0)
+    # a window reveal the CGA way: a negative extrusion into the wall, its sides as surfaces
+    g = G("Lot --> footprint(rect(4, 4)) extrude(3) comp(f) { front: Win | volume: Mass. }\n"
+          "Win --> split(x) { 1: NIL | 2: extrude(-0.5) comp(f) { side: Reveal. } | ~1: NIL }")
+    m = derive(g)
+    reveal = [t for t in m.surface_tags.tolist() if m.tags[t].name == "Reveal"]
+    assert len(reveal) == 8  # four sides, two triangles each
+    assert m.surface_vertices[:, 1].max() == pytest.approx(0.5)  # 0.5 into the wall (+y)
+    # extrude(0): a volume without thickness, left out of the solid with a warning
+    m = derive(G("Lot --> footprint(rect(4, 4)) [ extrude(0) Flat. ] extrude(1) Box."))
+    assert any("no thickness" in w for w in m.warnings) and ok(m).volume == pytest.approx(16.0, rel=5e-3)
 
 
 def test_division_by_zero_has_span(G):
@@ -213,7 +233,7 @@ def test_polygon_footprint_split_and_comp(G):
     g = G("""
 Lot --> footprint(polygon(0, 0, 10, 0, 10, 4, 6, 4, 6, 8, 0, 8)) extrude(3) Mass
 Mass --> split(x) { ~1: P | ~1: P }
-P --> comp(f) { side: F. | top: T. | bottom: NIL }
+P --> comp(f) { side: F. | top: T. | bottom: NIL | volume: P. }
 """)
     m = derive(g)
     rep = ok(m)
@@ -251,7 +271,7 @@ def test_snippets_use_default_and_private_rules(G):
     g = G("""
 snippet tower : Mass {
   attr h = 5 @range(2, 9)
-  Start --> extrude(h) comp(f) { top: Roof | side: Wall | bottom: NIL }
+  Start --> extrude(h) comp(f) { top: Roof | side: Wall | bottom: NIL | volume: Body. }
   Wall --> color("#ff0000") Wall.
 }
 snippet flat : Roof {
@@ -269,7 +289,7 @@ variants Roof { flat: 50% | peaked: 50% }
     m = derive(g)
     ok(m)
     assert m.bindings == {"Mass": "tower", "Roof": "flat"}
-    assert {p.name for p in m.parts} == {"Wall", "Flat"}
+    assert {p.name for p in m.parts} == {"Wall", "Flat", "Body"}
     wall = next(p for p in m.parts if p.name == "Wall")
     assert wall.rule == "Wall" and wall.object_type == "Mass" and wall.color == "#ff0000"
     assert m.attrs == {"Mass.h": 5}
@@ -297,7 +317,7 @@ P --> extrude(2) P.
 
 def test_colors_reach_mesh_faces_and_tree(G):
     g = G("""
-Lot --> footprint(rect(10, 10)) extrude(6) color("#808080") comp(f) { front: Facade | top: roofGable(30) color("#aa0000") Roof. | all: NIL }
+Lot --> footprint(rect(10, 10)) extrude(6) color("#808080") comp(f) { front: Facade | top: roofGable(30) color("#aa0000") Roof. | all: NIL | volume: Body. }
 Facade --> color("#00aa00") split(x) { ~1: Wall. | 2: Window | ~1: Wall. }
 Window --> split(y) { 1: Wall. | 2: recess(0.3) color("#0000aa") Glass. | ~1: Wall. }
 """)
@@ -315,7 +335,7 @@ Window --> split(y) { 1: Wall. | 2: recess(0.3) color("#0000aa") Glass. | ~1: Wa
 
 def test_solids_inside_a_recess_survive_the_cut(G):
     g = G("""
-Lot --> footprint(rect(6, 6)) extrude(4) comp(f) { front: Win | all: NIL }
+Lot --> footprint(rect(6, 6)) extrude(4) comp(f) { front: Win | all: NIL | volume: Body. }
 Win --> offset(-1) { inside: recess(0.5) split(x) { ~1: Glass. | 0.2: extrude(0.3) Mullion. | ~1: Glass. } | border: Wall. }
 """)
     m = derive(g)
