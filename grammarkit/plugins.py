@@ -161,6 +161,7 @@ class PluginManager:
         self._infos: dict[str, PluginInfo] = {}
         self._cache: dict[str, dict[str, Any]] = {}
         self._registries: Registries | None = None
+        self._runtime: set[str] = set()  # plugins registered by code, not by entry points
         self._reported: set[tuple[str, str]] = set()
         self._lock = threading.RLock()
         self.disabled = set(disabled) if disabled is not None else _env_names(os.environ.get(DISABLE_ENV))
@@ -204,6 +205,7 @@ class PluginManager:
         """Register a plugin object at run time (tests, notebooks). Clears the caches."""
         with self._lock:
             self._pm.register(plugin, name=name)
+            self._runtime.add(name)
             self._infos[name] = PluginInfo(name=name, version=version,
                                            module=getattr(plugin, "__name__", type(plugin).__name__))
             self._clear()
@@ -213,6 +215,7 @@ class PluginManager:
             plugin = self._pm.get_plugin(name)
             if plugin is not None:
                 self._pm.unregister(plugin)
+            self._runtime.discard(name)
             self._infos.pop(name, None)
             self._clear()
 
@@ -322,7 +325,8 @@ class PluginManager:
         such as compiled grammars, are reused)."""
         with self._lock:
             if self._registries is None:
-                self._registries = Registries({k: getattr(self, k) for k in Registries.KINDS})
+                self._registries = Registries({k: getattr(self, k) for k in Registries.KINDS},
+                                              installed=not self._runtime)
             return self._registries
 
     def backend(self, name: str) -> BackendSpec:

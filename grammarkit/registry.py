@@ -121,13 +121,29 @@ class Registries:
 
     KINDS = ("operations", "functions", "constraints", "exporters", "backends", "fits")
 
-    def __init__(self, loaders: dict[str, Callable[[], dict]] | None = None, **mappings: dict):
+    def __init__(self, loaders: dict[str, Callable[[], dict]] | None = None, *,
+                 installed: bool = False, **mappings: dict):
+        # installed: these are exactly what a fresh process's plugin manager provides (the
+        # entry points, under the same environment), so a worker process rebuilds them
+        # instead of receiving them (see __reduce__)
+        self.installed = installed
         self._loaders = dict(loaders or {})
         self._values: dict[str, dict] = {}
         for kind, mapping in mappings.items():
             if kind not in self.KINDS:
                 raise TypeError(f"Registries: unknown kind {kind!r}")
             self._values[kind] = dict(mapping)
+
+    def __reduce__(self) -> Any:
+        """Pickled by reference when they are the installed plugins' (a worker process
+        rebuilds its own from the entry points); other registries hold functions that need
+        not pickle, so they refuse, and the executor keeps such work in the calling process."""
+        if not self.installed:
+            import pickle
+
+            raise pickle.PicklingError("these registries were built in this process (plugins "
+                                       "registered at run time or given by hand)")
+        return (_installed_registries, ())
 
     def _get(self, kind: str) -> dict:
         value = self._values.get(kind)
@@ -160,3 +176,10 @@ class Registries:
     @property
     def fits(self) -> dict[str, FitSpec]:
         return self._get("fits")
+
+
+def _installed_registries() -> "Registries":
+    """A worker process's own registries of the installed plugins (unpickling target)."""
+    from .plugins import default_registries
+
+    return default_registries()

@@ -255,29 +255,43 @@ def to_scene(obj: Any) -> Any:
                      "trimesh.Trimesh, a model or an assembly")
 
 
-def solids_of(obj: Any) -> Scene:
-    """The intermediate form of a split Model (`.export_solids()`), an assembly (`.parts`), a
-    trimesh Scene or a Trimesh."""
-    import trimesh
+def _trimesh_scene(obj: Any) -> Scene | None:
+    """The intermediate form of a trimesh Trimesh or Scene, else None. An object can only be
+    one of those if trimesh is loaded: a split Model is encoded without importing trimesh (and
+    scipy behind it), which a one-building derive would otherwise pay on start-up."""
+    import sys
 
+    trimesh = sys.modules.get("trimesh")
+    if trimesh is None:
+        return None
+    if isinstance(obj, trimesh.Trimesh):
+        name = str((obj.metadata or {}).get("name") or "mesh")
+        return Scene(name, [_trimesh_solid(obj, name, None, {})])
+    if isinstance(obj, trimesh.Scene):
+        return Scene(str(obj.metadata.get("name") or "scene"), _scene_solids(obj),
+                     to_jsonable({k: v for k, v in obj.metadata.items() if k != "name"}))
+    return None
+
+
+def solids_of(obj: Any) -> Scene:
+    """The intermediate form of a split Model (`.export_scene()`), an assembly (`.parts`), a
+    trimesh Scene or a Trimesh."""
     if callable(getattr(obj, "export_scene", None)):
         scene = obj.export_scene()
-    elif isinstance(obj, trimesh.Trimesh):
-        name = str((obj.metadata or {}).get("name") or "mesh")
-        scene = Scene(name, [_trimesh_solid(obj, name, None, {})])
-    elif isinstance(obj, trimesh.Scene):
-        scene = Scene(str(obj.metadata.get("name") or "scene"), _scene_solids(obj),
-                      to_jsonable({k: v for k, v in obj.metadata.items() if k != "name"}))
-    elif hasattr(obj, "parts") and not isinstance(obj, (str, bytes)):
-        parts = list(obj.parts)
-        scene = Scene(str(getattr(obj, "name", "") or "assembly"), _assembly_solids(parts),
-                      {"kind": "assembly", "part_types": {t: "#{:02x}{:02x}{:02x}".format(*c[:3])
-                                                         for t, c in type_colors(p.type for p in parts).items()}})
-    elif callable(getattr(obj, "to_scene", None)):
-        return solids_of(obj.to_scene())
     else:
-        raise ShapeError(f"cannot export a {type(obj).__name__}: expected a trimesh.Scene, a "
-                         "trimesh.Trimesh, a model or an assembly")
+        scene = _trimesh_scene(obj)
+    if scene is None:
+        if hasattr(obj, "parts") and not isinstance(obj, (str, bytes)):
+            parts = list(obj.parts)
+            colors = type_colors(p.type for p in parts)
+            scene = Scene(str(getattr(obj, "name", "") or "assembly"), _assembly_solids(parts),
+                          {"kind": "assembly", "part_types": {t: "#{:02x}{:02x}{:02x}".format(*c[:3])
+                                                             for t, c in colors.items()}})
+        elif callable(getattr(obj, "to_scene", None)):
+            return solids_of(obj.to_scene())
+        else:
+            raise ShapeError(f"cannot export a {type(obj).__name__}: expected a trimesh.Scene, a "
+                             "trimesh.Trimesh, a model or an assembly")
     if not any(len(s.faces) for s in scene.solids):
         raise ShapeError("nothing to export: the model has no triangles")
     return scene

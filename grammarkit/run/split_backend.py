@@ -58,16 +58,19 @@ class _State:
     """What every process deriving items of one run holds (built once per process)."""
 
     def __init__(self, grammar: Any, seed: int, attrs: dict, options: SplitOptions,
-                 exporter: Any, preview: bool):
+                 exporter: Any, preview: bool, registries: Any):
         self.grammar, self.seed, self.attrs = grammar, seed, attrs
         self.options, self.exporter, self.preview = options, exporter, preview
+        # the installed plugins' registries travel by reference (grammarkit.registry); others
+        # cannot be pickled, and the executor then keeps the work in this process
+        self.registries = registries
         self.limits = _limits(options)
         self.name = grammar.name or "model"
 
 
 def _init_state(grammar: Any, seed: int, attrs: dict, options: SplitOptions, exporter: Any,
-                preview: bool) -> _State:
-    return _State(grammar, seed, attrs, options, exporter, preview)
+                preview: bool, registries: Any) -> _State:
+    return _State(grammar, seed, attrs, options, exporter, preview, registries)
 
 
 def _derive_item(state: _State, index: int) -> Result:
@@ -77,11 +80,12 @@ def _derive_item(state: _State, index: int) -> Result:
     t0 = time.perf_counter()
     if state.options.variations:
         (var, model), = variations(state.grammar, 1, seed=state.seed, attrs=state.attrs,
-                                   limits=state.limits, start=index)
+                                   limits=state.limits, start=index, registries=state.registries)
         seed = var.seed
     else:
         seed = state.seed + index
-        model = derive(state.grammar, seed=seed, attrs=state.attrs, limits=state.limits)
+        model = derive(state.grammar, seed=seed, attrs=state.attrs, limits=state.limits,
+                       registries=state.registries)
     metrics, extra = _model_entry(model, time.perf_counter() - t0)
     attachments: dict[str, bytes | str] = {}
     if state.options.tree:
@@ -103,12 +107,13 @@ def run(request: Request) -> Iterator[Result]:
     from ..split import check_attrs
 
     attrs = dict(request.attrs)
-    check_attrs(request.grammar, attrs)  # a bad --set fails before any work
+    check_attrs(request.grammar, attrs, registries=request.registries)  # fails before any work
     options = request.options or SplitOptions()
     indices = range(request.start, request.n)
     if request.format is None:
         # in memory: Model objects cannot cross processes, so derive here
-        state = _State(request.grammar, request.seed, attrs, options, None, False)
+        state = _State(request.grammar, request.seed, attrs, options, None, False,
+                       request.registries)
         for i in indices:
             request.check_deadline()
             yield _derive_item(state, i)
@@ -119,7 +124,7 @@ def run(request: Request) -> Iterator[Result]:
         advance(request.start)
     exporter = request.registries.exporters[request.format]  # the run layer checked the format
     with request.executor.session(_init_state, request.grammar, request.seed, attrs, options,
-                                  exporter, request.preview) as session:
+                                  exporter, request.preview, request.registries) as session:
         for result in session.map(_derive_item, indices):
             request.check_deadline()
             advance(1, file=result.id)

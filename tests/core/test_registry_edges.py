@@ -14,7 +14,6 @@ EDGE_MODULES = {
     "grammarkit/plugins.py",  # defines them
     "grammarkit/__init__.py",  # the top-level API (lazy names)
     "grammarkit/run/api.py",  # run_backend / iter_results
-    "grammarkit/run/split_backend.py",  # a worker process initialises its own registries
 }
 EDGE_PACKAGES = ("grammarkit/cli/",)
 # Public API functions that may default to the installed plugins when given no registries.
@@ -26,6 +25,7 @@ EDGE_FUNCTIONS = {
     "grammarkit/cga/importer.py": {"_operation_names"},  # behind import_cga / translate_cga
     "grammarkit/geometry/exporters.py": {"_all_specs"},  # behind exporter_for / known_formats
     "grammarkit/run/batch.py": {"run_batch"},  # the batch API, given no registries
+    "grammarkit/registry.py": {"_installed_registries"},  # a worker process rebuilds its own
 }
 
 

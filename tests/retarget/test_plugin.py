@@ -59,11 +59,7 @@ def test_fit_keeps_the_assets_own_size_on_a_zero_scope_axis_and_scales_plain_ass
 
 
 def test_fit_in_a_split_grammar(tmp_path, models):
-    """`i("fence.glb", fit=retarget)`: runs once the split engine accepts `fit=` (branch core)."""
-    ops = get_plugin_manager().registries().operations
-    insert = ops.get("i")
-    if insert is None or not any(p.name == "fit" for p in insert.params):
-        pytest.skip("the split engine's i() has no fit= argument yet (being added on branch core)")
+    """`i("fence.glb", fit=retarget)` inside a split grammar."""
     from grammarkit.geometry.exporters import exporter_for
     from grammarkit.split import derive
 

@@ -101,11 +101,13 @@ def test_an_exporter_that_writes_nothing_replaces_nothing(small, tmp_path):
     out = tmp_path / "o"
     run_backend(small, out=out, n=1)
     before = (out / "small_0000.glb").read_bytes()
-    reg = _registries()
-    reg = Registries(exporters={**reg.exporters, "glb": ExporterSpec("glb", (".glb",), encode=lambda m: b"",
-                                                                     plugin="noop")},
-                     backends=__import__("grammarkit.plugins", fromlist=["x"]).get_plugin_manager()
-                     .registries().backends)
+    from grammarkit.plugins import get_plugin_manager
+
+    real = get_plugin_manager().registries()
+    kinds = {k: getattr(real, k) for k in Registries.KINDS}
+    kinds["exporters"] = {**real.exporters, "glb": ExporterSpec("glb", (".glb",), encode=lambda m: b"",
+                                                                plugin="noop")}
+    reg = Registries(**kinds)
     with pytest.raises(GrammarkitError, match="produced no data"):
         run_backend(small, out=tmp_path / "o2", n=1, registries=reg)
     assert not (tmp_path / "o2").exists()
