@@ -131,7 +131,6 @@ class ShapeView(Protocol):
     # operation that moves a face off its plane sets it to None.
     on: tuple | None
     trims: tuple  # CGA trim planes ((world point, world normal), ...) that clip inserted meshes
-    uv: Any  # texturing state (projections, texture), grammarkit.split.texturing
 
     @property
     def rule_name(self) -> str: ...  # the rule being applied (for messages)

@@ -75,7 +75,7 @@ class Material:
 
     name: str | None
     rgba: tuple[int, int, int, int]
-    # surfaces (open faces, see docs/derive.md) are seen from both sides
+    # surfaces (open faces, see docs/language.md "Solids and surfaces") are seen from both sides
     double_sided: bool = False
 
     @property

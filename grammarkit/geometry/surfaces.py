@@ -1,6 +1,6 @@
 """Open surfaces: the geometry of face terminals, recess reveals and open inserted meshes.
 
-A split model emits two layers (docs/derive.md, "Solids and surfaces"): the *solid*, one
+A split model emits two layers (docs/language.md, "Solids and surfaces"): the *solid*, one
 watertight manifold, and the *surface layer*: faces that are not views of an emitted solid
 (a lot left as a face, the faces of a volume that `comp(f)` consumed, an inserted mesh that is
 not closed). Surfaces have no inside, so they never enter a boolean; they are kept as plain

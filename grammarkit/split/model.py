@@ -457,7 +457,7 @@ class Model:
                                 extras={"grammar": self.name, "seed": self.seed}))
         if len(self.surface_faces):
             # the surface layer: its own node, flagged as a surface (no inside, not part of the
-            # solid's watertight guarantee), double-sided materials (docs/derive.md)
+            # solid's watertight guarantee), double-sided materials (docs/language.md, "Solids and surfaces")
             stags = self.surface_tags
             face_group = tag_group[stags]
             used = np.unique(tag_material[stags])

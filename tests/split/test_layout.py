@@ -125,3 +125,24 @@ def test_nested_repeat_groups():
 def test_repeat_limit_raises_limit_error():
     with pytest.raises(LimitError, match="repeat limit"):
         layout(Ctx, S, (rep(flt(0.01)),), 100.0)
+
+
+def test_zero_time_repeat_end_to_end(G):
+    # the example: on 3 m, { ~2: Window | 0.3: Wall }* | ~2: Window is ONE window (CGA),
+    # not two; on 4.3 m the group fits once
+    from grammarkit.split import derive
+
+    def count(width):
+        m = derive(G(f"Lot --> footprint(rect({width}, 3)) split(x) "
+                     "{ { ~2: extrude(1) Window. | 0.3: extrude(1) Wall. }* | ~2: extrude(1) Window. }"))
+        names = [p.name for p in m.parts]
+        return names.count("Window"), names.count("Wall")
+    assert count(3) == (1, 0)
+    assert count(4.3) == (2, 1)
+    # a repeat nested in a repeat: the outer group sits beside a fixed part that nearly fills
+    # the space, so it runs zero times (nothing of it is made) ...
+    m = derive(G("Lot --> footprint(rect(4, 3)) split(x) { 3.5: extrude(1) E. | { { ~2: extrude(1) R. }* }* }"))
+    assert sorted(p.name for p in m.parts) == ["E"]
+    # ... while a block of nothing but the nested groups makes one (clipped) inner part
+    m = derive(G("Lot --> footprint(rect(0.5, 3)) split(x) { { { ~2: extrude(1) R. }* }* }"))
+    assert [p.size[0] for p in m.parts] == [pytest.approx(0.5)]
