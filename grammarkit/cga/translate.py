@@ -944,7 +944,7 @@ def _h_i(t, args, block, star, frame, rctx, ctx, span, out):
     if not isinstance(path, Str):
         raise Untranslatable("i:expression", "i() of a computed file name", span)
     if path.value.startswith("builtin:"):
-        raise Untranslatable("i:builtin", f"built-in primitive {path.value!r}", span)
+        return _builtin(path.value[len("builtin:"):], frame, span, len(args) > 1)
     found = t.asset(path.value, span)
     if not found and t.missing_assets == "drop":
         raise Untranslatable("asset:missing", f"asset {path.value!r} was not found (the i() is "
@@ -959,12 +959,35 @@ def _h_nil_op(t, args, block, star, frame, rctx, ctx, span, out):
     return [Nil(span=span)], None
 
 
-def _h_primitive_cube(t, args, block, star, frame, rctx, ctx, span, out):
-    prev = out[-1] if out else None
-    if isinstance(prev, OpCall) and prev.name == "s" and not args:
-        return [], ("op:primitiveCube", "the cube is the scope box that s() with a depth already "
-                    "makes of a face")
-    raise Untranslatable("op:primitiveCube", "built-in primitives are not supported", span)
+# CGA's built-in assets and primitive operations -> grammarkit's built-in primitives
+# (grammarkit/split/assets.py). CGA's primitives are y-up; in frame Y that is grammarkit's z.
+_BUILTIN_NAMES = {"cube": "cube", "cube:notex": "cube:notex", "cylinder": "cylinder",
+                  "sphere": "sphere", "cone": "cone", "quad": "quad", "disk": "disk"}
+_PRIMITIVE_OPS = {"primitiveCube": "cube", "primitiveCylinder": "cylinder", "primitiveSphere": "sphere",
+                  "primitiveCone": "cone", "primitiveQuad": "quad", "primitiveDisk": "disk"}
+
+
+def _builtin(name: str, frame: str, span: Span | None, options: bool) -> tuple:
+    gk = _BUILTIN_NAMES.get(name)
+    if gk is None:
+        raise Untranslatable("i:builtin", f"built-in asset 'builtin:{name}' has no grammarkit "
+                             "counterpart", span)
+    if gk == "cylinder" and frame == "Z":
+        gk = "cylinder:y"  # CGA's cylinder axis is its scope's y: grammarkit's y on a face
+    call = OpCall(name="i", args=(Arg(value=Str(value="builtin:" + gk)),), span=span)
+    if options:
+        return [call], ("i:options", "the up axis and insert mode arguments are ignored")
+    return [call], None
+
+
+def _h_primitive(cga: str):
+    def handler(t, args, block, star, frame, rctx, ctx, span, out):
+        items, approx = _builtin(_PRIMITIVE_OPS[cga], frame, span, False)
+        if args:
+            approx = (f"{cga}:options", "the number of segments (and other arguments) is "
+                      "grammarkit's fixed 16")
+        return items, approx
+    return handler
 
 
 def _h_taper(t, args, block, star, frame, rctx, ctx, span, out):
@@ -977,11 +1000,11 @@ _HANDLERS = {
     "roofGable": _roof("roofGable", 5), "roofHip": _roof("roofHip", 3),
     "roofPyramid": _roof("roofPyramid", 1), "roofShed": _roof("roofShed", 2),
     "s": _h_s, "t": _h_t, "r": _h_r, "center": _h_center, "color": _h_color, "set": _h_set,
-    "i": _h_i, "primitiveCube": _h_primitive_cube,
+    "i": _h_i, **{name: _h_primitive(name) for name in _PRIMITIVE_OPS},
 }
 # Operations CGA writes without parentheses.
 _BARE_OPS = {"reverseNormals", "cleanupGeometry", "deleteHoles", "resetGeometry", "resetMaterial",
              "convexify", "innerRectangle", "alignScopeToAxes", "alignScopeToGeometry",
-             "primitiveCube", "primitiveQuad", "setPivot", "trim"}
+             "primitiveCube", "primitiveQuad", "primitiveDisk", "setPivot", "trim"}
 
 __all__ = ["Translator"]

@@ -9,7 +9,8 @@ surfaces (grammarkit.geometry.surfaces) and a recess shows its reveal.
 
 What `comp(f)` decomposes:
 
-- a box or a footprint prism: one side face per contour edge (x along the edge, y up, z the
+- a box or a footprint prism, in CGA's order: the bottom (index 0), the top (1), then one
+  side face per contour edge (x along the edge, y up, z the
   outward normal), the top (the volume's axes) and the bottom (x along the volume's x, z down);
   side faces carry CGA's trim planes (the bisector planes with their neighbours), which clip
   inserted meshes at the corners;
@@ -113,7 +114,9 @@ def _box_faces(s: Shape) -> list[tuple[frozenset, Shape]]:
     bottom = s.derived(s.world(0.0, sy, 0.0), (sx, sy, 0.0), bpoly, FACE, ax=(ax, neg_y, neg_z))
     bottom.on = on
     faces.append((frozenset(("bottom", "all", "horizontal")), bottom))
-    return faces
+    # CGA's order for an extruded face: the bottom (the face extruded) is 0, the top 1, then
+    # the sides in the order of the footprint's edges; index selectors and comp.index use it
+    return [faces[-1], faces[-2], *faces[:-2]]
 
 
 def _trims(s: Shape, contour: Any, dirs: list, i: int) -> tuple:

@@ -529,7 +529,7 @@ class _Compiler:
                                call.span, code="operation-without-apply")
         apply = apply.target() if hasattr(apply, "target") else apply
         fns = self._args(call, spec, scope, params)
-        if call.name == "i" and fns and is_constant(fns[0]):
+        if call.name == "i" and fns and is_constant(fns[0]) and not str(fns[0](None)).startswith("builtin:"):
             base = Path(call.span.file).parent if call.span and call.span.file else (
                 Path(self.out.base_dir) if self.out.base_dir else Path("."))
             fns[0] = constant(str((base / str(fns[0](None))).resolve()))

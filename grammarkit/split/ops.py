@@ -23,7 +23,7 @@ from ..dsl.binding import parse_color
 from ..geometry import footprints as fp
 from ..geometry import roofs
 from ..geometry.solids import insert_fitted, taper as taper_solid
-from .assets import load_asset_mesh, load_asset_solid
+from .assets import builtin_asset, load_asset, load_asset_mesh
 from .engine import rotation
 from .shape import FACE, VOLUME, Shape
 
@@ -457,15 +457,43 @@ def fitted_size(extent: tuple, size: tuple) -> tuple[float, float, float]:
                  for s, e in zip(size, extent))
 
 
-def op_insert(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
+def _trimmed(solid: Any, s: Shape) -> Any:
+    """Clip an inserted solid or surface by the shape's trim planes (CGA: the bisector planes
+    at the corners of the faces comp(f) made; a cornice inserted along a facade is mitred at
+    the building's corners). The planes are in world coordinates; the solid is in the scope's."""
+    for point, normal in s.trims:
+        ln = [sum(normal[k] * s.ax[i][k] for k in range(3)) for i in range(3)]  # world -> scope
+        lp = [sum((point[k] - s.o[k]) * s.ax[i][k] for k in range(3)) for i in range(3)]
+        offset = ln[0] * lp[0] + ln[1] * lp[1] + ln[2] * lp[2]
+        x0, y0, z0, x1, y1, z1 = solid.bounding_box()
+        # the lowest value of dot(n, p) over the bounding box: nothing to cut when it is kept
+        low = sum(min(n * a, n * b) for n, a, b in zip(ln, (x0, y0, z0), (x1, y1, z1)))
+        if low >= offset - 1e-9:
+            continue
+        solid = solid.trim_by_plane(tuple(ln), offset)
+    return solid
+
+
+def op_insert(ctx: Any, s: Shape, args: Any, block: Any) -> Shape | None:
     rel = str(args[0])  # the compiler made constant paths absolute (relative to their file)
     fit = str(args[1]) if len(args) > 1 else "scale"
-    path = Path(rel) if Path(rel).is_absolute() else (Path(ctx.base_dir or ".") / rel).resolve()
-    if not path.is_file():
-        raise ValueError(f"i(): mesh file not found: {path}")
+    if rel.startswith("builtin:"):
+        asset = builtin_asset(rel)
+        path = Path(rel)
+    else:
+        path = Path(rel) if Path(rel).is_absolute() else (Path(ctx.base_dir or ".") / rel).resolve()
+        if not path.is_file():
+            raise ValueError(f"i(): mesh file not found: {path}")
+        asset = load_asset(str(path)) if fit == "scale" else None
     if fit == "scale":  # the built-in fit, on the manifold directly (no mesh round trip)
-        solid, size = insert_fitted(load_asset_solid(str(path)), s.sz)
+        solid, size = insert_fitted(asset, s.sz)
+        if s.trims:
+            solid = _trimmed(solid, s)
+            if solid.is_empty():
+                return None  # trimmed away entirely
         return s.derived(s.o, size, None, VOLUME, solid=solid)
+    if rel.startswith("builtin:"):
+        raise ValueError(f"i(): fit {fit!r} needs a mesh file, not the built-in {rel!r}")
     fits = ctx.registries.fits if ctx.registries is not None else {}
     spec = fits.get(fit)
     if spec is None or spec.fit is None:

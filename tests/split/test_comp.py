@@ -82,8 +82,11 @@ def test_index_selectors_and_comp_index(G):
     by = {p.name: [] for p in m.parts}
     for p in m.parts:
         by[p.name].append(p.size[2])
+    # CGA's order: bottom 0, top 1, sides 2.. (in the footprint's edge order)
     assert by["A"] == [1] and by["B"] == [1 + 6]  # comp.total counts every face of the comp
-    assert sorted(by["C"]) == [2, 3, 4]  # faces 1, 2, 3 (face 0 went to A, 4 = top to B)
+    assert sorted(by["C"]) == [3, 4, 6]  # sides 2, 3, 5 (side 4 went to B)
+    bottom = next(p for p in m.parts if p.name == "A")
+    assert bottom.axes[2] == pytest.approx((0, 0, -1))
 
 
 def test_orientation_selectors(G):
