@@ -203,7 +203,7 @@ class Translator:
         if not self.rules:
             self.diagnostics.append(Diagnostic("error", "the CGA file has no rules", Span(
                 file=self.filename, line=1, column=1), code="cga-no-rules"))
-        starts = [k for k, r in self.rules.items() if r.start] or list(self.rules)[:1]
+        starts = [k for k, r in self.rules.items() if r.start] or self._default_start()
         rules_out: list[Rule] = []
         translated_keys: set[tuple[str, int]] = set()
         for key in starts:
@@ -228,6 +228,49 @@ class Translator:
                        comments=(f" Imported from CGA by `grammarkit import-cga`"
                                  f"{': ' + os.path.basename(self.filename) if self.filename else ''}",),
                        span=Span(file=self.filename, line=1, column=1))
+
+    def _default_start(self) -> list:
+        """Without @StartRule: the first rule, unless it takes parameters (a lot gets no
+        arguments); then, of the rules without parameters that no other rule calls (roots of
+        the file's call graph), the one that reaches the most rules."""
+        keys = list(self.rules)
+        if not keys:
+            return []
+        if not self.rules[keys[0]].params:
+            return keys[:1]
+        names = {k[0] for k in keys}
+        calls: dict[str, set[str]] = {}
+        for key, r in self.rules.items():
+            toks = r.body.scan_values(lambda v: isinstance(v, Token)) if isinstance(r.body, Tree) else ()
+            calls.setdefault(key[0], set()).update(t.value for t in toks if t.value in names and t.value != key[0])
+        called = set().union(*calls.values()) if calls else set()
+
+        def reach(name: str) -> int:
+            seen, todo = {name}, [name]
+            while todo:
+                for nxt in calls.get(todo.pop(), ()):
+                    if nxt not in seen:
+                        seen.add(nxt)
+                        todo.append(nxt)
+            return len(seen)
+        plain = [k for k in keys if not self.rules[k].params]
+        pool = [k for k in plain if k[0] not in called] or plain
+        chosen = max(pool, key=lambda k: (reach(k[0]), -keys.index(k))) if pool else None
+        first = self.rules[keys[0]]
+        if chosen is None or reach(chosen[0]) * 4 < len(names):
+            # no parameterless rule leads to most of the file (a library of rules called with
+            # arguments from another file): keep the first rule; deriving then says that the
+            # start rule takes parameters, rather than deriving a small side branch
+            self._record("start-rule", first.name, "dropped", first.span, feature="start:params",
+                         message=f"the first rule {first.name!r} takes parameters and no rule without "
+                         "parameters leads to most of the file: the file needs a start rule that "
+                         "calls it with arguments", counting=True)
+            return keys[:1]
+        self._record("start-rule", first.name, "approximated", first.span, feature="start:params",
+                     message=f"the first rule {first.name!r} takes parameters and cannot start from "
+                     f"the lot: {chosen[0]!r} (the rule without parameters that reaches the most "
+                     "rules) is the start rule", counting=True)
+        return [chosen]
 
     def _functions_report(self) -> None:
         for key, fn in self.functions.items():

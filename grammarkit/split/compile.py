@@ -324,6 +324,13 @@ class _Compiler:
         axiom = self._lookup(start, _Scope(), None)
         if axiom is None:
             raise GrammarError(f"start rule {start!r} is not defined", None, code="no-axiom")
+        if axiom.params:
+            # the lot is handed to the start rule without arguments: a rule with parameters
+            # would read missing ones (CityEngine's start rules take none either)
+            raise GrammarError(
+                f"start rule {axiom.name!r} takes parameters ({', '.join(axiom.params)}): the start "
+                "rule is applied to the lot without arguments", axiom.span, code="axiom-params",
+                hint="start from a rule without parameters (put it first, or pass start=...)")
         out.axiom = axiom
         while self.pending:
             crule, rule, scope = self.pending.pop()

@@ -224,3 +224,20 @@ Win --> split(y) { 1: W. | 1.5: extrude(0.2) Frame. | ~1: W. }
     assert a.mesh.volume == pytest.approx(b.mesh.volume, rel=1e-9)
     assert (a.mesh.bounds == b.mesh.bounds).all()
     assert a.mesh.is_watertight
+
+
+def test_a_first_rule_with_parameters_is_not_the_start_rule():
+    # a parameterless root that leads to the rest of the file starts instead (with a warning)
+    r = translate_cga("Part(h) --> extrude(h) P.\nLot --> Part(3)\n", filename="s.cga")
+    assert r.ok and r.grammar.rules[0].name == "Lot"
+    assert any(c.feature == "start:params" for c in r.report.constructs)
+    assert grammarkit.derive(r.grammar, lot=LOT).mesh.is_watertight
+    # a library of rules with parameters: the first rule stays first, and deriving says why
+    # it cannot start (not an IndexError deep in the engine)
+    r = translate_cga("Vol(i, use) --> case use == \"a\": Sub(i) else: B.\n"
+                      "Sub(i) --> extrude(i) A.\n", filename="l.cga")
+    assert r.ok and r.grammar.rules[0].name == "Vol"
+    assert any(c.feature == "start:params" and c.status == "dropped" for c in r.report.constructs)
+    with pytest.raises(grammarkit.errors.GrammarError) as e:
+        grammarkit.derive(r.grammar, lot=LOT)
+    assert "start rule 'Vol' takes parameters (i, use_)" in str(e.value) and e.value.span.line == 1

@@ -344,3 +344,13 @@ Win --> offset(-1) { inside: recess(0.5) split(x) { ~1: Glass. | 0.2: extrude(0.
     mullion = 0.2 * 2 * 0.3
     assert rep.volume == near(144 - hole + mullion)
     assert any(t.name == "Mullion" for t in m.tags)
+
+
+def test_a_start_rule_with_parameters_is_a_located_error(G):
+    from grammarkit.errors import GrammarError
+
+    with pytest.raises(GrammarError) as e:
+        derive(G("Lot(h) --> extrude(h) A.\nB --> Lot(2)"))
+    assert "start rule 'Lot' takes parameters (h)" in str(e.value)
+    assert e.value.span.line == 1 and e.value.diagnostics[0].code == "axiom-params"
+    assert derive(G("Lot(h) --> extrude(h) A.\nB --> Lot(2)"), start="B").mesh.is_watertight
