@@ -131,6 +131,9 @@ class ShapeView(Protocol):
     # operation that moves a face off its plane sets it to None.
     on: tuple | None
     trims: tuple  # CGA trim planes ((world point, world normal), ...) that clip inserted meshes
+    # the attr/const values the shape's expressions read, shared between shapes until an
+    # operation (CGA's set()) gives one shape a changed copy
+    values: dict
 
     @property
     def rule_name(self) -> str: ...  # the rule being applied (for messages)

@@ -976,8 +976,15 @@ def _h_set(t, args, block, star, frame, rctx, ctx, span, out):
     if target and target.startswith("material."):
         raise Untranslatable("op:set(material.*)", f"set({target}, ...): texturing and material "
                              "properties are not supported", span)
-    raise Untranslatable("op:set", f"set({target}, ...): setting attrs during the derivation is "
-                         "not supported", span)
+    if target and len(args) == 2:
+        kinds = {v.name: v.kind for v in t.values}
+        if kinds.get(target) == "attr":
+            value = translate_expr(args[1], ctx)
+            return [OpCall(name="set", args=(Arg(value=Ref(name=t.value_names[target])), Arg(value=value)),
+                           span=span)], None
+        if kinds.get(target) == "const":
+            raise Untranslatable("op:set(const)", f"set({target}, ...) of a const", span)
+    raise Untranslatable("op:set", f"set({target}, ...): only attrs of this file can be set", span)
 
 
 def _h_i(t, args, block, star, frame, rctx, ctx, span, out):

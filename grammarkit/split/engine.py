@@ -246,8 +246,21 @@ class Derivation:
         if solid is not None and s.solid is not None:
             self.check_extent(s, solid.bounding_box())
         if solid is None:
-            self.warnings.append(f"rule {s.rule.name!r}: a volume of size {tuple(round(v, 4) for v in s.sz)} "
-                                 "has no thickness and was left out of the mesh")
+            # a volume without thickness (extrude(0), CGA's flat "volumes"): what CityEngine
+            # shows is its footprint; it cannot be a solid, so it is that face in the surface
+            # layer (only when the thin axis is z; a box thin along x or y is left out)
+            flat = s.solid is None and s.sz[2] <= 1e-9 and s.sz[0] > 1e-9 and s.sz[1] > 1e-9
+            message = (f"rule {s.rule.name!r}: a volume of size {tuple(round(v, 4) for v in s.sz)} "
+                       "has no thickness: " + ("its footprint is emitted as a surface" if flat
+                                               else "it was left out of the mesh"))
+            if message not in self.warned:
+                self.warned.add(message)
+                self.warnings.append(message)
+            if flat:
+                from ..geometry.surfaces import face_triangles
+
+                V, F = face_triangles(s.o, s.ax, s.sz, s.poly)
+                self.add_surface(tag, V, F, s)
             return
         self.id_tag[oid] = tag
         self.solid_of[s.gid] = ((s.o, s.ax, s.sz), tag)

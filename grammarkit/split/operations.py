@@ -83,6 +83,8 @@ _SPECS: tuple[OperationSpec, ...] = (
                   doc="Insert a mesh file fitted to the scope (`fit=scale`: scaled to it)."),
     OperationSpec("color", (Param("value", "color"),), doc="Tag the shape with a colour (#rrggbb)."),
     OperationSpec("material", (Param("name", "string"),), doc="Tag the shape with a material name."),
+    OperationSpec("set", (Param("attr", "name"), Param("value", "any")),
+                  doc="Change an attr for this shape and everything derived from it (CGA's set)."),
 )
 
 

@@ -534,13 +534,24 @@ def op_material(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
     return c
 
 
+def op_set(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
+    """CGA's `set(attr, value)`: the shape and its descendants see the new value; other shapes
+    keep theirs (each shape carries its values, shared until one is changed)."""
+    key, value = str(args[0]), args[1]
+    if isinstance(value, tuple):
+        raise ValueError(f"set({key}, ...): the value must be a number, a string or a boolean")
+    c = s
+    c.values = {**s.values, key: value}
+    return c
+
+
 BUILTIN_APPLY = {
     "footprint": op_footprint, "extrude": op_extrude, "taper": op_taper, "recess": op_recess,
     "comp": op_comp, "split": op_split, "offset": op_offset,
     "roofGable": op_roof_gable, "roofHip": op_roof_hip, "roofPyramid": op_roof_pyramid,
     "roofShed": op_roof_shed, "roofMansard": op_roof_mansard,
     "t": op_t, "r": op_r, "s": op_s, "center": op_center, "i": op_insert,
-    "color": op_color, "material": op_material,
+    "color": op_color, "material": op_material, "set": op_set,
 }
 
 

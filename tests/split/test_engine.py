@@ -107,6 +107,9 @@ def test_extrude_negative_goes_against_the_normal(G):
     # extrude(0): a volume without thickness, left out of the solid with a warning
     m = derive(G("Lot --> footprint(rect(4, 4)) [ extrude(0) Flat. ] extrude(1) Box."))
     assert any("no thickness" in w for w in m.warnings) and ok(m).volume == pytest.approx(16.0, rel=5e-3)
+    # ... and its footprint is in the surface layer (what CityEngine shows of a flat volume)
+    assert [m.tags[t].name for t in m.surface_tags.tolist()] == ["Flat", "Flat"]
+    assert m.surface_mesh.area == pytest.approx(16.0)
 
 
 def test_division_by_zero_has_span(G):
@@ -354,3 +357,31 @@ def test_a_start_rule_with_parameters_is_a_located_error(G):
     assert "start rule 'Lot' takes parameters (h)" in str(e.value)
     assert e.value.span.line == 1 and e.value.diagnostics[0].code == "axiom-params"
     assert derive(G("Lot(h) --> extrude(h) A.\nB --> Lot(2)"), start="B").mesh.is_watertight
+
+
+def test_set_changes_an_attr_for_the_shape_and_its_descendants(G):
+    m = derive(G("""
+attr h = 3
+attr w = 2
+Lot --> footprint(rect(10, 4)) split(x) { ~1: set(h, 6) A | ~1: A | ~1: set(h, h + 1) set(w, w * 2) A }
+A --> extrude(h) s(w, scope.sy, scope.sz) X.
+"""))
+    # siblings do not see each other's set(); later reads in the same shape see the new value
+    assert [p.size for p in m.parts] == [(2, 4, 6), (2, 4, 3), (4, 4, 4)]
+    # a split whose sizes read a set() attr is laid out per shape, not cached per derivation
+    m = derive(G("""
+attr f = 1
+Lot --> footprint(rect(4, 4)) split(y) { ~1: set(f, 2) R | ~1: R }
+R --> split(x) { f: extrude(1) A. | ~1: extrude(1) B. }
+"""))
+    assert sorted(p.size[0] for p in m.parts if p.name == "A") == [1, 2]
+
+
+def test_set_of_a_const_or_unknown_name_is_a_located_error(G):
+    from grammarkit.errors import GrammarError
+
+    for text, what in (("const c = 1\nLot --> set(c, 2) X.", "is a const"),
+                       ("Lot --> set(nope, 2) X.", "is not an attr")):
+        with pytest.raises(GrammarError) as e:
+            derive(G(text))
+        assert what in str(e.value) and e.value.span is not None
