@@ -149,10 +149,23 @@ def translate_expr(node: Any, ctx: ExprContext) -> Any:
     if kind in ("array", "index"):
         raise Untranslatable("expr:array", "arrays are not supported", span)
     if kind == "case_expr":
-        raise Untranslatable("expr:case", "a case expression as a value is not supported", span)
+        # case c1: v1 case c2: v2 else: v3 -> select(c1, v1, select(c2, v2, v3)) (lazy)
+        parts = [k for k in kids if isinstance(k, Tree)]
+        conds, vals, other = parts[0:-1:2], parts[1:-1:2], parts[-1]
+        out = translate_expr(other, ctx)
+        for cond, val in reversed(list(zip(conds, vals))):
+            out = Call(func="select", args=(translate_expr(cond, ctx), translate_expr(val, ctx), out),
+                       span=span)
+        return out
     if kind == "stoch_expr":
-        raise Untranslatable("expr:stochastic", "a stochastic expression as a value is not "
-                             "supported", span)
+        # 30%: a 20%: b else: c -> pick(rand(0, 100), 30, a, 20, b, c)
+        parts = [k for k in kids if isinstance(k, Tree) or (isinstance(k, Token) and k.type != "PERCENT_COLON"
+                                                             and k.type != "ELSE")]
+        args: list = [Call(func="rand", args=(Num(value=0.0), Num(value=100.0)), span=span)]
+        for k in parts[:-1]:
+            args.append(translate_expr(k, ctx))
+        args.append(translate_expr(parts[-1], ctx))
+        return Call(func="pick", args=tuple(args), span=span)
     raise Untranslatable(f"expr:{kind}", f"expression {kind} is not supported", span)
 
 

@@ -241,3 +241,20 @@ def test_a_first_rule_with_parameters_is_not_the_start_rule():
     with pytest.raises(grammarkit.errors.GrammarError) as e:
         grammarkit.derive(r.grammar, lot=LOT)
     assert "start rule 'Vol' takes parameters (i, use_)" in str(e.value) and e.value.span.line == 1
+
+
+def test_case_and_stochastic_values_become_select_and_pick():
+    text = ('attr type = "tall"\n'
+            'attr h = case type == "tall": 30 case type == "mid": 20 else: 10\n'
+            'const w = 40%: 2 30%: 3 else: 4\n'
+            'inv(x) = case x == 0: 0 else: 1 / x\n'
+            "Lot --> extrude(h + inv(0)) s(w, '1, '1) X.\n")
+    r = imported(text)
+    assert not [c for c in r.report.constructs if c.status != "translated"]
+    assert 'select(type == "tall", 30, select(type == "mid", 20, 10))' in r.text
+    assert "pick(rand(0, 100), 40, 2, 30, 3, 4)" in r.text
+    tops = {t: grammarkit.derive(r.grammar, attrs={"type": t}, lot=LOT).mesh.bounds[1][2]
+            for t in ("tall", "mid", "low")}
+    assert tops == pytest.approx({"tall": 30, "mid": 20, "low": 10}, abs=0.01)
+    widths = {round(grammarkit.derive(r.grammar, seed=s, lot=LOT).mesh.bounds[1][0]) for s in range(40)}
+    assert widths == {2, 3, 4}  # every arm is drawn for some seed

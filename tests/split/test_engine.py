@@ -385,3 +385,14 @@ def test_set_of_a_const_or_unknown_name_is_a_located_error(G):
         with pytest.raises(GrammarError) as e:
             derive(G(text))
         assert what in str(e.value) and e.value.span is not None
+
+
+def test_select_and_pick_evaluate_only_the_chosen_value(G):
+    # select(x == 0, 0, 1 / x) must not divide by zero (CGA's case expressions are lazy)
+    m = derive(G("const z = 0\nattr k = 2\n"
+                 "Lot --> footprint(rect(4, 4)) extrude(3 + select(z == 0, 0, 1 / z) + select(k > 1, 1, 1 / z)) A."))
+    assert m.mesh.bounds[1][2] == pytest.approx(4, abs=0.01)
+    # pick(u, p1, v1, ..., other): percentages accumulate; u at or past their sum gives other
+    for u, want in ((0, 1), (29.9, 1), (30, 2), (49.9, 2), (50, 3), (99, 3)):
+        m = derive(G(f"Lot --> footprint(rect(4, 4)) extrude(pick({u}, 30, 1, 20, 2, 3)) A."))
+        assert m.mesh.bounds[1][2] == pytest.approx(want, abs=0.01), u
