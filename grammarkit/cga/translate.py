@@ -104,6 +104,8 @@ class Translator:
         self._seen_assets: set[str] = set()
 
     # -- reporting ------------------------------------------------------------------------------
+    frame_change: str | None = None  # set by a handler that changes the frame of what follows
+
     def _record(self, kind: str, name: str, status: str, span: Span | None, *,
                 feature: str | None = None, message: str | None = None, counting: bool = True) -> None:
         if not counting:
@@ -461,6 +463,8 @@ class Translator:
                 i += 1
                 continue
             items = self._item(node, frame, rctx, out)
+            if self.frame_change is not None:  # alignScopeToGeometry(yUp | zUp, ...)
+                frame, self.frame_change = self.frame_change, None
             is_last = i == len(nodes) - 1
             for it in items:
                 if isinstance(it, OpCall) and it.block is not None and not is_last:
@@ -1009,6 +1013,64 @@ def _h_nil_op(t, args, block, star, frame, rctx, ctx, span, out):
     return [Nil(span=span)], None
 
 
+def _literal_number(tree: Any) -> float | None:
+    if isinstance(tree, Tree) and tree.data == "number":
+        return float(tree.children[0].value)
+    if isinstance(tree, Tree) and tree.data == "neg":
+        v = _literal_number(tree.children[-1])
+        return None if v is None else -v
+    return None
+
+
+def _h_align_scope_to_geometry(t, args, block, star, frame, rctx, ctx, span, out):
+    """alignScopeToGeometry(upAxis, faceIndex, edgeIndex | longest): x along the edge; the up
+    axis says which CGA frame the shape is in afterwards (yUp: the normal is CGA's y)."""
+    _need(args, 2, 3, "alignScopeToGeometry", span)
+    up = _axis_name(args[0])
+    if up not in ("yUp", "zUp"):
+        raise Untranslatable("alignScopeToGeometry:up", f"up axis {up!r}", span)
+    approx = None
+    face = args[1]
+    if _literal_number(face) != 0:
+        approx = ("alignScopeToGeometry:face", "the face index is read as face 0 (the shape's "
+                  "outline)")
+    edge: Any = Num(value=0)
+    if len(args) == 3:
+        if _axis_name(args[2]) == "longest":
+            edge = Str(value="longest")
+        elif _axis_name(args[2]) is not None and "." in (_axis_name(args[2]) or ""):
+            raise Untranslatable("alignScopeToGeometry:orientation", f"edge orientation "
+                                 f"{_axis_name(args[2])!r}", span)
+        else:
+            edge = translate_expr(args[2], ctx)
+    t.frame_change = "Y" if up == "yUp" else "Z"
+    return [OpCall(name="alignScopeToGeometry", args=(Arg(value=edge),), span=span)], approx
+
+
+def _h_align_scope_to_axes(t, args, block, star, frame, rctx, ctx, span, out):
+    _need(args, 0, 1, "alignScopeToAxes", span)
+    if args and _axis_name(args[0]) != "y":
+        raise Untranslatable("alignScopeToAxes:axis", f"alignScopeToAxes({_axis_name(args[0])})", span)
+    if frame != "Y":
+        raise Untranslatable("alignScopeToAxes:face", "alignScopeToAxes() on a face of a volume "
+                             "(grammarkit turns only scopes whose up axis is vertical)", span)
+    return [OpCall(name="alignScopeToAxes", span=span)], None
+
+
+def _h_rotate_scope(t, args, block, star, frame, rctx, ctx, span, out):
+    _need(args, 3, 3, "rotateScope", span)
+    # the axis normal to the face: CGA's y in frame Y, its z in frame Z (grammarkit's z both)
+    about = 1 if frame == "Y" else 2
+    others = [a for k, a in enumerate(args) if k != about]
+    if any(_literal_number(a) != 0 for a in others):
+        raise Untranslatable("rotateScope:axes", "rotateScope() about an axis in the face plane",
+                             span)
+    angle = translate_expr(args[about], ctx)
+    zero = Num(value=0)
+    return [OpCall(name="rotateScope", args=(Arg(value=zero), Arg(value=zero), Arg(value=angle)),
+                   span=span)], None
+
+
 # CGA's built-in assets and primitive operations -> grammarkit's built-in primitives
 # (grammarkit/split/assets.py). CGA's primitives are y-up; in frame Y that is grammarkit's z.
 _BUILTIN_NAMES = {"cube": "cube", "cube:notex": "cube:notex", "cylinder": "cylinder",
@@ -1051,6 +1113,8 @@ _HANDLERS = {
     "roofPyramid": _roof("roofPyramid", 1), "roofShed": _roof("roofShed", 2),
     "s": _h_s, "t": _h_t, "r": _h_r, "center": _h_center, "color": _h_color, "set": _h_set,
     "i": _h_i, **{name: _h_primitive(name) for name in _PRIMITIVE_OPS},
+    "alignScopeToGeometry": _h_align_scope_to_geometry, "alignScopeToAxes": _h_align_scope_to_axes,
+    "rotateScope": _h_rotate_scope,
 }
 # Operations CGA writes without parentheses.
 _BARE_OPS = {"reverseNormals", "cleanupGeometry", "deleteHoles", "resetGeometry", "resetMaterial",

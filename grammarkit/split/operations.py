@@ -83,6 +83,13 @@ _SPECS: tuple[OperationSpec, ...] = (
                   doc="Insert a mesh file fitted to the scope (`fit=scale`: scaled to it)."),
     OperationSpec("color", (Param("value", "color"),), doc="Tag the shape with a colour (#rrggbb)."),
     OperationSpec("material", (Param("name", "string"),), doc="Tag the shape with a material name."),
+    OperationSpec("alignScopeToGeometry", (Param("edge", "any", required=False, default=0),),
+                  doc="Turn the scope about z so x runs along an edge of the outline (an index, "
+                      "or \"longest\"); the geometry stays."),
+    OperationSpec("alignScopeToAxes", (),
+                  doc="Turn the scope about its (vertical) z so x runs along the world x axis."),
+    OperationSpec("rotateScope", (Param("x"), Param("y"), Param("z")),
+                  doc="Turn the scope (not the geometry) about its z axis by z degrees."),
     OperationSpec("set", (Param("attr", "name"), Param("value", "any")),
                   doc="Change an attr for this shape and everything derived from it (CGA's set)."),
 )

@@ -258,3 +258,20 @@ def test_case_and_stochastic_values_become_select_and_pick():
     assert tops == pytest.approx({"tall": 30, "mid": 20, "low": 10}, abs=0.01)
     widths = {round(grammarkit.derive(r.grammar, seed=s, lot=LOT).mesh.bounds[1][0]) for s in range(40)}
     assert widths == {2, 3, 4}  # every arm is drawn for some seed
+
+
+def test_scope_alignment_operations_and_the_frame_they_leave():
+    text = ("Lot --> alignScopeToAxes(y) rotateScope(0, 30, 0) alignScopeToGeometry(yUp, 0, longest) "
+            "extrude(3) comp(f) { front: alignScopeToGeometry(yUp, 0, 0) split(z) { 1: A | ~1: B } }\n"
+            "A --> extrude(1) A.\nB --> extrude(2) B.\n")
+    r = imported(text)
+    assert not [c for c in r.report.constructs if c.status != "translated"]
+    assert ('alignScopeToAxes() rotateScope(0, 0, 30) alignScopeToGeometry("longest")' in r.text)
+    # after alignScopeToGeometry(yUp, ...) the face is in CGA's y-up frame: split(z) is
+    # grammarkit's split(y), reversed
+    assert "alignScopeToGeometry(0) split(y) { ~1: B | 1: A }" in r.text
+    m = grammarkit.derive(r.grammar, lot=LOT)
+    assert m.mesh.is_watertight
+    # rotateScope about an axis in the face plane is reported, not guessed
+    r = translate_cga("Lot --> rotateScope(90, 0, 0) X.\n", filename="r.cga")
+    assert [c.feature for c in r.report.constructs if c.status != "translated"] == ["rotateScope:axes"]

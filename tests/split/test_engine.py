@@ -396,3 +396,30 @@ def test_select_and_pick_evaluate_only_the_chosen_value(G):
     for u, want in ((0, 1), (29.9, 1), (30, 2), (49.9, 2), (50, 3), (99, 3)):
         m = derive(G(f"Lot --> footprint(rect(4, 4)) extrude(pick({u}, 30, 1, 20, 2, 3)) A."))
         assert m.mesh.bounds[1][2] == pytest.approx(want, abs=0.01), u
+
+
+def test_scope_operations_turn_the_scope_not_the_geometry(G):
+    # alignScopeToGeometry(i): x along edge i of the outline; the footprint stays in place
+    m = derive(G("Lot --> footprint(rect(10, 4)) alignScopeToGeometry(1) extrude(2) A."))
+    a = m.parts[0]
+    assert a.axes[0] == pytest.approx((0, 1, 0)) and a.size == pytest.approx((4, 10, 2))
+    assert ok(m).volume == near(80.0) and m.mesh.bounds[1][:2] == pytest.approx((10, 4), abs=2e-3)
+    assert derive(G('Lot --> footprint(polygon(0, 0, 3, 0, 3, 8, 0, 8)) alignScopeToGeometry("longest") '
+                    "A.")).parts[0].axes[0] == pytest.approx((0, 1, 0))
+    # rotateScope turns the scope about z: a split then runs along the turned x axis
+    m = derive(G("Lot --> footprint(rect(10, 4)) rotateScope(0, 0, 90) split(x) { 1: extrude(1) A. | ~1: extrude(2) B. }"))
+    a = next(p for p in m.parts if p.name == "A")
+    assert a.size == pytest.approx((1, 10, 1))  # the first metre along world y
+    assert ok(m).volume == near(1 * 10 * 1 + 3 * 10 * 2)
+    # alignScopeToAxes brings x back to the world x axis
+    m = derive(G("Lot --> footprint(rect(10, 4)) rotateScope(0, 0, 30) alignScopeToAxes() A."))
+    assert m.parts[0].axes[0] == pytest.approx((1, 0, 0)) and m.parts[0].size[:2] == pytest.approx((10, 4))
+    # a general solid turns with its scope; the model is unchanged
+    m = derive(G("Lot --> footprint(rect(10, 4)) roofHip(30) rotateScope(0, 0, 90) A."))
+    assert m.parts[0].size[:2] == pytest.approx((4, 10)) and ok(m).watertight
+
+
+def test_rotate_scope_about_x_or_y_is_refused(G):
+    with pytest.raises(DerivationError) as e:
+        derive(G("Lot --> footprint(rect(10, 4)) rotateScope(90, 0, 0) A."))
+    assert "about its z axis only" in str(e.value) and e.value.span.line == 1
