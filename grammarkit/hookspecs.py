@@ -203,5 +203,7 @@ class OperationContext(Protocol):
 
     def warn(self, message: str) -> None: ...  # a warning listed on the model
 
+    def report(self, key: str, value: Any) -> None: ...  # a value for Model.reports (CGA's report())
+
 
 Apply = Callable[[OperationContext, ShapeView, list, "tuple[BlockSlot, ...] | None"], Any]

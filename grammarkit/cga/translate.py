@@ -48,7 +48,7 @@ _UI_ANNOTATIONS = {"@Order", "@Group", "@Description", "@Hidden", "@Color", "@Di
 # feature is `op:<name>`; listed here only to word the message.
 _TEXTURING = {"setupProjection", "projectUV", "texture", "tileUV", "translateUV", "rotateUV",
               "scaleUV", "normalizeUV", "deleteUV", "setNormals", "softenNormals"}
-_METADATA = {"report", "print", "label"}
+_METADATA = {"print", "label"}
 
 
 @dataclass
@@ -1057,6 +1057,12 @@ def _h_align_scope_to_axes(t, args, block, star, frame, rctx, ctx, span, out):
     return [OpCall(name="alignScopeToAxes", span=span)], None
 
 
+def _h_report(t, args, block, star, frame, rctx, ctx, span, out):
+    _need(args, 2, 2, "report", span)
+    key, value = translate_expr(args[0], ctx), translate_expr(args[1], ctx)
+    return [OpCall(name="report", args=(Arg(value=key), Arg(value=value)), span=span)], None
+
+
 def _h_rotate_scope(t, args, block, star, frame, rctx, ctx, span, out):
     _need(args, 3, 3, "rotateScope", span)
     # the axis normal to the face: CGA's y in frame Y, its z in frame Z (grammarkit's z both)
@@ -1114,7 +1120,7 @@ _HANDLERS = {
     "s": _h_s, "t": _h_t, "r": _h_r, "center": _h_center, "color": _h_color, "set": _h_set,
     "i": _h_i, **{name: _h_primitive(name) for name in _PRIMITIVE_OPS},
     "alignScopeToGeometry": _h_align_scope_to_geometry, "alignScopeToAxes": _h_align_scope_to_axes,
-    "rotateScope": _h_rotate_scope,
+    "rotateScope": _h_rotate_scope, "report": _h_report,
 }
 # Operations CGA writes without parentheses.
 _BARE_OPS = {"reverseNormals", "cleanupGeometry", "deleteHoles", "resetGeometry", "resetMaterial",

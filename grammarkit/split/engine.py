@@ -117,6 +117,8 @@ class Derivation:
         self.leaves: list[tuple] = []  # (tag, origin, axes, size) of each terminal, in order
         self.warnings: list[str] = []
         self.warned: set[str] = set()
+        # report(key, value) calls in derivation order: key -> values (CGA's reports)
+        self.reports: dict[str, list] = {}
         self.est_tris = 0
         self.context = OperationContext(self)
 
@@ -398,6 +400,10 @@ class OperationContext:
     def terminal(self, shape: Shape, name: str) -> None:
         """Make `shape` (a face or a volume) a terminal named `name`, as `Name.` does."""
         self._derivation.leaf(shape, name)
+
+    def report(self, key: str, value: Any) -> None:
+        """Record a value under a report key (CGA's report(); summed up in `Model.reports`)."""
+        self._derivation.reports.setdefault(key, []).append(value)
 
     def warn(self, message: str) -> None:
         """A warning of the derivation (listed on the model and by the CLI); a message already

@@ -1,7 +1,9 @@
 """The result of a derivation: one watertight mesh, the tagged terminals, and the derivation tree."""
 from __future__ import annotations
 
+
 import json
+import math
 import os
 from dataclasses import dataclass, field
 from functools import cached_property
@@ -203,6 +205,27 @@ class Model:
         self.bindings = bindings
 
     @cached_property
+    def reports(self) -> dict[str, dict]:
+        """CGA's reports: per key of `report(key, value)`, the number of values `n`, and for
+        numbers (booleans count as 0/1) `sum`, `mean`, `min`, `max`; for strings the count of
+        each distinct value (`values`). Keys in the order they were first reported."""
+        out: dict[str, dict] = {}
+        for key, values in self._ctx.reports.items():
+            nums = [float(v) for v in values if isinstance(v, (int, float))]
+            texts = [v for v in values if isinstance(v, str)]
+            entry: dict[str, Any] = {"n": len(values)}
+            if nums:
+                total = math.fsum(nums)
+                entry.update(sum=total, mean=total / len(nums), min=min(nums), max=max(nums))
+            if texts:
+                counts: dict[str, int] = {}
+                for v in texts:
+                    counts[v] = counts.get(v, 0) + 1
+                entry["values"] = dict(sorted(counts.items()))
+            out[key] = entry
+        return out
+
+    @cached_property
     def tags(self) -> list[Tag]:
         """Semantic tags of every solid and face terminal (indexed by `triangle_tags`)."""
         return [Tag(*t) for t in self._ctx.tags]
@@ -374,7 +397,7 @@ class Model:
         return {
             "grammar": self.name, "seed": self.seed, "attrs": self.attrs, "bindings": self.bindings,
             "shape_count": self.shape_count, "terminal_count": len(self._ctx.leaves),
-            "triangles": self.triangle_count, "warnings": self.warnings,
+            "triangles": self.triangle_count, "warnings": self.warnings, "reports": self.reports,
             "nodes": [n.to_dict() for n in self._tree_nodes],
         }
 
@@ -471,6 +494,8 @@ class Model:
                   "attrs": {k: v for k, v in self.attrs.items() if isinstance(v, (int, float, str, bool))},
                   "bindings": dict(self.bindings),
                   "materials": sorted({t[4] for t in raw if t[4]})}
+        if self._ctx.reports:
+            extras["reports"] = self.reports  # CGA's reports, in the building node's extras
         return Scene(name, solids, extras)
 
     def save(self, path: Any, format: str | None = None) -> Any:
@@ -504,6 +529,8 @@ class Model:
         extras = {"grammar": self.name, "seed": self.seed,
                   "attrs": {k: v for k, v in self.attrs.items() if isinstance(v, (int, float, str, bool))},
                   "materials": sorted({t.material for t in self.tags if t.material})}
+        if self._ctx.reports:
+            extras["reports"] = self.reports
         scene.add_geometry(self.mesh, node_name=self.name or "building", geom_name=self.name or "building",
                            metadata=extras)
         scene.metadata.update(extras)

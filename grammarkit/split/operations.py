@@ -90,6 +90,8 @@ _SPECS: tuple[OperationSpec, ...] = (
                   doc="Turn the scope about its (vertical) z so x runs along the world x axis."),
     OperationSpec("rotateScope", (Param("x"), Param("y"), Param("z")),
                   doc="Turn the scope (not the geometry) about its z axis by z degrees."),
+    OperationSpec("report", (Param("key", "string"), Param("value", "any")),
+                  doc="Collect a value under a report key (Model.reports; the model's metadata)."),
     OperationSpec("set", (Param("attr", "name"), Param("value", "any")),
                   doc="Change an attr for this shape and everything derived from it (CGA's set)."),
 )

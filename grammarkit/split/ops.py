@@ -546,6 +546,18 @@ def op_set(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
     return c
 
 
+def op_report(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
+    """CGA's `report(key, value)`: the value is collected under the key (Model.reports: count,
+    sum, mean, min, max of numbers; counts of strings)."""
+    key, value = args[0], args[1]
+    if not isinstance(key, str) or not key:
+        raise ValueError(f"report(): the key must be a non-empty string, got {key!r}")
+    if isinstance(value, tuple):
+        raise ValueError(f"report({key!r}, ...): the value must be a number, a string or a boolean")
+    ctx.report(key, value)
+    return s
+
+
 BUILTIN_APPLY = {
     "footprint": op_footprint, "extrude": op_extrude, "taper": op_taper, "recess": op_recess,
     "comp": op_comp, "split": op_split, "offset": op_offset,
@@ -554,7 +566,7 @@ BUILTIN_APPLY = {
     "t": op_t, "r": op_r, "s": op_s, "center": op_center, "i": op_insert,
     "color": op_color, "material": op_material, "set": op_set,
     "alignScopeToGeometry": op_align_scope_to_geometry, "alignScopeToAxes": op_align_scope_to_axes,
-    "rotateScope": op_rotate_scope,
+    "rotateScope": op_rotate_scope, "report": op_report,
 }
 
 

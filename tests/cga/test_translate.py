@@ -175,13 +175,13 @@ def test_block_before_more_items_keeps_the_shape():
 
 def test_untranslatable_constructs_warn_with_location_and_feature():
     text = ("Lot -->\n  setupProjection(0, scope.xy, 2, 2)\n  extrude(geometry.area() * 0.1)\n"
-            "  report(\"h\", 3)\n  X.\n")
+            "  print(\"h\")\n  X.\n")
     result = translate_cga(text, filename="w.cga")
     assert result.ok
     warnings = [d for d in result.diagnostics if d.severity == "warning"]
     assert [(d.span.line, d.span.column) for d in warnings] == [(2, 3), (3, 3), (4, 3)]
     assert {c.feature for c in result.report.constructs if c.status != "translated"} == {
-        "op:setupProjection", "fn:geometry.area", "op:report"}
+        "op:setupProjection", "fn:geometry.area", "op:print"}
     formatted = warnings[0].format(text)
     assert formatted.startswith("w.cga:2:3: warning: not translated: setupProjection()")
     assert "    ^" in formatted

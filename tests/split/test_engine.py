@@ -423,3 +423,21 @@ def test_rotate_scope_about_x_or_y_is_refused(G):
     with pytest.raises(DerivationError) as e:
         derive(G("Lot --> footprint(rect(10, 4)) rotateScope(90, 0, 0) A."))
     assert "about its z axis only" in str(e.value) and e.value.span.line == 1
+
+
+def test_reports_are_collected_into_the_model_metadata(G, tmp_path):
+    m = derive(G('Lot --> footprint(rect(10, 4)) report("lot area", scope.sx * scope.sy) '
+                 "split(x) { ~1: F | ~1: F | ~1: H }\n"
+                 'F --> report("use", "shop") report("floors", 2) extrude(3) F.\n'
+                 'H --> report("use", "flat") report("floors", 5) extrude(3) H.\n'))
+    assert m.reports == {"lot area": {"n": 1, "sum": 40.0, "mean": 40.0, "min": 40.0, "max": 40.0},
+                         "use": {"n": 3, "values": {"flat": 1, "shop": 2}},
+                         "floors": {"n": 3, "sum": 9.0, "mean": 3.0, "min": 2.0, "max": 5.0}}
+    assert m.tree_dict()["reports"] == m.reports
+    import json
+    import struct
+
+    data = m.save(tmp_path / "r.glb").read_bytes()
+    doc = json.loads(data[20:20 + struct.unpack("<I", data[12:16])[0]])
+    assert any((n.get("extras") or {}).get("reports") == m.reports for n in doc["nodes"])
+    assert derive(G("Lot --> footprint(rect(4, 4)) extrude(1) A.")).reports == {}
