@@ -690,6 +690,10 @@ class Translator:
             if mode == "offset-parts":
                 mapped = (sel,) if sel in ("inside", "border") else None
                 body_frame = frame
+            elif sel is not None and key_tree.data == "number":
+                # an index: CGA's and grammarkit's face orders agree (bottom 0, top 1, sides)
+                mapped = (int(float(sel)),) if float(sel).is_integer() and float(sel) >= 0 else None
+                body_frame = "Z"
             else:
                 mapped = frames.comp_selectors(frame, sel) if sel else None
                 body_frame = "Z"
@@ -706,7 +710,8 @@ class Translator:
             else:
                 self._record("selector", sel, "translated", span, counting=rctx.counting)
             for gsel in mapped:
-                out.append(Branch(key=Ref(name=gsel), body=Seq(items=tuple(body)), span=span))
+                key = Num(value=float(gsel)) if isinstance(gsel, int) else Ref(name=gsel)
+                out.append(Branch(key=key, body=Seq(items=tuple(body)), span=span))
         return out
 
     # -- assets -----------------------------------------------------------------------------------------
