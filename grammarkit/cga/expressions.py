@@ -29,7 +29,14 @@ _FUNCTIONS: dict[str, tuple[str, int, int | None]] = {
     "floor": ("floor", 1, 1), "ceil": ("ceil", 1, 1), "abs": ("abs", 1, 1),
     "sqrt": ("sqrt", 1, 1), "sin": ("sin", 1, 1), "cos": ("cos", 1, 1), "tan": ("tan", 1, 1),
     "rint": ("round", 1, 1), "clamp": ("clamp", 3, 3),
+    # string and list functions (grammarkit/split/strings.py)
+    "str": ("str", 1, 1), "len": ("len", 1, 1), "find": ("find", 2, 3),
+    "substring": ("substring", 3, 3), "listSize": ("listSize", 1, 1), "listItem": ("listItem", 2, 2),
+    "listIndex": ("listIndex", 2, 2), "listFirst": ("listFirst", 1, 1), "listLast": ("listLast", 1, 1),
+    "listRange": ("listRange", 3, 3),
 }
+# functions whose value is text: `+` with one of them concatenates (CGA converts the other side)
+_TEXT_FUNCTIONS = {"str", "substring", "listItem", "listFirst", "listLast", "listRange"}
 _BINARY = {"+": "+", "-": "-", "*": "*", "/": "/", "%": "%", "==": "==", "!=": "!=",
            "<": "<", "<=": "<=", ">": ">", ">=": ">="}
 _INDEX_REFS = {"split.index", "split.total", "comp.index", "comp.total"}
@@ -125,8 +132,11 @@ def translate_expr(node: Any, ctx: ExprContext) -> Any:
                              "(per-edge values) is not supported", span)
     if kind == "binop":
         left, op, right = kids
-        return Binary(op=_BINARY[op.value], left=translate_expr(left, ctx),
-                      right=translate_expr(right, ctx), span=span)
+        a, b = translate_expr(left, ctx), translate_expr(right, ctx)
+        if op.value == "+" and (_is_text(a) or _is_text(b)):
+            # CGA's + joins text and turns the other side into text (str(3) is "3")
+            a, b = (x if _is_text(x) else Call(func="str", args=(x,), span=x.span) for x in (a, b))
+        return Binary(op=_BINARY[op.value], left=a, right=b, span=span)
     if kind in ("or_op", "and_op"):
         left, right = kids
         return Binary(op="||" if kind == "or_op" else "&&", left=translate_expr(left, ctx),
@@ -167,6 +177,17 @@ def translate_expr(node: Any, ctx: ExprContext) -> Any:
         args.append(translate_expr(parts[-1], ctx))
         return Call(func="pick", args=tuple(args), span=span)
     raise Untranslatable(f"expr:{kind}", f"expression {kind} is not supported", span)
+
+
+def _is_text(e: Any) -> bool:
+    """Whether an IR expression is statically text (a string, a text function, a join)."""
+    if isinstance(e, Str):
+        return True
+    if isinstance(e, Call):
+        return e.func in _TEXT_FUNCTIONS or (e.func == "select" and (_is_text(e.args[1]) or _is_text(e.args[2])))
+    if isinstance(e, Binary):
+        return e.op == "+" and (_is_text(e.left) or _is_text(e.right))
+    return False
 
 
 def _unquote(text: str) -> str:
@@ -225,7 +246,10 @@ def _call(name: str, args: list[Any], span: Span | None, ctx: ExprContext) -> An
     if name == "p" and len(args) == 1:
         return Binary(op="<", left=Call(func="rand", span=span), right=translate_expr(args[0], ctx),
                       span=span)
-    if name in ("float", "bool") and len(args) == 1:
+    if name == "float" and len(args) == 1:
+        inner = translate_expr(args[0], ctx)
+        return Call(func="float", args=(inner,), span=span) if not isinstance(inner, Num) else inner
+    if name == "bool" and len(args) == 1:
         inner = translate_expr(args[0], ctx)
         if isinstance(inner, Str):
             raise Untranslatable(f"fn:{name}", f"{name}() of a string is not supported", span)

@@ -124,3 +124,11 @@ FITS: tuple[FitSpec, ...] = (
 @hookimpl
 def grammarkit_insert_fits() -> Iterable[FitSpec]:
     return FITS
+
+
+@hookimpl
+def grammarkit_functions() -> Iterable[Any]:
+    """CGA's string and list functions (grammarkit/split/strings.py; pure Python, light)."""
+    from .strings import STRING_FUNCTIONS
+
+    return STRING_FUNCTIONS

@@ -275,3 +275,13 @@ def test_scope_alignment_operations_and_the_frame_they_leave():
     # rotateScope about an axis in the face plane is reported, not guessed
     r = translate_cga("Lot --> rotateScope(90, 0, 0) X.\n", filename="r.cga")
     assert [c.feature for c in r.report.constructs if c.status != "translated"] == ["rotateScope:axes"]
+
+
+def test_text_joins_and_list_functions():
+    r = imported('attr id = 7\nattr names = "a;b;c;"\n'
+                 'Lot --> report("Height." + id, 3) report(listItem(names, 1) + 2, listSize(names)) '
+                 'extrude(float("4")) X.\n')
+    assert 'report("Height." + str(id), 3)' in r.text
+    assert "report(listItem(names, 1) + str(2), listSize(names))" in r.text
+    m = grammarkit.derive(r.grammar, lot=LOT)
+    assert set(m.reports) == {"Height.7", "b2"} and m.reports["b2"]["sum"] == 3
