@@ -40,6 +40,7 @@ _TEXT_FUNCTIONS = {"str", "substring", "listItem", "listFirst", "listLast", "lis
 _BINARY = {"+": "+", "-": "-", "*": "*", "/": "/", "%": "%", "==": "==", "!=": "!=",
            "<": "<", "<=": "<=", ">": ">", ">=": ">="}
 _INDEX_REFS = {"split.index", "split.total", "comp.index", "comp.total"}
+_GEOMETRY_REFS = {"geometry.area", "geometry.volume", "geometry.nVertices", "geometry.isRectangular"}
 MAX_INLINE_DEPTH = 16
 
 
@@ -221,7 +222,7 @@ def _ref(name: str, span: Span | None, ctx: ExprContext) -> Any:
     mapped = frames.scope_name(ctx.frame, name)
     if mapped is not None:
         return Ref(name=mapped, span=span)
-    if name in _INDEX_REFS:
+    if name in _INDEX_REFS or name in _GEOMETRY_REFS:
         return Ref(name=name, span=span)
     head = name.split(".", 1)[0]
     if head in ("geometry", "scope", "comp", "split", "initialShape", "material", "seedian",
@@ -235,6 +236,10 @@ def _call(name: str, args: list[Any], span: Span | None, ctx: ExprContext) -> An
     key = (name, len(args))
     if key in ctx.functions:
         return _inline(ctx.functions[key], args, span, ctx)
+    if name in _GEOMETRY_REFS and (not args or name == "geometry.isRectangular" and len(args) == 1):
+        # geometry.area() etc.: built-in names of grammarkit (isRectangular's tolerance in
+        # degrees is grammarkit's fixed one, see docs/cga.md)
+        return Ref(name=name, span=span)
     if name in _FUNCTIONS:
         gk, lo, hi = _FUNCTIONS[name]
         if len(args) < lo or (hi is not None and len(args) > hi):

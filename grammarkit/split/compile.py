@@ -417,6 +417,12 @@ class _Compiler:
                 return lambda s: s.si
             if name in ("split.total", "comp.total"):
                 return lambda s: s.st
+            if name.startswith("geometry."):
+                from .geometry_queries import GEOMETRY_QUERIES
+
+                query = GEOMETRY_QUERIES.get(name)
+                if query is not None:
+                    return lambda s, _q=query: _q(s)
             # attrs and consts: the derivation's values, carried by the shape evaluated on
             if name in scope.local_attrs and name not in grammar_attrs:
                 key = f"{scope.anchor}.{name}"
@@ -619,7 +625,7 @@ def _shape_free(e: Any, params: tuple[str, ...], mutable: frozenset = frozenset(
     one derivation."""
     if isinstance(e, E.Ref):
         return (e.name not in params and e.name not in mutable
-                and not e.name.startswith(("scope.", "split.", "comp.")))
+                and not e.name.startswith(("scope.", "split.", "comp.", "geometry.")))
     if isinstance(e, E.Call):
         return e.func != "rand" and all(_shape_free(a, params, mutable) for a in e.args)
     if isinstance(e, E.Unary):

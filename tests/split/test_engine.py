@@ -441,3 +441,16 @@ def test_reports_are_collected_into_the_model_metadata(G, tmp_path):
     doc = json.loads(data[20:20 + struct.unpack("<I", data[12:16])[0]])
     assert any((n.get("extras") or {}).get("reports") == m.reports for n in doc["nodes"])
     assert derive(G("Lot --> footprint(rect(4, 4)) extrude(1) A.")).reports == {}
+
+
+def test_geometry_queries(G):
+    m = derive(G('Lot --> footprint(lshape(10, 8, 4, 4)) report("a", geometry.area) '
+                 'report("n", geometry.nVertices) report("r", geometry.isRectangular) '
+                 '[ extrude(2) report("v", geometry.volume) report("A", geometry.area) '
+                 'report("nv", geometry.nVertices) X. ] '
+                 'split(x) { 4: report("r4", geometry.isRectangular) NIL | ~1: NIL }'))
+    got = {k: v["sum"] for k, v in m.reports.items()}
+    assert got == {"a": 56, "n": 6, "r": 0, "v": 112, "A": 2 * 56 + 36 * 2, "nv": 12, "r4": 1}
+    # a general solid: its mesh
+    m = derive(G('Lot --> footprint(rect(4, 4)) roofPyramid(45) report("v", geometry.volume) X.'))
+    assert m.reports["v"]["sum"] == pytest.approx(4 * 4 * 2 / 3, rel=0.02)
