@@ -422,7 +422,9 @@ class _Compiler:
 
                 query = GEOMETRY_QUERIES.get(name)
                 if query is not None:
-                    return lambda s, _q=query: _q(s)
+                    # attr and const values are evaluated without a shape (ValueEnv: the scope
+                    # is 0 there too), so the geometry reads as 0 / false in them
+                    return lambda s, _q=query: _q(s) if type(s) is not ValueEnv else 0
             # attrs and consts: the derivation's values, carried by the shape evaluated on
             if name in scope.local_attrs and name not in grammar_attrs:
                 key = f"{scope.anchor}.{name}"

@@ -454,3 +454,9 @@ def test_geometry_queries(G):
     # a general solid: its mesh
     m = derive(G('Lot --> footprint(rect(4, 4)) roofPyramid(45) report("v", geometry.volume) X.'))
     assert m.reports["v"]["sum"] == pytest.approx(4 * 4 * 2 / 3, rel=0.02)
+
+
+def test_geometry_in_attr_values_reads_zero(G):
+    # attrs and consts are evaluated without a shape (as scope.sx is 0 there)
+    m = derive(G("const a = geometry.area\nLot --> footprint(rect(4, 4)) extrude(1 + a) X."))
+    assert m.mesh.bounds[1][2] == pytest.approx(1, abs=0.01)
