@@ -33,10 +33,10 @@ _FUNCTIONS: dict[str, tuple[str, int, int | None]] = {
     "str": ("str", 1, 1), "len": ("len", 1, 1), "find": ("find", 2, 3),
     "substring": ("substring", 3, 3), "listSize": ("listSize", 1, 1), "listItem": ("listItem", 2, 2),
     "listIndex": ("listIndex", 2, 2), "listFirst": ("listFirst", 1, 1), "listLast": ("listLast", 1, 1),
-    "listRange": ("listRange", 3, 3),
+    "listRange": ("listRange", 3, 3), "replace": ("replace", 3, 3),
 }
 # functions whose value is text: `+` with one of them concatenates (CGA converts the other side)
-_TEXT_FUNCTIONS = {"str", "substring", "listItem", "listFirst", "listLast", "listRange"}
+_TEXT_FUNCTIONS = {"str", "substring", "listItem", "listFirst", "listLast", "listRange", "replace"}
 _BINARY = {"+": "+", "-": "-", "*": "*", "/": "/", "%": "%", "==": "==", "!=": "!=",
            "<": "<", "<=": "<=", ">": ">", ">=": ">="}
 _INDEX_REFS = {"split.index", "split.total", "comp.index", "comp.total"}
@@ -245,6 +245,12 @@ def _call(name: str, args: list[Any], span: Span | None, ctx: ExprContext) -> An
         if len(args) < lo or (hi is not None and len(args) > hi):
             raise Untranslatable(f"fn:{name}", f"{name}() with {len(args)} arguments", span)
         return Call(func=gk, args=tuple(translate_expr(a, ctx) for a in args), span=span)
+    if name == "listRandom" and len(args) == 1:
+        # an item drawn uniformly: listItem(l, floor(rand(0, listSize(l))))
+        lst = translate_expr(args[0], ctx)
+        idx = Call(func="floor", args=(Call(func="rand", args=(Num(value=0.0), Call(
+            func="listSize", args=(lst,), span=span)), span=span),), span=span)
+        return Call(func="listItem", args=(lst, idx), span=span)
     if name == "pow" and len(args) == 2:
         return Binary(op="^", left=translate_expr(args[0], ctx), right=translate_expr(args[1], ctx),
                       span=span)

@@ -1068,6 +1068,11 @@ def _h_report(t, args, block, star, frame, rctx, ctx, span, out):
     return [OpCall(name="report", args=(Arg(value=key), Arg(value=value)), span=span)], None
 
 
+def _h_reverse_normals(t, args, block, star, frame, rctx, ctx, span, out):
+    _need(args, 0, 0, "reverseNormals", span)
+    return [OpCall(name="reverseNormals", span=span)], None
+
+
 def _h_rotate_scope(t, args, block, star, frame, rctx, ctx, span, out):
     _need(args, 3, 3, "rotateScope", span)
     # the axis normal to the face: CGA's y in frame Y, its z in frame Z (grammarkit's z both)
@@ -1125,7 +1130,7 @@ _HANDLERS = {
     "s": _h_s, "t": _h_t, "r": _h_r, "center": _h_center, "color": _h_color, "set": _h_set,
     "i": _h_i, **{name: _h_primitive(name) for name in _PRIMITIVE_OPS},
     "alignScopeToGeometry": _h_align_scope_to_geometry, "alignScopeToAxes": _h_align_scope_to_axes,
-    "rotateScope": _h_rotate_scope, "report": _h_report,
+    "rotateScope": _h_rotate_scope, "report": _h_report, "reverseNormals": _h_reverse_normals,
 }
 # Operations CGA writes without parentheses.
 _BARE_OPS = {"reverseNormals", "cleanupGeometry", "deleteHoles", "resetGeometry", "resetMaterial",

@@ -88,6 +88,8 @@ _SPECS: tuple[OperationSpec, ...] = (
                       "or \"longest\"); the geometry stays."),
     OperationSpec("alignScopeToAxes", (),
                   doc="Turn the scope about its (vertical) z so x runs along the world x axis."),
+    OperationSpec("reverseNormals", (),
+                  doc="Turn a face (or an open mesh) to look the other way; a closed volume keeps its outside."),
     OperationSpec("rotateScope", (Param("x"), Param("y"), Param("z")),
                   doc="Turn the scope (not the geometry) about its z axis by z degrees."),
     OperationSpec("report", (Param("key", "string"), Param("value", "any")),

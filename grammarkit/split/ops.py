@@ -25,7 +25,7 @@ from ..geometry import roofs
 from ..geometry.solids import insert_fitted, taper as taper_solid
 from .assets import builtin_asset, load_asset, load_asset_mesh
 from .engine import rotation
-from .scope_ops import op_align_scope_to_axes, op_align_scope_to_geometry, op_rotate_scope
+from .scope_ops import op_align_scope_to_axes, op_align_scope_to_geometry, op_reverse_normals, op_rotate_scope
 from .shape import FACE, VOLUME, Shape
 
 Manifold = manifold3d.Manifold
@@ -566,7 +566,7 @@ BUILTIN_APPLY = {
     "t": op_t, "r": op_r, "s": op_s, "center": op_center, "i": op_insert,
     "color": op_color, "material": op_material, "set": op_set,
     "alignScopeToGeometry": op_align_scope_to_geometry, "alignScopeToAxes": op_align_scope_to_axes,
-    "rotateScope": op_rotate_scope, "report": op_report,
+    "rotateScope": op_rotate_scope, "report": op_report, "reverseNormals": op_reverse_normals,
 }
 
 

@@ -15,7 +15,8 @@ from typing import Any
 from ..geometry import footprints as fp
 from .shape import Shape
 
-__all__ = ["op_align_scope_to_geometry", "op_align_scope_to_axes", "op_rotate_scope", "turn_scope"]
+__all__ = ["op_align_scope_to_geometry", "op_align_scope_to_axes", "op_reverse_normals", "op_rotate_scope",
+           "turn_scope"]
 
 EPS = 1e-9
 
@@ -112,3 +113,30 @@ def op_rotate_scope(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
                          f"must be 0, got ({rx:g}, {ry:g}, {rz:g})")
     a = math.radians(rz)
     return turn_scope(s, math.cos(a), math.sin(a))
+
+
+def op_reverse_normals(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
+    """CGA's `reverseNormals`: a face turned to look the other way (x kept, y and z reversed:
+    the scope is mirrored across its x axis, the outline stays in place); an open mesh's
+    triangles flipped. A closed volume keeps its outside (turning it inside out would break
+    the solid), with a warning."""
+    from ..geometry.surfaces import SurfaceMesh
+    from .shape import FACE
+
+    if isinstance(s.solid, SurfaceMesh):
+        c = s.copy()
+        c.solid = SurfaceMesh(s.solid.V, s.solid.F[:, ::-1])
+        return c
+    if s.kind != FACE:
+        ctx.warn(f"reverseNormals in rule {s.rule_name!r}: a closed volume keeps its outside "
+                 "(it stays a watertight solid)")
+        return s
+    ex, ey, ez = s.ax
+    sy = s.sz[1]
+    c = s.copy()
+    c.o = tuple(s.o[k] + ey[k] * sy for k in range(3))  # type: ignore[assignment]
+    c.ax = (ex, tuple(-v for v in ey), tuple(-v for v in ez))  # type: ignore[assignment]
+    if s.poly is not None:
+        c.poly = tuple(tuple(reversed([(x, sy - y) for x, y in ring])) for ring in s.poly)
+    c.on = None  # it no longer faces out of its volume
+    return c

@@ -76,12 +76,17 @@ def _substring(s: str, start: Any, end: Any) -> str:
     return str(s)[max(0, _index(start)):max(0, _index(end))]
 
 
+def _replace(s: str, old: str, new: str) -> str:
+    return str(s).replace(str(old), str(new)) if str(old) else str(s)
+
+
 STRING_FUNCTIONS: tuple[FunctionSpec, ...] = (
     FunctionSpec("str", 1, 1, "str(x): x as text (CGA: 3 -> \"3\", 2.5 -> \"2.5\")", cga_str),
     FunctionSpec("float", 1, 1, "float(x): a number from a number, boolean or text", _float),
     FunctionSpec("len", 1, 1, "len(s): number of characters", lambda s: len(str(s))),
     FunctionSpec("find", 2, 3, "find(s, sub, n=0): position of the n-th sub in s, or -1", _find),
     FunctionSpec("substring", 3, 3, "substring(s, start, end): characters start..end-1", _substring),
+    FunctionSpec("replace", 3, 3, "replace(s, old, new): every old in s replaced by new", _replace),
     FunctionSpec("listSize", 1, 1, "listSize(\"a;b;\"): number of items of a CGA list",
                  lambda lst: len(_items(lst))),
     FunctionSpec("listItem", 2, 2, "listItem(list, i): item i (from 0), or \"\"", _list_item),

@@ -285,3 +285,12 @@ def test_text_joins_and_list_functions():
     assert "report(listItem(names, 1) + str(2), listSize(names))" in r.text
     m = grammarkit.derive(r.grammar, lot=LOT)
     assert set(m.reports) == {"Height.7", "b2"} and m.reports["b2"]["sum"] == 3
+
+
+def test_reverse_normals_replace_and_list_random():
+    r = imported('attr l = "a;b;c;"\nLot --> reverseNormals report(replace(listRandom(l), "a", "x"), 1) X.\n')
+    assert "reverseNormals()" in r.text and "listItem(l, floor(rand(0, listSize(l))))" in r.text
+    drawn = set()
+    for seed in range(30):
+        drawn |= set(grammarkit.derive(r.grammar, seed=seed, lot=LOT).reports)
+    assert drawn == {"x", "b", "c"}

@@ -460,3 +460,16 @@ def test_geometry_in_attr_values_reads_zero(G):
     # attrs and consts are evaluated without a shape (as scope.sx is 0 there)
     m = derive(G("const a = geometry.area\nLot --> footprint(rect(4, 4)) extrude(1 + a) X."))
     assert m.mesh.bounds[1][2] == pytest.approx(1, abs=0.01)
+
+
+def test_reverse_normals_turns_a_face_around(G):
+    m = derive(G("Lot --> footprint(rect(4, 2)) reverseNormals() X."))
+    assert m.parts[0].axes[2] == pytest.approx((0, 0, -1))
+    assert (m.surface_mesh.face_normals[:, 2] < -0.99).all()  # the surface looks down now
+    # the outline stays in place: an L extruded after turning grows downwards
+    m = derive(G("Lot --> footprint(lshape(4, 4, 2, 2)) reverseNormals() extrude(1) X."))
+    assert ok(m).volume == pytest.approx(12.0, rel=5e-3) and m.mesh.bounds[0][2] == pytest.approx(-1.0, abs=2e-3)
+    assert m.mesh.bounds[1][:2] == pytest.approx((4, 4), abs=2e-3)
+    # a closed volume keeps its outside, with a warning
+    m = derive(G("Lot --> footprint(rect(4, 2)) extrude(1) reverseNormals() X."))
+    assert ok(m).watertight and any("keeps its outside" in w for w in m.warnings)

@@ -25,7 +25,7 @@ def report_of(G, expr):
     ('listFirst("a;b;")', "a"), ('listLast("a;b;")', "b"), ('listRange("a;b;c;d;", 1, 3)', "b;c;"),
     ('find("abcabc", "c")', 2), ('find("abcabc", "c", 1)', 5), ('find("abc", "x")', -1),
     ('substring("hello", 1, 3)', "el"), ('len("hello")', 5), ('float("2.5") * 2', 5),
-    ('"Floor " + str(3)', "Floor 3"),
+    ('"Floor " + str(3)', "Floor 3"), ('replace("a-b-c", "-", "+")', "a+b+c"),
 ])
 def test_string_and_list_functions(G, expr, want):
     assert report_of(G, expr) == want
