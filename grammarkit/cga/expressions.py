@@ -53,6 +53,11 @@ class Untranslatable(Exception):
 
 
 def span_of(node: Any, filename: str | None) -> Span | None:
+    # nodes of an imported file carry that file's name (translate.py: _merge_import)
+    if isinstance(node, Token):
+        filename = getattr(node, "cga_file", filename)
+    else:
+        filename = getattr(getattr(node, "meta", None), "cga_file", filename)
     if isinstance(node, Token):
         if node.line is None:
             return None

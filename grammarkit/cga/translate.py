@@ -59,6 +59,7 @@ class RuleDef:
     span: Span | None
     start: bool = False
     annotations: list = field(default_factory=list)
+    imported: bool = False  # from an imported file (counted in that file's own report)
 
 
 @dataclass
@@ -68,6 +69,7 @@ class ValueDef:
     value: Any
     span: Span | None
     annotations: list
+    imported: bool = False  # declared in an imported file (counted in that file's own report)
 
 
 @dataclass
@@ -98,6 +100,7 @@ class Translator:
         self.imports: dict[str, Span | None] = {}
         self.value_names: dict[str, str] = {}
         self.inlined: set[str] = set()
+        self.imported_functions: set[str] = set()
         self._rule_names: dict[tuple[tuple[str, int], str], str] = {}
         self._used_names: set[str] = set()
         self._pending: list[tuple[tuple[str, int], str]] = []
@@ -166,9 +169,105 @@ class Translator:
             self.imports[alias] = span
         for a in annotations:
             self.report.ignored[a.children[0].value] += 1
-        self._record("import", alias or path, "dropped", span, feature="import",
-                     message=f"import of {path!r}: import the file separately; calls into it "
-                     "become leaves")
+        found = self._import_file(path) if alias else None
+        if found is None:
+            why = ("an import without a name" if not alias else
+                   "the file was not found beside this one" if found is None else "")
+            self._record("import", alias or path, "dropped", span, feature="import",
+                         message=f"import of {path!r}: {why}; calls into it become leaves")
+            return
+        child, problem = self._load_import(found)
+        if child is None:
+            self._record("import", alias, "dropped", span, feature="import",
+                         message=f"import of {path!r}: {problem}; calls into it become leaves")
+            return
+        overrides = {}
+        args = next((c for c in decl.children if isinstance(c, Tree) and c.data == "import_args"), None)
+        for arg in (args.children if args is not None else ()):
+            if isinstance(arg, Tree) and arg.data == "import_set":
+                overrides[arg.children[0].value] = arg.children[1]
+        self._merge_import(alias, child, overrides)
+        self._record("import", alias, "translated", span)
+
+    MAX_IMPORT_DEPTH = 8
+
+    def _import_file(self, path: str) -> Path | None:
+        """The imported file: the path relative to this file's folder, else (CityEngine's
+        project paths like /ESRI.lib/rules/...) a file of that name beside this one."""
+        base = Path(self.filename).parent if self.filename else Path(".")
+        for cand in (base / path.lstrip("/"), base / Path(path).name):
+            if cand.is_file():
+                return cand
+        return None
+
+    def _load_import(self, path: Path) -> tuple["Translator | None", str]:
+        from .parser import parse_cga, read_cga
+
+        chain = getattr(self, "_import_chain", ())
+        key = str(path.resolve())
+        if key in chain or (self.filename and key == str(Path(self.filename).resolve())):
+            return None, "an import cycle"
+        if len(chain) >= self.MAX_IMPORT_DEPTH:
+            return None, f"imports nested more than {self.MAX_IMPORT_DEPTH} deep"
+        text, diags = read_cga(path)
+        if text is None:
+            return None, diags[0].message if diags else "unreadable"
+        parsed = parse_cga(text, str(path))
+        if not parsed.ok:
+            return None, "the file has syntax errors (import it on its own to see them)"
+        child = Translator(parsed.tree, str(path), parsed.source, asset_dirs=self.asset_dirs,
+                           missing_assets=self.missing_assets, operations=self.operations)
+        child._import_chain = (*chain, key)  # type: ignore[attr-defined]
+        child.collect()
+        return child, ""
+
+    def _merge_import(self, alias: str, child: "Translator", overrides: dict) -> None:
+        """The imported file's declarations under `alias.` (CGA's `alias.Rule`, `alias.attr`).
+        Its attrs take the value given in the import's arguments, else the value of this
+        file's attr of the same name (CGA's attribute propagation), else their own."""
+        names = ({k[0] for k in child.rules} | {v.name for v in child.values}
+                 | {k[0] for k in child.functions})
+        own_attrs = {v.name for v in self.values if v.kind == "attr"}
+
+        def rename(node: Any, params: frozenset) -> Any:
+            if isinstance(node, Token):
+                tok = node
+                if node.type == "NAME" and node.value in names and node.value not in params:
+                    tok = node.update(value=f"{alias}.{node.value}")
+                try:
+                    tok.cga_file = getattr(node, "cga_file", child.filename)  # type: ignore[attr-defined]
+                except AttributeError:
+                    pass
+                return tok
+            if isinstance(node, Tree):
+                kids = [rename(c, params) for c in node.children]
+                out = Tree(node.data, kids, meta=node.meta)
+                if not getattr(node.meta, "empty", True) and not hasattr(node.meta, "cga_file"):
+                    node.meta.cga_file = child.filename  # type: ignore[attr-defined]
+                return out
+            return node
+        for (name, n), r in child.rules.items():
+            key = (f"{alias}.{name}", n)
+            if key in self.rules:
+                continue
+            body = rename(r.body, frozenset(r.params))
+            self.rules[key] = RuleDef(f"{alias}.{name}", r.params, body, r.span, False, [], imported=True)
+            self.rule_arities.setdefault(key[0], set()).add(n)
+        for (name, n), fn in child.functions.items():
+            key = (f"{alias}.{name}", n)
+            self.functions[key] = Function(key[0], fn.params, rename(fn.body, frozenset(fn.params)))
+            self.function_spans[key] = child.function_spans.get((name, n))
+            self.imported_functions.add(key[0])
+        for v in child.values:
+            if v.name in overrides:
+                value = overrides[v.name]  # an expression of this file
+            elif v.kind == "attr" and v.name in own_attrs:
+                value = Tree("ref", [Token("NAME", v.name)])
+            else:
+                value = rename(v.value, frozenset())
+            self.values.append(ValueDef(v.kind, f"{alias}.{v.name}", value, v.span, [], imported=True))
+        for sub, span in child.imports.items():
+            self.imports.setdefault(f"{alias}.{sub}", span)
 
     # -- names ----------------------------------------------------------------------------------
     def _claim(self, base: str) -> str:
@@ -217,9 +316,12 @@ class Translator:
                 if (key, frame) in done:
                     continue
                 done.add((key, frame))
-                rules_out.append(self._rule(key, frame, counting=key not in translated_keys))
+                rules_out.append(self._rule(key, frame, counting=key not in translated_keys
+                                            and not self.rules[key].imported))
                 translated_keys.add(key)
-            unreached = [k for k in self.rules if k not in translated_keys]
+            # rules nothing calls are translated too (a file of rules for other files); those
+            # of imported files only when called
+            unreached = [k for k in self.rules if k not in translated_keys and not self.rules[k].imported]
             if not unreached:
                 break
             self._rule_name(unreached[0], "Y")
@@ -235,7 +337,7 @@ class Translator:
         """Without @StartRule: the first rule, unless it takes parameters (a lot gets no
         arguments); then, of the rules without parameters that no other rule calls (roots of
         the file's call graph), the one that reaches the most rules."""
-        keys = list(self.rules)
+        keys = [k for k, r in self.rules.items() if not r.imported]
         if not keys:
             return []
         if not self.rules[keys[0]].params:
@@ -276,6 +378,8 @@ class Translator:
 
     def _functions_report(self) -> None:
         for key, fn in self.functions.items():
+            if fn.name in self.imported_functions:
+                continue  # reported when its file is imported on its own
             span = self.function_spans.get(key)
             if fn.name in self.inlined:
                 self._record("function", fn.name, "translated", span)
@@ -310,7 +414,8 @@ class Translator:
                 value = Num(value=0) if not _looks_like_string(v.value) else Str(value="")
                 message = (f"{v.kind} {v.name}: {exc.message}; defined as "
                            f"{'0' if isinstance(value, Num) else chr(34) * 2} instead")
-        self._record(v.kind, v.name, status, v.span, feature=feature, message=message)
+        self._record(v.kind, v.name, status, v.span, feature=feature, message=message,
+                     counting=not v.imported)
         if v.kind == "const":
             for a in v.annotations:
                 self.report.ignored[a.children[0].value] += 1
