@@ -131,6 +131,7 @@ class ShapeView(Protocol):
     # operation that moves a face off its plane sets it to None.
     on: tuple | None
     trims: tuple  # CGA trim planes ((world point, world normal), ...) that clip inserted meshes
+    trim_on: bool  # whether i() clips by them (CGA's trim.vertical; the trim() operation)
     # the attr/const values the shape's expressions read, shared between shapes until an
     # operation (CGA's set()) gives one shape a changed copy
     values: dict

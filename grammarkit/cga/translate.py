@@ -1087,6 +1087,14 @@ def _h_set(t, args, block, star, frame, rctx, ctx, span, out):
         return [OpCall(name="material", args=(Arg(value=translate_expr(args[1], ctx)),), span=span)], None
     if target in ("material.color.rgb",) and len(args) == 2:
         return _h_color(t, args[1:], block, star, frame, rctx, ctx, span, out)
+    if target in ("trim.vertical", "trim.horizontal") and len(args) == 2:
+        value = translate_expr(args[1], ctx)
+        if target == "trim.vertical":
+            return [OpCall(name="trim", args=(Arg(value=value),), span=span)], None
+        # grammarkit makes vertical trim planes only: turning horizontal ones off changes nothing
+        if isinstance(value, Bool) and not value.value:
+            return [], None
+        return [], ("set(trim.horizontal)", "grammarkit makes no horizontal trim planes")
     if target and target.startswith("material."):
         raise Untranslatable("op:set(material.*)", f"set({target}, ...): texturing and material "
                              "properties are not supported", span)

@@ -92,6 +92,8 @@ _SPECS: tuple[OperationSpec, ...] = (
                   doc="Turn a face (or an open mesh) to look the other way; a closed volume keeps its outside."),
     OperationSpec("rotateScope", (Param("x"), Param("y"), Param("z")),
                   doc="Turn the scope (not the geometry) about its z axis by z degrees."),
+    OperationSpec("trim", (Param("enabled", "any"),),
+                  doc="Whether i() clips inserts by the trim planes of comp(f) side faces (CGA's trim.vertical)."),
     OperationSpec("report", (Param("key", "string"), Param("value", "any")),
                   doc="Collect a value under a report key (Model.reports; the model's metadata)."),
     OperationSpec("set", (Param("attr", "name"), Param("value", "any")),

@@ -488,7 +488,7 @@ def op_insert(ctx: Any, s: Shape, args: Any, block: Any) -> Shape | None:
         asset = load_asset(str(path)) if fit == "scale" else None
     if fit == "scale":  # the built-in fit, on the manifold directly (no mesh round trip)
         solid, size = insert_fitted(asset, s.sz)
-        if s.trims:
+        if s.trims and s.trim_on:
             solid = _trimmed(solid, s)
             if solid.is_empty():
                 return None  # trimmed away entirely
@@ -546,6 +546,14 @@ def op_set(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
     return c
 
 
+def op_trim(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
+    """`trim(false)` / `trim(true)`: whether `i()` clips inserts by the trim planes (CGA's
+    `set(trim.vertical, ...)`), for this shape and what is derived from it."""
+    c = s
+    c.trim_on = bool(args[0])
+    return c
+
+
 def op_report(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
     """CGA's `report(key, value)`: the value is collected under the key (Model.reports: count,
     sum, mean, min, max of numbers; counts of strings)."""
@@ -567,6 +575,7 @@ BUILTIN_APPLY = {
     "color": op_color, "material": op_material, "set": op_set,
     "alignScopeToGeometry": op_align_scope_to_geometry, "alignScopeToAxes": op_align_scope_to_axes,
     "rotateScope": op_rotate_scope, "report": op_report, "reverseNormals": op_reverse_normals,
+    "trim": op_trim,
 }
 
 

@@ -40,7 +40,7 @@ class Shape:
     __slots__ = (
         "o", "ax", "sz", "kind", "poly", "solid", "color", "material", "rule", "params",
         "seed", "node", "depth", "si", "st", "entry", "cut", "values", "_rng", "gid", "on",
-        "trims",
+        "trims", "trim_on",
     )
 
     def __init__(self, o: Vec, ax: tuple[Vec, Vec, Vec], sz: Vec, kind: str = FACE,
@@ -69,6 +69,7 @@ class Shape:
         # face of; None for other shapes
         self.on: tuple | None = None
         self.trims: tuple = ()  # CGA trim planes (world point, world normal) for inserts
+        self.trim_on = True  # CGA's trim.vertical: whether i() clips by the trim planes
 
     def copy(self) -> "Shape":
         c = Shape.__new__(Shape)
@@ -76,7 +77,7 @@ class Shape:
         c.color, c.material, c.rule, c.params = self.color, self.material, self.rule, self.params
         c.seed, c.node, c.depth, c.si, c.st = self.seed, self.node, self.depth, self.si, self.st
         c.entry, c.cut, c.values, c._rng = self.entry, self.cut, self.values, None
-        c.gid, c.on, c.trims = self.gid, self.on, self.trims
+        c.gid, c.on, c.trims, c.trim_on = self.gid, self.on, self.trims, self.trim_on
         return c
 
     def derived(self, o: Vec, sz: Vec, poly: Any = None, kind: str | None = None,
@@ -91,7 +92,7 @@ class Shape:
         c.entry, c.cut, c.values, c._rng = self.entry, self.cut, self.values, None
         c.gid = next(_GIDS)
         c.on = self.on if c.kind == FACE else None
-        c.trims = self.trims
+        c.trims, c.trim_on = self.trims, self.trim_on
         return c
 
     def rng(self) -> random.Random:

@@ -321,3 +321,10 @@ def test_imports_are_translated_under_their_alias(tmp_path):
     assert [c.feature for c in r.report.constructs if c.status != "translated"][:1] == ["import"]
     r = translate_cga('import gone : "nowhere.cga"\nLot --> gone.X\n', filename=str(tmp_path / "g.cga"))
     assert any("not found" in (c.message or "") for c in r.report.constructs)
+
+
+def test_set_trim_vertical_is_trim():
+    r = imported("Lot --> extrude(3) comp(f) { side: set(trim.vertical, false) set(trim.horizontal, false) "
+                 "s('1, '1, 1) i(\"builtin:cube\") C }\n")
+    assert "trim(false)" in r.text and "trim.horizontal" not in r.text
+    assert not [c for c in r.report.constructs if c.status != "translated"]

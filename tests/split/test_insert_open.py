@@ -89,3 +89,9 @@ def test_trim_planes_mitre_inserts_at_the_corners(G):
     rep = mesh_report(m.mesh)
     assert rep.watertight and rep.volume == pytest.approx(0.5 * (6 * 4 - 4 * 2), rel=0.01)
     assert rep.euler_number == 0  # one ring (a torus), not four overlapping blocks
+
+
+def test_trim_false_turns_the_trim_planes_off(G):
+    cornice = 'comp(f) { front: trim(false) t(-1, 0, 0) s(scope.sx + 2, 0.5, 1) i("builtin:cube") C. }'
+    m = derive(G(f"Lot --> footprint(rect(4, 2)) extrude(3) {cornice}"))
+    assert mesh_report(m.mesh).volume == pytest.approx(0.5 * 6, rel=0.01)  # the whole cube
