@@ -1,6 +1,12 @@
 """Speed of the .grammar front end: parse, parse+check, print, per example grammar and a ~1 MB file.
 
-    python benchmarks/bench_parse.py [--runs 5] [--size-mb 1.0]
+    python benchmarks/bench_parse.py [--runs 5] [--size-mb 0.4] [--worst]
+
+With --worst, a second table splits `check` of the worst grammars at the size limit
+(tests/qa/attack.py: long chains, push/pop, many errors, ...) into its shares: lexing, the
+LALR parse, the tree -> IR transform, the checker, and formatting every diagnostic with its
+source line, each the median of --runs runs, in CPU seconds (time.process_time: the machine is
+shared, so wall time is noisy).
 
 Prints a table with the median over --runs of each step and, as the baseline measured in the same
 run, the time of Lark's lexer alone over the same text (the floor for any parse): `x lex` is how
@@ -58,7 +64,9 @@ def row(name: str, text: str, runs: int) -> tuple:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--runs", type=int, default=5)
-    ap.add_argument("--size-mb", type=float, default=1.0)
+    ap.add_argument("--size-mb", type=float, default=0.4,
+                    help="size of the generated grammar (under the 512 KiB limit)")
+    ap.add_argument("--worst", action="store_true", help="also the worst cases' shares")
     args = ap.parse_args()
     t0 = time.perf_counter()
     get_parser()
@@ -81,5 +89,64 @@ def main() -> None:
               f"{c * 1000:.1f} | {pr * 1000:.1f} | {lps:,.0f} | {ratio:.1f} |")
 
 
+def cpu_median(fn, runs: int) -> float:  # noqa: ANN001
+    """Median CPU time of fn, each run after a full collection and with the GC paused (as the
+    front end runs), so that one stage does not pay for the garbage of the previous one."""
+    import gc
+
+    from grammarkit.dsl.parser import paused_gc
+
+    times = []
+    for _ in range(runs):
+        gc.collect()
+        with paused_gc():
+            t = time.process_time()
+            fn()
+            times.append(time.process_time() - t)
+    return sorted(times)[len(times) // 2]
+
+
+def worst_shares(runs: int) -> None:
+    """Where `check` of the worst files at the size limit spends its time."""
+    sys.path.insert(0, str(ROOT / "tests" / "qa"))
+    import attack
+
+    from grammarkit.dsl import DEFAULT_MAX_BYTES
+    from grammarkit.dsl.checker import check_grammar
+    from grammarkit.dsl.frontend import parse_source
+    from grammarkit.dsl.parser import parse_tree, paused_gc
+    from grammarkit.plugins import builtin_registries
+
+    registries = builtin_registries()
+    head = ("worst case", "KB", "lex s", "parse s", "transform s", "checker s", "diagnostics s",
+            "diagnostics", "total s", "x lex")
+    print(f"\nworst grammars at the size limit ({DEFAULT_MAX_BYTES // 1024} KiB), CPU seconds, "
+          f"median of {runs}\n")
+    print("| " + " | ".join(head) + " |")
+    print("|" + "---|" * len(head))
+    lexer = get_parser()
+    for kind, text in attack.worst_grammars().items():
+        t_lex = cpu_median(lambda: list(lexer.lex(text)), runs)
+        t_tree = cpu_median(lambda: parse_tree(text, "w.grammar"), runs)
+        t_ir = cpu_median(lambda: parse_source(text, "w.grammar"), runs) - t_tree
+        parsed = parse_source(text, "w.grammar")
+        diags = list(parsed.diagnostics)
+        t_check = 0.0
+        if parsed.grammar is not None and not diags:
+            t_check = cpu_median(lambda: check_grammar(parsed.grammar, registries, None), runs)
+            with paused_gc():
+                diags = check_grammar(parsed.grammar, registries, None)
+        t_diag = cpu_median(lambda: [d.format(text) for d in diags], runs)
+        total = t_tree + t_ir + t_check + t_diag
+        print(f"| {kind} | {len(text.encode()) // 1024} | {t_lex:.2f} | {t_tree - t_lex:.2f} | "
+              f"{t_ir:.2f} | {t_check:.2f} | {t_diag:.2f} | {len(diags):,} | {total:.2f} | "
+              f"{total / t_lex:.1f} |", flush=True)
+    print("\n(parse s excludes the lexing it includes; the CLI adds ~0.4 s of start-up and "
+          "prints at most 200 diagnostics)")
+
+
 if __name__ == "__main__":
     main()
+    if "--worst" in sys.argv:
+        worst_shares(max(1, min(3, int(sys.argv[sys.argv.index("--runs") + 1])
+                                if "--runs" in sys.argv else 3)))

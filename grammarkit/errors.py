@@ -19,6 +19,7 @@ if TYPE_CHECKING:  # pragma: no cover - spans are IR (pydantic); this module sta
     from .ir.base import Span
 
 Severity = Literal["error", "warning", "note"]
+SHOWN_COLUMNS = 200  # columns of a source line shown under a diagnostic
 
 
 @dataclass(frozen=True)
@@ -54,6 +55,14 @@ class Diagnostic:
             width = 1
             if self.span.end_line == self.span.line and self.span.end_column > self.span.column:
                 width = self.span.end_column - self.span.column
+            # a long line is shown as a window of at most SHOWN_COLUMNS around the column, so a
+            # one-line 500 KB file does not print half a megabyte per diagnostic
+            start = 0
+            if len(line_text) > SHOWN_COLUMNS:
+                start = max(0, min(caret_col - 1 - SHOWN_COLUMNS // 4, len(line_text) - SHOWN_COLUMNS))
+                line_text = ("..." if start else "") + line_text[start:start + SHOWN_COLUMNS] + (
+                    "..." if start + SHOWN_COLUMNS < len(line_text) else "")
+                caret_col = caret_col - start + (3 if start else 0)
             width = max(1, min(width, max(1, len(line_text) - caret_col + 1)))
             shown = line_text.expandtabs(1)
             out.append(f"    {shown}")
@@ -66,18 +75,47 @@ class Diagnostic:
 def _source_line(span: Span | None, source: str | None) -> str | None:
     if span is None or not span.line:
         return None
-    if source is None and span.file:
-        try:
-            source = Path(span.file).read_text(encoding="utf-8")
-        except (OSError, UnicodeDecodeError):
-            return None
-    if source is None:
-        return None
-    lines = source.splitlines()
-    if 1 <= span.line <= len(lines):
-        line = lines[span.line - 1]
-        return line if len(line) <= 400 else line[:400]
+    lines = _lines_of(source) if source is not None else (
+        _file_lines(span.file) if span.file else None)
+    if lines is not None and 1 <= span.line <= len(lines):
+        return lines[span.line - 1].rstrip("\r")
     return None
+
+
+# The lines of the last text and the last few files shown: printing N diagnostics of one file
+# reads and splits it once, not N times (which made `check` quadratic in the number of errors).
+_last_text: list = [None, None]  # [text, its lines]
+_file_cache: dict[tuple, list[str] | None] = {}
+
+
+def _lines_of(text: str) -> list[str]:
+    # split at "\n" only, as the parser counts lines: str.splitlines() also breaks at \f,
+    # \x85, U+2028, ..., which would show another line than the one the location names
+    if _last_text[0] is not text:
+        _last_text[0], _last_text[1] = text, text.split("\n")
+    return _last_text[1]
+
+
+def _file_lines(file: str) -> list[str] | None:
+    import os
+
+    from .dsl.parser import DEFAULT_MAX_BYTES, read_source
+    try:
+        st = os.stat(file)
+    except (OSError, ValueError):
+        return None
+    key = (file, st.st_mtime_ns, st.st_size, st.st_ino)
+    if key not in _file_cache:
+        if len(_file_cache) >= 8:
+            _file_cache.pop(next(iter(_file_cache)))
+        try:
+            # bounded, regular files only: a diagnostic never reads a FIFO or a device
+            text = read_source(Path(file), max_bytes=4 * DEFAULT_MAX_BYTES)
+            lines: list[str] | None = text.removeprefix("\ufeff").split("\n")
+        except GrammarkitError:
+            lines = None
+        _file_cache[key] = lines
+    return _file_cache[key]
 
 
 class GrammarkitError(Exception):

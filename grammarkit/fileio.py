@@ -53,9 +53,13 @@ def atomic_output(path: str | Path) -> Iterator[Path]:
         raise OutputError(f"{path}: cannot write: folder {folder} does not exist")
     try:
         fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=folder)
-        os.close(fd)
     except OSError as exc:
         raise OutputError(f"{path}: cannot write: {exc.strerror or exc}") from None
+    # The temporary file stays locked while it is being written: a later writer of the same
+    # path removes the ones whose lock is free, i.e. those of a writer that was killed (issue
+    # 19: SIGKILL left hidden .tmp files behind), never those of one still writing.
+    _lock(fd)
+    _remove_stale(folder, path.name, keep=tmp)
     tmp_path = Path(tmp)
     try:
         yield tmp_path
@@ -73,3 +77,46 @@ def atomic_output(path: str | Path) -> Iterator[Path]:
         if isinstance(exc, OSError) and not isinstance(exc, ShapeError):
             raise OutputError(f"{path}: cannot write: {exc.strerror or exc}") from exc
         raise
+    finally:
+        os.close(fd)
+
+
+def _lock(fd: int) -> bool:
+    """An exclusive lock on fd without waiting; False if another process holds it."""
+    try:
+        import fcntl
+    except ImportError:  # pragma: no cover - not POSIX: no stale-file cleanup
+        return False
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        return True
+    except OSError:
+        return False
+
+
+def _remove_stale(folder: Path, name: str, keep: str) -> None:
+    """Delete `.name.*.tmp` files next to the target that no live writer holds locked."""
+    try:
+        candidates = [p for p in folder.glob(f".{glob_escape(name)}.*.tmp") if str(p) != keep]
+    except OSError:
+        return
+    for p in candidates[:64]:
+        try:
+            fd = os.open(p, os.O_RDONLY | os.O_NONBLOCK | getattr(os, "O_NOFOLLOW", 0))
+        except OSError:
+            continue
+        try:
+            import stat
+
+            if stat.S_ISREG(os.fstat(fd).st_mode) and _lock(fd):
+                p.unlink()
+        except OSError:
+            pass
+        finally:
+            os.close(fd)
+
+
+def glob_escape(text: str) -> str:
+    import glob
+
+    return glob.escape(text)

@@ -151,6 +151,51 @@ def _items(result: Any) -> list:
     return list(result)
 
 
+class GuardedConstraint:
+    """A third-party constraint's `check`, made safe for every caller (validate, the samplers):
+    an exception (even SystemExit) or a result that is not a list of messages becomes a
+    PluginError naming the plugin and the constraint, never a traceback or a silent pass. A
+    class, not a closure, so that specs stay picklable for worker processes."""
+
+    def __init__(self, plugin: str, name: str, check: Callable[..., Any]):
+        self.plugin, self.name, self.check = plugin, name, check
+
+    def __call__(self, *args: Any, **kwargs: Any) -> list[str]:
+        from .errors import GrammarkitError
+
+        who = f"plugin {self.plugin!r}: constraint {self.name!r}"
+        try:
+            result = self.check(*args, **kwargs)
+            messages = list(result) if result is not None else []
+        except GrammarkitError:
+            raise
+        except (Exception, SystemExit) as exc:  # noqa: BLE001 - the plugin's fault, named
+            raise PluginError(f"{who} failed: {type(exc).__name__}: {exc}") from None
+        bad = [m for m in messages if not isinstance(m, str)]
+        if bad or isinstance(result, (str, bytes)):
+            raise PluginError(f"{who} returned {_describe(result)}, not a list of messages")
+        return messages
+
+
+class GuardedFunction:
+    """A third-party expression function: any exception it raises (even SystemExit) becomes a
+    ValueError naming the plugin, which the evaluator reports at the call in the grammar
+    (`g.grammar:2:18: error: boom(): plugin 'x' failed: RuntimeError: ...`)."""
+
+    def __init__(self, plugin: str, name: str, impl: Callable[..., Any]):
+        self.plugin, self.name, self.impl = plugin, name, impl
+
+    def __call__(self, *args: Any) -> Any:
+        from .errors import GrammarkitError
+
+        try:
+            return self.impl(*args)
+        except GrammarkitError:
+            raise
+        except (Exception, SystemExit) as exc:  # noqa: BLE001 - the plugin's fault, named
+            raise ValueError(f"plugin {self.plugin!r} failed: {type(exc).__name__}: {exc}") from None
+
+
 class PluginManager:
     """Finds plugins and caches their contributions per kind."""
 
@@ -262,6 +307,10 @@ class PluginManager:
                         item = replace(item, plugin=info.name)
                     except TypeError:
                         pass
+                if isinstance(item, ConstraintSpec) and item.check is not None and not info.builtin:
+                    item = replace(item, check=GuardedConstraint(info.name, item.name, item.check))
+                if isinstance(item, FunctionSpec) and item.impl is not None and not info.builtin:
+                    item = replace(item, impl=GuardedFunction(info.name, item.name, item.impl))
                 good.append(item)
             out.append((info, good))
         return out
@@ -382,11 +431,44 @@ def default_registries() -> Registries:
     return get_plugin_manager().registries()
 
 
+# Diagnostics that a third-party plugin could resolve (it may provide the name).
+NEEDS_PLUGINS = frozenset({"unknown-operation", "unknown-function", "unknown-constraint"})
+_builtin_manager: PluginManager | None = None
+
+
+def builtin_registries() -> Registries:
+    """The registries of grammarkit's own entry points only: no third-party plugin is imported.
+    `grammarkit check` uses them first, so that checking a grammar that needs no plugin never
+    runs plugin code (a plugin whose import hangs or exits cannot break it)."""
+    global _builtin_manager
+    with _manager_lock:
+        if _builtin_manager is None:
+            _builtin_manager = PluginManager(builtins_only=True)
+        return _builtin_manager.registries()
+
+
+def third_party_plugins() -> list[str]:
+    """Names of the installed, enabled entry points that are not grammarkit's own (no import),
+    and of those GRAMMARKIT_DISABLE_PLUGINS names (loading the manager reports unknown ones)."""
+    if _env_flag(os.environ.get(NO_PLUGINS_ENV)):
+        return []
+    disabled = _env_names(os.environ.get(DISABLE_ENV))
+    if disabled:
+        return sorted(disabled)
+    out = []
+    for ep in md.entry_points(group=ENTRY_POINT_GROUP):
+        dist = getattr(ep, "dist", None)
+        if (dist is None or dist.metadata["Name"] != BUILTIN_DISTRIBUTION) and ep.name not in disabled:
+            out.append(ep.name)
+    return sorted(set(out))
+
+
 def reset_plugin_manager() -> None:
     """Forget the cached manager (tests that install plugins at run time use this)."""
-    global _manager
+    global _manager, _builtin_manager
     with _manager_lock:
         _manager = None
+        _builtin_manager = None
 
 
 def manager_if_loaded() -> PluginManager | None:

@@ -22,7 +22,7 @@ from .errors import GrammarError
 from .ir import (
     Attr, Binary, Bool, Branch, Call, Case, Choice, Const, ConstraintDef, Default, DockDef, ExampleDef,
     Grammar, Import, NeighborRule, Nil, Num, OpCall, PartDef, Pattern, Placement, Push, Ref, Repeat,
-    Rule, Seq, SiteDef, Snippet, Str, Successor, Terminal, Unary, Use, Variants, Vector,
+    Rule, Seq, SiteDef, Snippet, Str, Successor, Terminal, Unary, UpDef, Use, Variants, Vector,
 )
 from .ir.expr import PRECEDENCE, UNARY_PRECEDENCE
 
@@ -289,6 +289,37 @@ def _rule(p: _Printer, r: Rule, indent: int) -> str:
     return text
 
 
+_AXES = {(1.0, 0.0, 0.0): "+x", (-1.0, 0.0, 0.0): "-x", (0.0, 1.0, 0.0): "+y",
+         (0.0, -1.0, 0.0): "-y", (0.0, 0.0, 1.0): "+z", (0.0, 0.0, -1.0): "-z"}
+
+
+def _direction(d: Any) -> str:
+    """A part's `up(...)` direction: `+x` for a signed unit axis, else the vector."""
+    if all(isinstance(x, Num) for x in d):
+        name = _AXES.get(tuple(float(x.value) + 0.0 for x in d))
+        if name is not None:
+            return name
+    return _vec3(d)
+
+
+def _count_comparison(s: ConstraintDef) -> str | None:
+    """`(T) == n` / `(T) >= n` / `(T) <= n` for `count` constraints written that way (the parser
+    turns them into the bounds lo/hi), else None."""
+    if s.name != "count" or not s.args or s.args[0].name not in (None, "type"):
+        return None
+    bounds = {a.name: a.value for a in s.args[1:]}
+    if len(bounds) != len(s.args) - 1 or not set(bounds) <= {"lo", "hi"} or not bounds:
+        return None
+    head = f"({format_expr(s.args[0].value)})"
+    if set(bounds) == {"lo", "hi"}:
+        if bounds["lo"] != bounds["hi"]:
+            return None
+        return f"{head} == {format_expr(bounds['lo'])}"
+    if "lo" in bounds:
+        return f"{head} >= {format_expr(bounds['lo'])}"
+    return f"{head} <= {format_expr(bounds['hi'])}"
+
+
 def _placement(pl: Placement) -> str:
     text = f"at {_vec3(pl.at)}"
     if pl.rot is not None:
@@ -328,13 +359,25 @@ def _statement(p: _Printer, s: Any) -> list[str]:
         opts = " | ".join(f"{_ident(o.snippet, o)}: {_percent(o.weight)}" for o in s.options)
         lines.append(f"variants {_ident(s.object_type, s)} " + (f"{{ {opts} }}" if opts else "{}"))
     elif isinstance(s, PartDef):
-        lines.append(f"part {_ident(s.name, s)} = {format_expr(s.geometry)}")
+        text = f"part {_ident(s.name, s)} = {format_expr(s.geometry)}"
+        if s.symmetry is not None or s.mirror:
+            group = s.symmetry if s.symmetry is not None else "none"
+            text += f" symmetry({group}, mirror)" if s.mirror else f" symmetry({group})"
+        if s.up_any:
+            text += " up(any)"
+        elif s.up:
+            text += f" up({', '.join(_direction(d) for d in s.up)})"
+        lines.append(text)
+    elif isinstance(s, UpDef):
+        lines.append(f"up {s.axis}")
     elif isinstance(s, SiteDef):
         text = f"site {_ident(s.part, s)}.{_ident(s.name, s)} at {_vec3(s.position)}"
         if s.facing != "+x":
             text += f" facing {s.facing}"
         if s.mirror is not None:
             text += f" mirror {s.mirror}"
+        if s.required:
+            text += " required"
         lines.append(text)
     elif isinstance(s, DockDef):
         a = _ident(s.a, s) + (f".{_ident(s.a_site, s)}" if s.a_site is not None else "")
@@ -366,7 +409,10 @@ def _statement(p: _Printer, s: Any) -> list[str]:
         lines.append(f"neighbors {_ident(s.part, s)}:" + (" " + ", ".join(parts) if parts else ""))
     elif isinstance(s, ConstraintDef):
         text = f"constraint {_ident(s.name, s)}"
-        if s.args:
+        compared = _count_comparison(s)
+        if compared is not None:
+            text += compared
+        elif s.args:
             text += f"({p.args(s.args)})"
         lines.append(text)
     elif isinstance(s, ExampleDef):

@@ -72,8 +72,42 @@ class GrammarkitGroup(click.Group):
         except GrammarkitError as exc:
             report_error(exc)
             ctx.exit(1)
+        except ImportError as exc:
+            missing = missing_dependency(exc)
+            if missing is None:
+                raise
+            click.echo(f"error: {missing}", err=True)
+            ctx.exit(1)
         finally:
             report_plugin_problems()
+
+
+# Importable module -> (distribution, extra of grammarkit that installs it, or None: a core
+# dependency). A command that needs one that is missing names it instead of a traceback.
+DEPENDENCIES: dict[str, tuple[str, str | None]] = {
+    "trimesh": ("trimesh", None), "manifold3d": ("manifold3d", None), "scipy": ("scipy", None),
+    "numpy": ("numpy", None), "networkx": ("networkx", None), "rtree": ("rtree", None),
+    "PIL": ("Pillow", None), "lark": ("lark", None), "pydantic": ("pydantic", None),
+    "torch": ("torch", "learning"), "safetensors": ("safetensors", "learning"),
+    "dask": ("dask[distributed]", "dask"), "distributed": ("dask[distributed]", "dask"),
+    "pyarrow": ("pyarrow", "parquet"), "shapefile": ("pyshp", "shapefile"),
+    "rdkit": ("rdkit", "molecules"),
+}
+
+
+def missing_dependency(exc: ImportError) -> str | None:
+    """The message for an ImportError of a known dependency (None: not one of them)."""
+    name = (getattr(exc, "name", None) or "").split(".")[0]
+    if name not in DEPENDENCIES:
+        text = str(exc)  # a module that raises ImportError itself names it in the message
+        name = next((m for m in DEPENDENCIES if m in text.split("'") or f" {m}" in text), "")
+    if name not in DEPENDENCIES:
+        return None
+    dist, extra = DEPENDENCIES[name]
+    how = (f"pip install 'grammarkit[{extra}]'" if extra else
+           f"pip install '{dist}' (a dependency of grammarkit: the installation is incomplete)")
+    return (f"this command needs the Python package {dist!r}, which cannot be imported "
+            f"({type(exc).__name__}: {exc}); install it: {how}")
 
 
 def report_error(exc: GrammarkitError) -> None:

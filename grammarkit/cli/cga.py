@@ -33,7 +33,11 @@ def import_cga_command(file: Path, output: Path | None, report_path: Path | None
     from ..cga import translate_cga
     from ..fileio import atomic_output
 
+    from ..run.writer import check_outputs
+
     out = output or file.with_suffix(".grammar")
+    # a CGA file named x.grammar, or -o/--report naming it or each other, would be overwritten
+    check_outputs({"-o": out, "--report": report_path}, inputs=[file])
     result = translate_cga(file, output=out, asset_dirs=asset_dirs, missing_assets=missing_assets)
     for d in result.diagnostics:
         if quiet and d.severity != "error":

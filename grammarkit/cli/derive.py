@@ -121,11 +121,22 @@ def derive(file: Path, out: Path, preview: Path | None, seed: int, sets: tuple[s
     """
     from rich.console import Console
 
+    from .deadline import hard_deadline
+
+    console = Console(stderr=True)
+    with hard_deadline(timeout):
+        _derive(file, out, preview, seed, sets, fmt, tree, variations, backend, count, iterations,
+                workers, options, executor_spec, timeout, overwrite, console)
+
+
+def _derive(file: Path, out: Path, preview: Path | None, seed: int, sets: tuple[str, ...],
+            fmt: str | None, tree: Path | None, variations: int | None, backend: str | None,
+            count: int | None, iterations: int, workers: int | None, options: tuple[str, ...],
+            executor_spec: str, timeout: float | None, overwrite: bool, console: Any) -> None:
     from ..dsl import load
     from ..plugins import get_plugin_manager
     from ..run.api import resolve_backend
 
-    console = Console(stderr=True)
     grammar = load(file)
     registries = get_plugin_manager().registries()
     spec = resolve_backend(grammar, backend, registries)

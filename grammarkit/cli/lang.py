@@ -10,7 +10,18 @@ import click
 
 from ..errors import Diagnostic, GrammarError
 
-_MAX_SIZE_HELP = "refuse grammar files larger than this many bytes"
+_MAX_SIZE_HELP = "refuse grammar files larger than this many bytes (default: 512 KiB)"
+MAX_SHOWN_DIAGNOSTICS = 200  # `check` prints the first ones in file order, then a count
+
+
+def _read_input(path: Path, max_bytes: int) -> tuple[str, str]:
+    """(text, name) of a grammar FILE, or of standard input for `-` (read up to the limit)."""
+    from ..dsl.parser import decode_source, read_limited, read_source
+
+    if str(path) == "-":
+        stream = getattr(sys.stdin, "buffer", sys.stdin)
+        return decode_source(read_limited(stream, max_bytes, "<stdin>"), "<stdin>"), "<stdin>"
+    return read_source(path, max_bytes=max_bytes), str(path)
 
 
 def _counts(diags: list[Diagnostic]) -> tuple[int, int]:
@@ -24,18 +35,31 @@ def _plural(n: int, word: str) -> str:
 
 
 @click.command("check")
-@click.argument("files", nargs=-1, required=True, type=click.Path(dir_okay=False, path_type=Path))
+@click.argument("files", nargs=-1, required=True, type=click.Path(dir_okay=False, allow_dash=True, path_type=Path))
 @click.option("--json", "as_json", is_flag=True, help="print the diagnostics as JSON")
 @click.option("--emit-ir", is_flag=True, help="print the IR of each file as JSON")
 @click.option("--max-size", type=click.IntRange(min=1), default=None, help=_MAX_SIZE_HELP)
-def check(files: tuple[Path, ...], as_json: bool, emit_ir: bool, max_size: int | None) -> None:
-    """Report every problem in the grammar FILES (exit status 1 if there are errors)."""
-    from ..dsl import DEFAULT_MAX_BYTES, check_text
+@click.option("--max-diagnostics", type=click.IntRange(min=1), default=MAX_SHOWN_DIAGNOSTICS,
+              show_default=True, help="print at most this many diagnostics, then their count")
+def check(files: tuple[Path, ...], as_json: bool, emit_ir: bool, max_size: int | None,
+          max_diagnostics: int) -> None:
+    """Report every problem in the grammar FILES (`-`: standard input; exit status 1 if there
+    are errors)."""
+    from ..dsl import DEFAULT_MAX_BYTES
 
     results = []
     total_errors = total_warnings = 0
     for path in files:
-        grammar, diags = check_text(path, max_bytes=max_size or DEFAULT_MAX_BYTES)
+        limit = max_size or DEFAULT_MAX_BYTES
+        if str(path) == "-":
+            try:
+                text, name = _read_input(path, limit)
+            except GrammarError as exc:
+                grammar, diags = None, list(exc.diagnostics)
+            else:
+                grammar, diags = _check_lazily(text, name, limit)
+        else:
+            grammar, diags = _check_lazily(path, None, limit)
         e, w = _counts(diags)
         total_errors += e
         total_warnings += w
@@ -57,16 +81,38 @@ def check(files: tuple[Path, ...], as_json: bool, emit_ir: bool, max_size: int |
     else:
         # With --emit-ir the IR goes to stdout and the diagnostics to stderr (pipe-friendly).
         diag_err = emit_ir
+        shown = 0
         for path, g, diags in results:
             for d in diags:
+                if shown >= max_diagnostics:
+                    break
                 click.echo(d.format(), err=diag_err)
+                shown += 1
             if emit_ir and g is not None:
                 click.echo(g.model_dump_json(indent=2))
+        total = sum(len(diags) for _, _, diags in results)
+        if total > shown:
+            click.echo(f"... and {total - shown:,} more diagnostics (--max-diagnostics shows more)",
+                       err=diag_err)
         summary = (f"{_plural(total_errors, 'error')}, {_plural(total_warnings, 'warning')} "
                    f"in {_plural(len(files), 'file')}")
         click.echo(summary, err=True)
     if total_errors:
         sys.exit(1)
+
+
+def _check_lazily(source, filename: str | None, limit: int):  # noqa: ANN001, ANN202
+    """Check with grammarkit's own operations, functions and constraints first; load the
+    third-party plugins only if the grammar names something those do not provide. So `check`
+    of a grammar that needs no plugin never runs plugin code (issue 19)."""
+    from ..dsl import check_text
+    from ..plugins import NEEDS_PLUGINS, builtin_registries, third_party_plugins
+
+    grammar, diags = check_text(source, filename=filename, max_bytes=limit,
+                                registries=builtin_registries())
+    if any(d.code in NEEDS_PLUGINS for d in diags) and third_party_plugins():
+        grammar, diags = check_text(source, filename=filename, max_bytes=limit)
+    return grammar, diags
 
 
 def write_atomically(path: Path, text: str) -> None:
@@ -78,23 +124,25 @@ def write_atomically(path: Path, text: str) -> None:
 
 
 @click.command("fmt")
-@click.argument("files", nargs=-1, required=True, type=click.Path(dir_okay=False, path_type=Path))
+@click.argument("files", nargs=-1, required=True, type=click.Path(dir_okay=False, allow_dash=True, path_type=Path))
 @click.option("--in-place", "-i", is_flag=True, help="rewrite the files (atomically)")
 @click.option("--check", "check_only", is_flag=True,
               help="do not write; exit 1 if a file is not in canonical form")
 @click.option("--max-size", type=click.IntRange(min=1), default=None, help=_MAX_SIZE_HELP)
 def fmt(files: tuple[Path, ...], in_place: bool, check_only: bool, max_size: int | None) -> None:
-    """Print grammar FILES in canonical form (or rewrite them with --in-place)."""
+    """Print grammar FILES in canonical form (or rewrite them with --in-place); `-` reads
+    standard input."""
     from ..dsl import DEFAULT_MAX_BYTES
-    from ..dsl.parser import read_source
     from ..printer import format_grammar
 
     failed = False
     changed = []
     for path in files:
+        if str(path) == "-" and in_place:
+            raise click.UsageError("--in-place cannot rewrite standard input")
         try:
-            original = read_source(path, max_bytes=max_size or DEFAULT_MAX_BYTES)
-            text = format_grammar(original, filename=str(path))
+            original, name = _read_input(path, max_size or DEFAULT_MAX_BYTES)
+            text = format_grammar(original, filename=name)
         except GrammarError as exc:
             click.echo(exc.format(), err=True)
             failed = True

@@ -57,6 +57,27 @@ def _stages() -> Iterator[Callable[[str], Any]]:
         yield stage
 
 
+@contextlib.contextmanager
+def _substages(stage: Callable[[str], Any], prefix: str) -> Iterator[Callable[[str], None]]:
+    """A `progress(stage_name)` callback for learn/validate: each call ends the previous
+    sub-stage line and starts the next ("learning: docking sites ..."), so a model that takes
+    tens of seconds shows where it is."""
+    current: list[Any] = []
+
+    def say(name: str) -> None:
+        while current:
+            current.pop().__exit__(None, None, None)
+        ctx = stage(f"{prefix}: {name}")
+        ctx.__enter__()
+        current.append(ctx)
+
+    try:
+        yield say
+    finally:
+        while current:
+            current.pop().__exit__(None, None, None)
+
+
 def _relative(path: Path, base: Path) -> str:
     try:
         return Path(os.path.relpath(path.resolve(), base.resolve())).as_posix()
@@ -74,16 +95,27 @@ def _relative(path: Path, base: Path) -> str:
 @click.option("--tolerance", default=None, type=click.FloatRange(min=0.0),
               help="contact tolerance in model units (default: 0.001 x the model's diagonal)")
 @click.option("--no-docks", is_flag=True, help="write type pairs only, without docking placements")
+@click.option("--neighbors", "neighbors", default="multisets", show_default=True,
+              type=click.Choice(["multisets", "ranges", "none"]),
+              help="neighbourhood rules: exact multisets (Kalojanov), count ranges, or none (sites and docks only)")
+@click.option("--no-sites", is_flag=True, help="learn no docking sites (one dock per type pair)")
+@click.option("--no-counts", is_flag=True, help="infer no `count(T) == n` constraints")
+@click.option("--up", default="+z", show_default=True, type=click.Choice(["+x", "-x", "+y", "-y", "+z", "-z"]),
+              help="the examples' up axis")
 def learn(examples: tuple[Path, ...], output: Path | None, name: str | None, bandwidth: float,
-          tolerance: float | None, no_docks: bool) -> None:
+          tolerance: float | None, no_docks: bool, neighbors: str = "multisets", no_sites: bool = False,
+          no_counts: bool = False, up: str = "+z") -> None:
     """Learn the tiling grammar that segmented EXAMPLES (GLB/glTF/OBJ files or folders) exhibit.
 
     Example: grammarkit learn examples/*.glb -o castle.grammar"""
     from ..printer import print_grammar
     from ..tiling import learn as learn_grammar
     from ..tiling import read_assembly
-    from ..run.writer import write_files
+    from ..run.writer import check_outputs, write_files
 
+    if output is not None:  # refuse, before any work, to write the grammar over an example
+        inputs = [q for p in examples for q in ([p] if not p.is_dir() else sorted(p.iterdir()))]
+        check_outputs({"-o": output}, inputs=inputs)
     base = output.parent if output else Path.cwd()
     with _stages() as stage:
         with warnings.catch_warnings(record=True) as caught:
@@ -92,19 +124,24 @@ def learn(examples: tuple[Path, ...], output: Path | None, name: str | None, ban
             for k, p in enumerate(examples, 1):
                 with stage(f"reading {p} ({k}/{len(examples)})"):
                     asms.append(read_assembly(p))
-        with stage(f"learning from {sum(len(a) for a in asms)} parts in {len(asms)} example(s)"):
+        notes: list[str] = []
+        with _substages(stage, f"learning from {sum(len(a) for a in asms)} parts") as say:
             grammar = learn_grammar(asms, name=name or (output.stem if output else "learned"),
                                     example_paths=[_relative(p, base) for p in examples],
-                                    tolerance=tolerance, bandwidth=bandwidth, docks=not no_docks)
+                                    tolerance=tolerance, bandwidth=bandwidth, docks=not no_docks,
+                                    neighbors=neighbors, sites=not no_sites, counts=not no_counts,
+                                    up=up, notes=notes, progress=say)
     for w in caught:
         click.echo(f"warning: {w.message}", err=True)
+    for line in notes:  # what was inferred (counts, symmetries, support): the user should know
+        click.echo(f"learned: {line}", err=True)
     text = print_grammar(grammar)
     if output is None:
         click.echo(text, nl=False)
         return
     write_files({output: text})
     n_parts = sum(len(a) for a in asms)
-    click.echo(f"wrote {output}: {len(grammar.neighbor_rules)} part types, {len(grammar.docks)} docks, "
+    click.echo(f"wrote {output}: {len(grammar.parts)} part types, {len(grammar.sites)} sites, {len(grammar.docks)} docks, "
                f"{len(grammar.constraints)} constraints, learned from {len(asms)} example(s) "
                f"with {n_parts} parts", err=True)
 
@@ -143,8 +180,8 @@ def validate(grammar_file: Path, shapes: tuple[Path, ...], as_json: bool, tolera
             raise ShapeError(f"{grammar_file}: nothing to validate (no shapes given and the grammar has no examples)")
         reports = []
         for k, a in enumerate(asms, 1):
-            with stage(f"validating {a.name or k} ({len(a)} parts, {k}/{len(asms)})"):
-                reports.append(run_validate(rules, a, tolerance=tolerance, docks=not no_docks))
+            with _substages(stage, f"validating {a.name or k} ({len(a)} parts, {k}/{len(asms)})") as say:
+                reports.append(run_validate(rules, a, tolerance=tolerance, docks=not no_docks, progress=say))
     if not as_json:
         for w in caught:
             click.echo(f"warning: {w.message}", err=True)

@@ -20,7 +20,7 @@ from ..registry import Registries
 from .checker import BUILTIN_CONSTRAINTS, BUILTIN_REFS, check_grammar
 from .frontend import Parsed, load_text, parse_source
 from .imports import resolve_calls, resolve_imports
-from .parser import DEFAULT_MAX_BYTES, KEYWORDS
+from .parser import DEFAULT_MAX_BYTES, KEYWORDS, paused_gc
 
 __all__ = ["parse", "check", "load", "parse_with_header", "check_text", "KEYWORDS", "BUILTIN_REFS",
            "BUILTIN_CONSTRAINTS", "DEFAULT_MAX_BYTES", "Registries"]
@@ -28,7 +28,7 @@ __all__ = ["parse", "check", "load", "parse_with_header", "check_text", "KEYWORD
 
 def _parsed(source: Any, filename: str | None, max_bytes: int) -> Parsed:
     text, fname = load_text(source, filename, max_bytes=max_bytes)
-    return parse_source(text, fname, max_bytes=max_bytes)
+    return parse_source(text, fname, max_bytes=max_bytes)  # parse_source pauses the GC itself
 
 
 def _raise(diagnostics: list[Diagnostic]) -> None:
@@ -85,7 +85,8 @@ def _check(source: Any, filename: str | None, max_bytes: int,
         from ..plugins import default_registries
 
         registries = default_registries()
-    diags.extend(_sorted(check_grammar(merged, registries, main_file)))
+    with paused_gc():  # as parse_source does: the checker allocates ~1 object per byte
+        diags.extend(_sorted(check_grammar(merged, registries, main_file)))
     return merged, diags
 
 

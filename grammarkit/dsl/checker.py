@@ -727,8 +727,11 @@ class Checker:
             sites[key] = s
             for x in s.position:
                 self.check_expr(x, values)
+        used_sites: set[tuple[str, str]] = set()
         for d in g.docks:
             for part, site in ((d.a, d.a_site), (d.b, d.b_site)):
+                if site is not None:
+                    used_sites.add((part, site))
                 self._part_ref(part, d.span, "dock")
                 if site is not None and part in self.parts and (part, site) not in sites:
                     known = [n for (p, n) in sites if p == part]
@@ -738,6 +741,20 @@ class Checker:
                                    code="unknown-site")
             for pl in d.placements:
                 for x in pl.at + (pl.rot or ()):
+                    self.check_expr(x, values)
+        for key, s in sites.items():
+            # a site no dock names constrains nothing (unless it is required); say so
+            if key not in used_sites and not s.required:
+                self.bag.warning(f"site {s.part}.{s.name} is not used by any dock (it allows and "
+                                 "requires nothing)", s.span, hint=f"dock it: `dock {s.part}.{s.name} -- Other`"
+                                 f" or mark it `required`", code="unused-site")
+        ups = g.ups
+        for extra in ups[1:]:
+            self.bag.error("the grammar's up axis is given twice", extra.span,
+                           hint=f"the first `up` is at {ups[0].span}", code="duplicate")
+        for p in g.parts:
+            for d in p.up:
+                for x in d:
                     self.check_expr(x, values)
         for n in g.neighbor_rules:
             self._part_ref(n.part, n.span, "neighbors")

@@ -31,6 +31,18 @@ def resolve_imports(grammar: Grammar, *, max_bytes: int = DEFAULT_MAX_BYTES
     return resolve_calls(merged), diagnostics
 
 
+MAX_PATH_CHARS = 4096  # PATH_MAX of Linux; a longer path cannot name a file
+
+
+def _path_problem(path: str) -> str | None:
+    """Why `path` cannot name a file (None: it can)."""
+    if "\0" in path:
+        return "it contains a NUL character"
+    if len(path) > MAX_PATH_CHARS:
+        return f"it is {len(path):,} characters long (the limit is {MAX_PATH_CHARS:,})"
+    return None
+
+
 def _key(path: str) -> str:
     try:
         return str(Path(path).resolve())
@@ -46,8 +58,20 @@ def _expand(grammar: Grammar, chain: list[str], done: set[str], diagnostics: lis
         if not isinstance(s, Import):
             out.append(s)
             continue
+        problem = _path_problem(s.path)
+        if problem is not None:
+            diagnostics.append(Diagnostic("error", f"bad import path: {problem}", s.span,
+                                          code="import-path"))
+            continue
         target = base / s.path
-        key = _key(str(target))
+        try:
+            key = _key(str(target))
+            found = target.is_file()
+        except (OSError, ValueError) as exc:  # e.g. a name longer than the file system allows
+            reason = exc.strerror if isinstance(exc, OSError) and exc.strerror else str(exc)
+            diagnostics.append(Diagnostic("error", f"bad import path: {reason}", s.span,
+                                          code="import-path"))
+            continue
         if key in chain:
             names = [Path(c).name for c in chain[chain.index(key):]] + [Path(key).name]
             diagnostics.append(Diagnostic("error", "import cycle: " + " -> ".join(names), s.span,
@@ -59,7 +83,7 @@ def _expand(grammar: Grammar, chain: list[str], done: set[str], diagnostics: lis
             diagnostics.append(Diagnostic("error", f"imports nested deeper than {MAX_IMPORT_DEPTH}"
                                           " files", s.span, code="import-depth"))
             continue
-        if not target.is_file():
+        if not found:
             diagnostics.append(Diagnostic("error", f"imported file not found: {s.path}", s.span,
                                           hint=f"looked for {target}", code="import-missing"))
             continue

@@ -16,7 +16,7 @@ from ..errors import DiagnosticBag
 from ..ir import (
     Arg, Attr, Binary, Const, Bool, Branch, Call, Case, CaseArm, Choice, ChoiceArm, ConstraintDef, CountRange,
     Default, DockDef, ExampleDef, Import, InlinePart, NeighborRule, Nil, Num, OpCall, PartDef, Pattern,
-    Placement, Push, Ref, Repeat, Rule, Seq, SiteDef, Snippet, Str, Successor, Terminal, Unary, Use,
+    Placement, Push, Ref, Repeat, Rule, Seq, SiteDef, Snippet, Str, Successor, Terminal, Unary, UpDef, Use,
     Variants, VariantOption, Vector,
 )
 from ..ir.base import Span
@@ -288,7 +288,91 @@ class ToIR:
             self.bag.error("a part's geometry must be a call such as mesh(\"file.glb\") or box(w, d, h)",
                            getattr(geometry, "span", None) or span, code="bad-part")
             geometry = Call(func="box", args=(), span=span)
-        return PartDef(name=self.name(c[0]), geometry=geometry, span=span)
+        opts: dict[str, Any] = {}
+        for name, value, ospan in c[2:]:
+            if name in opts:
+                self.bag.error(f"part option {name}(...) given twice", ospan, code="bad-part")
+            opts[name] = value
+        symmetry, mirror = opts.get("symmetry", (None, False))
+        up = opts.get("up", ())
+        return PartDef(name=self.name(c[0]), geometry=geometry, symmetry=symmetry, mirror=mirror,
+                       up=() if up == "any" else up, up_any=up == "any", span=span)
+
+    _AXIS_VECTORS = {"x": (1.0, 0.0, 0.0), "y": (0.0, 1.0, 0.0), "z": (0.0, 0.0, 1.0)}
+
+    def part_option(self, meta, c):
+        """`symmetry(z4[, mirror])` or `up(+z, (0, 1, 0), ...)` after a part's geometry."""
+        span = self.span(meta)
+        name = str(c[0])
+        args = [a for a in c[1:] if isinstance(a, list)]
+        args = args[0] if args else []
+        mirror = any(isinstance(a, Tree) or a == "mirror" for a in c[1:] if not isinstance(a, list))
+        if name == "symmetry":
+            if any(a.name is not None for a in args) or len(args) > 1:
+                self.bag.error("symmetry(...) takes one group (none, z2, z4, ... zN) and optionally "
+                               "`mirror`", span, code="bad-symmetry")
+                return ("symmetry", (None, mirror), span)
+            group = None
+            if args:
+                v = args[0].value
+                text = v.name if isinstance(v, Ref) else None
+                if text == "none" or (text and re.fullmatch(r"z([1-9][0-9]{0,2})", text)):
+                    group = "none" if text in ("none", "z1") else text
+                else:
+                    self.bag.error("a symmetry group is none, z2, z3, z4, ... (turns about the up axis "
+                                   "that leave the part looking the same)", getattr(v, "span", None) or span,
+                                   code="bad-symmetry")
+            elif not mirror:
+                self.bag.error("symmetry() needs a group (none, z2, z4, ...) or `mirror`", span,
+                               code="bad-symmetry")
+            return ("symmetry", (group if args else "none", mirror), span)
+        if name == "up":
+            if mirror or not args:
+                self.bag.error("up(...) lists directions of the part's frame that may point up, "
+                               "e.g. up(+z, +x) or up((0, 0, 1)), or is up(any)", span, code="bad-up")
+                return ("up", (), span)
+            if len(args) == 1 and isinstance(args[0].value, Ref) and args[0].value.name == "any":
+                return ("up", "any", span)
+            dirs = []
+            for a in args:
+                d = self._direction(a.value)
+                if d is None or a.name is not None:
+                    self.bag.error("a direction is +x, -x, +y, -y, +z, -z or a vector (x, y, z)",
+                                   a.span or span, code="bad-up")
+                    continue
+                dirs.append(d)
+            return ("up", tuple(dirs), span)
+        self.bag.error(f"unknown part option '{name}(...)'; part options are symmetry(...) and up(...)",
+                       self.tspan(c[0]), code="bad-part")
+        return (name, None, span)
+
+    def part_mirror(self, meta, c):
+        return "mirror"
+
+    def _direction(self, v):
+        """`+x`/`-z` (a signed axis name) or a 3-vector expression, as three expressions."""
+        sign, inner = 1.0, v
+        if isinstance(v, Unary) and v.op in "+-" and isinstance(v.operand, Ref):
+            sign, inner = (-1.0 if v.op == "-" else 1.0), v.operand
+        if isinstance(inner, Ref) and inner.name in self._AXIS_VECTORS:
+            span = getattr(v, "span", None)
+            return tuple(Num(value=sign * x + 0.0, span=span) for x in self._AXIS_VECTORS[inner.name])
+        if isinstance(v, Vector) and len(v.items) == 3:
+            return tuple(v.items)
+        return None
+
+    def up_axis(self, meta, c):
+        span = self.span(meta)
+        head, value = str(c[0]), str(c[1])
+        if head != "up":
+            self.bag.error(f"unknown statement '{head} {value}' (did you mean `up +z`?)", span,
+                           code="syntax")
+            return UpDef(span=span)
+        if value not in ("+x", "-x", "+y", "-y", "+z", "-z", "none"):
+            self.bag.error(f"`up` takes an axis (+x, -x, +y, -y, +z, -z) or `none`, not '{value}'",
+                           self.tspan(c[1]), code="bad-up")
+            value = "+z"
+        return UpDef(axis=value, span=span)
 
     def vec3(self, meta, c):
         return tuple(c)
@@ -318,9 +402,17 @@ class ToIR:
             if piece in KEYWORDS:
                 self.bag.error(f"'{piece}' is a reserved word and cannot be used as a name",
                                self.tspan(c[0]), code="reserved-word")
-        opts = dict(x for x in c[2:])
+        opts = dict(x for x in c[2:] if x is not None)
         return SiteDef(part=dotted[0], name=dotted[1], position=c[1],
-                       facing=opts.get("facing", "+x"), mirror=opts.get("mirror"), span=span)
+                       facing=opts.get("facing", "+x"), mirror=opts.get("mirror"),
+                       required=bool(opts.get("required")), span=span)
+
+    def site_flag(self, meta, c):
+        if str(c[0]) != "required":
+            self.bag.error(f"unknown site flag '{c[0]}' (the only flag is `required`)", self.tspan(c[0]),
+                           code="bad-site")
+            return None
+        return ("required", True)
 
     def endpoint(self, meta, c):
         pieces = str(c[0]).split(".")
@@ -379,8 +471,29 @@ class ToIR:
         return CountRange(type=self.name(c[0]), lo=n, hi=n, span=self.span(meta))
 
     def constraint(self, meta, c):
-        args = tuple(c[1]) if len(c) > 1 else ()
-        return ConstraintDef(name=self.name(c[0]), args=args, span=self.span(meta))
+        span = self.span(meta)
+        cmp = c[-1] if len(c) > 1 and isinstance(c[-1], tuple) else None
+        rest = c[1:-1] if cmp is not None else c[1:]
+        args = tuple(rest[0]) if rest and rest[0] is not None else ()
+        name = self.name(c[0])
+        if cmp is not None:
+            op, value = cmp
+            if name != "count" or len(args) != 1 or args[0].name not in (None, "type"):
+                self.bag.error(f"a comparison `{op} n` follows only count(Type): "
+                               "`constraint count(Entry) == 1`", span, code="bad-constraint")
+            else:
+                bounds = {"==": ("lo", "hi"), ">=": ("lo",), "<=": ("hi",)}[op]
+                args = args + tuple(Arg(name=b, value=value, span=getattr(value, "span", span)) for b in bounds)
+        return ConstraintDef(name=name, args=args, span=span)
+
+    def count_eq(self, meta, c):
+        return ("==", c[0])
+
+    def count_ge(self, meta, c):
+        return (">=", c[0])
+
+    def count_le(self, meta, c):
+        return ("<=", c[0])
 
     def example_file(self, meta, c):
         span = self.span(meta)

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import base64
 import json
+import os
 import struct
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -211,6 +212,31 @@ def _gltf_json(path: Path) -> tuple[dict, bytes | None] | None:
         return None
 
 
+def _check_external_files(path: Path) -> None:
+    """Refuse a glTF whose external buffers or images are not regular files: reading a named
+    pipe blocks forever and a device such as /dev/zero never ends (issue 19)."""
+    import stat as stat_mod
+
+    loaded = _gltf_json(path)
+    if loaded is None:
+        return
+    doc = loaded[0]
+    for kind in ("buffers", "images"):
+        items = doc.get(kind) if isinstance(doc, dict) else None
+        for item in items if isinstance(items, list) else ():
+            uri = item.get("uri") if isinstance(item, dict) else None
+            if not isinstance(uri, str) or uri.startswith("data:") or "://" in uri:
+                continue  # embedded data; URLs are refused by the loader itself
+            target = path.parent / uri
+            try:
+                mode = os.stat(target).st_mode
+            except (OSError, ValueError):
+                continue  # missing: the loader reports it
+            if not stat_mod.S_ISREG(mode):
+                raise ShapeError(f"{path}: the external file {uri!r} of its {kind} is not a "
+                                 "regular file (a named pipe, a device or a folder)")
+
+
 def gltf_root_extras(path: str | Path) -> dict:
     """The `extras.grammarkit` block of a GLB/glTF's root node ({} for other files)."""
     loaded = _gltf_json(Path(path))
@@ -399,6 +425,8 @@ def load_mesh(path: str | Path, *, weld_vertices: bool = True,
                          f"expected one of {', '.join(MESH_SUFFIXES)}")
     if path.stat().st_size == 0:
         raise ShapeError(f"{path}: the file is empty")
+    if suffix in (".glb", ".gltf"):
+        _check_external_files(path)
     solids = read_gltf_solids(path) if suffix in (".glb", ".gltf") else None
     if solids is not None:
         loaded: trimesh.Trimesh | trimesh.Scene = _scene_of_solids(solids)

@@ -13,7 +13,7 @@ from .split import (
 )
 from .tiling import (
     ConstraintDef, CountRange, DockDef, ExampleDef, InlinePart, NeighborRule, PartDef, Placement,
-    SiteDef,
+    SiteDef, UpDef,
 )
 
 __all__ = [name for name in dir() if not name.startswith("_")]

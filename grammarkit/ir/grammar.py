@@ -11,18 +11,18 @@ from pydantic import Field
 
 from .base import Node
 from .split import Attr, Const, Default, Import, Rule, Snippet, Use, Variants
-from .tiling import ConstraintDef, DockDef, ExampleDef, NeighborRule, PartDef, SiteDef
+from .tiling import ConstraintDef, DockDef, ExampleDef, NeighborRule, PartDef, SiteDef, UpDef
 
 Statement = Annotated[
     Union[
         Attr, Const, Rule, Snippet, Use, Default, Variants, Import,
-        PartDef, SiteDef, DockDef, NeighborRule, ConstraintDef, ExampleDef,
+        PartDef, SiteDef, DockDef, NeighborRule, ConstraintDef, ExampleDef, UpDef,
     ],
     Field(discriminator="kind"),
 ]
 
 SPLIT_KINDS = frozenset({"rule", "snippet", "use", "default", "variants"})
-TILING_KINDS = frozenset({"part", "site", "dock", "neighbors", "constraint", "example"})
+TILING_KINDS = frozenset({"part", "site", "dock", "neighbors", "constraint", "example", "up"})
 
 
 class Grammar(Node):
@@ -62,6 +62,7 @@ class Grammar(Node):
     neighbor_rules = property(lambda self: self._of(NeighborRule))
     constraints = property(lambda self: self._of(ConstraintDef))
     examples = property(lambda self: self._of(ExampleDef))
+    ups = property(lambda self: self._of(UpDef))
 
 
 Grammar._ignored_in_eq = Node._ignored_in_eq | {"source_path", "trailing_comments"}

@@ -2,15 +2,17 @@
 
 Syntax (see docs/language.md):
 
-    part Tower = mesh("parts/tower.glb")
-    part Wall  = box(4, 0.8, 3)
-    site Wall.end at (2, 0, 0) facing +x
+    up +z
+    part Tower = mesh("parts/tower.glb") symmetry(z8)
+    part Wall  = box(4, 0.8, 3) symmetry(z2, mirror) up(+z)
+    site Wall.end at (2, 0, 0) facing +x mirror x required
     dock Tower.side -- Wall.end
     dock Tower -- Wall { at (2.4, 0, 0) rot (0, 0, 90) | at (-2.4, 0, 0) rot (0, 0, -90) }
     neighbors Tower: {Wall, Wall} | {Wall, Wall, Gate}
     neighbors Wall: Tower in 1..2, Gate in 0..1
     constraint connected
     constraint path(from=Gate, to=Tower)
+    constraint count(Gate) == 1
     example small = assembly("examples/castle_small.glb")
     example tiny { Tower at (0, 0, 0); Wall at (2.4, 0, 0) rot (0, 0, 90) }
 """
@@ -23,17 +25,32 @@ from .expr import Call, Expr
 from .split import Arg
 
 
+Vec3 = tuple[Expr, Expr, Expr]
+
+
 class PartDef(Node):
-    """`part NAME = geometry`; geometry is a call such as `mesh("f.glb")` or `box(w, d, h)`."""
+    """`part NAME = geometry [symmetry(GROUP[, mirror])] [up(DIR, ...)]`.
+
+    geometry: a call such as `mesh("f.glb")` or `box(w, d, h)`. `symmetry`: the rotations about
+    the up axis under which the part looks the same ("none", "z2", "z4", ... "zN"; None: found
+    from the geometry), `mirror`: its mirror image counts as the same part. `up`: the directions
+    of the part's modelling frame that may point up in a shape (empty: the grammar's up axis);
+    `up(any)` (`up_any`): the part may lie any way up (no orientation check; placements are
+    compared up to all of its geometry's rotations)."""
 
     kind: Literal["part"] = "part"
     name: str
     geometry: Call
+    symmetry: str | None = None
+    mirror: bool = False
+    up: tuple[Vec3, ...] = ()
+    up_any: bool = False
     comments: tuple[str, ...] = ()
 
 
 class SiteDef(Node):
-    """`site Part.name at (x, y, z) facing +x [mirror x]`: a docking frame on a part type."""
+    """`site Part.name at (x, y, z) facing +x [mirror x] [required]`: a docking frame on a part
+    type; `required`: every part of the type must have a neighbour there."""
 
     kind: Literal["site"] = "site"
     part: str
@@ -41,6 +58,16 @@ class SiteDef(Node):
     position: tuple[Expr, Expr, Expr]
     facing: Literal["+x", "-x", "+y", "-y", "+z", "-z"] = "+x"
     mirror: Literal["x", "y", "z"] | None = None
+    required: bool = False
+    comments: tuple[str, ...] = ()
+
+
+class UpDef(Node):
+    """`up +z`: the grammar's up axis (gravity points the other way); `up none`: no up axis,
+    parts may be turned any way (the behaviour before orientation was checked)."""
+
+    kind: Literal["up"] = "up"
+    axis: Literal["+x", "-x", "+y", "-y", "+z", "-z", "none"] = "+z"
     comments: tuple[str, ...] = ()
 
 
@@ -107,5 +134,5 @@ class ExampleDef(Node):
     comments: tuple[str, ...] = ()
 
 
-for _cls in (PartDef, SiteDef, Placement, DockDef, NeighborRule, ConstraintDef, InlinePart, ExampleDef):
+for _cls in (PartDef, SiteDef, UpDef, Placement, DockDef, NeighborRule, ConstraintDef, InlinePart, ExampleDef):
     _cls.model_rebuild()

@@ -257,7 +257,9 @@ def run_backend(grammar: Any, *, out: str | Path, backend: str | None = None, n:
                                           f"manifest lists {listed!r}; the run is not reproducible "
                                           "(use another folder or --overwrite)")
                 continue
-            files: dict[str, bytes | str] = {f"{result.id}.{fmt}": encode_result(result, fmt, registries)}
+            # a data-only result (model None, e.g. a shape string) has no model file
+            files: dict[str, bytes | str] = {} if result.model is None else \
+                {f"{result.id}.{fmt}": encode_result(result, fmt, registries)}
             attachments = dict(result.attachments)
             if preview and "png" not in attachments and result.model is not None \
                     and not isinstance(result.model, (bytes, bytearray)):
@@ -266,7 +268,7 @@ def run_backend(grammar: Any, *, out: str | Path, backend: str | None = None, n:
                 files[f"{result.id}.{suffix}"] = data
             entry = {"id": result.id, "index": result.index, "seed": result.seed,
                      "parents": list(result.parents), "metrics": to_jsonable(result.metrics),
-                     "file": f"{result.id}.{fmt}",
+                     "file": None if result.model is None else f"{result.id}.{fmt}",
                      "attachments": {s: f"{result.id}.{s}" for s in attachments}}
             for key, value in result.extra.items():
                 if key in entry:

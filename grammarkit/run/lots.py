@@ -49,6 +49,7 @@ from pathlib import Path
 from typing import Any, Iterator, Mapping, Sequence
 
 from ..errors import GrammarkitError
+from ..geometry.footprints import area as polygon_area
 
 __all__ = ["Lot", "LotSet", "LotsError", "lot_seed", "read_lots"]
 
@@ -87,7 +88,7 @@ class Lot:
     def area(self) -> float:
         if not self.polygon:
             return 0.0
-        return abs(_area(self.polygon))
+        return abs(polygon_area(self.polygon))
 
 
 @dataclass
@@ -122,16 +123,6 @@ def lot_seed(run_seed: int, lot_id: str) -> int:
 # ---------------------------------------------------------------------------------------------
 # reading
 # ---------------------------------------------------------------------------------------------
-def _area(poly: Sequence[Point]) -> float:
-    s = 0.0
-    n = len(poly)
-    for i in range(n):
-        x0, y0 = poly[i]
-        x1, y1 = poly[(i + 1) % n]
-        s += x0 * y1 - x1 * y0
-    return 0.5 * s
-
-
 def _read_geojson(path: Path, data: bytes) -> tuple[list[dict], str | None]:
     try:
         doc = json.loads(data.decode("utf-8-sig"))
@@ -435,8 +426,8 @@ def read_lots(path: str | Path, *, seed: int = 0, degrees: str = "project", hole
             if err is None and far > MAX_EXTENT:
                 err = (f"lies {far / 1000:.0f} km from the other lots' origin (more than "
                        f"{MAX_EXTENT / 1000:.0f} km); split the file by district")
-            if err is None and abs(_area(polygon)) < MIN_AREA:
-                err = (f"is degenerate: its area is {abs(_area(polygon)):.3g} m² (less than "
+            if err is None and abs(polygon_area(polygon)) < MIN_AREA:
+                err = (f"is degenerate: its area is {abs(polygon_area(polygon)):.3g} m² (less than "
                        f"{MIN_AREA:g} m²)")
             if err is None and r.get("holes"):
                 if holes == "fill":

@@ -38,7 +38,7 @@ from ..ir import split as S
 from ..ir.base import Span
 from ..ir.grammar import Grammar
 from .seeds import label_of
-from .shape import fail
+from .shape import Shape, fail
 
 BUILTIN_NAMES = {
     "scope.sx": 0, "scope.sy": 1, "scope.sz": 2,
@@ -545,6 +545,8 @@ class _Compiler:
         if apply is None:
             raise GrammarError(f"operation {call.name!r} (plugin {spec.plugin!r}) has no implementation",
                                call.span, code="operation-without-apply")
+        # a plugin's operation is named with its plugin in errors (built-ins are LazyApply)
+        plugin = "" if hasattr(apply, "target") else (spec.plugin or "?")
         apply = apply.target() if hasattr(apply, "target") else apply
         fns = self._args(call, spec, scope, params)
         if call.name == "set" and fns:
@@ -557,7 +559,7 @@ class _Compiler:
         block = None
         if call.block is not None:
             block = self._block(call, spec, scope, params, rule, index)
-        return _op_step(apply, tuple(fns), block, call.span, call.name)
+        return _op_step(apply, tuple(fns), block, call.span, call.name, plugin)
 
     def _set_key(self, call: S.OpCall, scope: _Scope) -> str:
         """The values key of the attr `set(name, ...)` changes (a snippet's own attr, or the
@@ -704,8 +706,10 @@ def _terminal_step(name: str, last: bool) -> Callable:
     return term
 
 
-def _op_step(apply: Callable, fns: tuple, block: tuple | None, span: Span | None, name: str) -> Callable:
+def _op_step(apply: Callable, fns: tuple, block: tuple | None, span: Span | None, name: str,
+             plugin: str = "") -> Callable:
     const = [f(None) for f in fns] if all(is_constant(f) for f in fns) else None
+    who = f"{name}() of plugin {plugin!r}" if plugin else f"{name}()"
 
     def step(ctx: Any, s: Any) -> Any:
         try:
@@ -716,18 +720,30 @@ def _op_step(apply: Callable, fns: tuple, block: tuple | None, span: Span | None
                 raise
             # an error from a helper that knows no grammar location (a bad mesh file for i()):
             # same class, located at the operation
-            raise type(exc)(f"in rule {s.rule.name!r} (shape #{s.node}): {name}(): {exc}", span,
+            raise type(exc)(f"in rule {s.rule.name!r} (shape #{s.node}): {who}: {exc}", span,
                             code=exc.diagnostics[0].code, hint=exc.diagnostics[0].hint) from None
         except (ValueError, TypeError, ArithmeticError, IndexError) as exc:
             msg = str(exc)
-            raise fail(s, msg if msg.startswith(f"{name}(") else f"{name}(): {msg}", span) from None
-        except Exception as exc:  # noqa: BLE001 - a plugin's operation crashed: report, no traceback
-            raise fail(s, f"{name}() failed: {type(exc).__name__}: {exc}", span) from None
+            raise fail(s, msg if msg.startswith(f"{name}(") and not plugin else f"{who}: {msg}",
+                       span) from None
+        except (Exception, SystemExit) as exc:  # noqa: BLE001 - a plugin's operation crashed (or
+            # called sys.exit): report it located, no traceback, no silent exit
+            raise fail(s, f"{who} failed: {type(exc).__name__}: {exc}", span) from None
         if type(r) is list:
+            if not all(type(c) is tuple and len(c) == 2 and isinstance(c[0], Shape) for c in r):
+                raise fail(s, f"{who} returned a list that is not of (shape, slot) pairs", span)
             ctx.spawn(s, r, name)
             return None
+        if r is not None and not isinstance(r, Shape):
+            raise fail(s, f"{who} returned {type(r).__name__} {_short(r)}, not a shape, a list of "
+                       "(shape, slot) pairs or None", span)
         return r
     return step
+
+
+def _short(value: Any) -> str:
+    text = repr(value)
+    return text if len(text) <= 40 else text[:37] + "..."
 
 
 def _case_step(arms: tuple, other: tuple | None) -> Callable:

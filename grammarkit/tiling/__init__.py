@@ -10,8 +10,11 @@ Public API (signatures are stable; the graph sampler builds on them):
     rules_from_grammar(grammar) -> Rules
     validate(grammar_or_rules, assembly, *, tolerance=None, graph=None, docks=True) -> Report
     learn(assemblies, name="learned", *, example_paths=None, bandwidth=0.1, docks=True) -> Grammar
+    mean_shift(points, bandwidth) -> (modes, labels)                 # learn's flat-kernel Mean Shift
+    ANGLE_SCALE_DEG                          # learn: a rotation this large weighs like one bandwidth
     dock(a_points, b_points) -> (4x4 rigid transform, rms residual)  # Kabsch, det +1
     local_frame(part) -> 4x4                                        # Kalojanov's diagonal frame
+    symmetry_offsets(vertices, faces) -> [4x4]      # rotations S: F @ S is the same part's frame too
     contacts(assembly_or_parts, tolerance=None, *, geom=None, pairs=None) -> list[Contact]
     prepare(parts) -> PartGeometry       # per-part bounds/centroids, reusable across contacts()
     surface_centroid(vertices, faces) -> (3,) area-weighted centroid
@@ -40,7 +43,7 @@ _EXPORTS = {
     "Contact": "contacts", "PartGeometry": "contacts", "contacts": "contacts", "prepare": "contacts",
     "surface_centroid": "frames",
     "dock": "dock",
-    "local_frame": "frames", "relative_placement": "frames",
+    "local_frame": "frames", "relative_placement": "frames", "symmetry_offsets": "frames",
     "shape_graph": "graph",
     "Cut": "graphops", "adjacency_from_edges": "graphops", "cut_layers": "graphops",
     "distance_matrix": "graphops", "histogram_key": "graphops", "induced_edges": "graphops",
@@ -52,7 +55,7 @@ _EXPORTS = {
     "part_key": "incremental",
     "ShapeWarning": "io", "load_examples": "io", "part_prototype": "io", "read_assembly": "io",
     "type_from_name": "io", "write_assembly": "io",
-    "learn": "learn",
+    "learn": "learn", "mean_shift": "learn", "ANGLE_SCALE_DEG": "learn",
     "DockPlacement": "rules", "Rules": "rules", "rules_from_grammar": "rules",
     "Report": "validate", "Violation": "validate", "validate": "validate",
 }
@@ -94,7 +97,7 @@ if TYPE_CHECKING:  # pragma: no cover - for type checkers and IDEs
         DEFAULT_RELATIVE_TOLERANCE, Contact, PartGeometry, contacts, default_tolerance, prepare,
     )
     from .dock import dock
-    from .frames import local_frame, relative_placement, surface_centroid
+    from .frames import local_frame, relative_placement, surface_centroid, symmetry_offsets
     from .graph import shape_graph
     from .graphops import (
         Cut, adjacency_from_edges, cut_layers, distance_matrix, histogram_key, induced_edges,
@@ -105,15 +108,15 @@ if TYPE_CHECKING:  # pragma: no cover - for type checkers and IDEs
         graph_of, moved_mesh, part_key,
     )
     from .io import ShapeWarning, load_examples, part_prototype, read_assembly, type_from_name, write_assembly
-    from .learn import learn
+    from .learn import ANGLE_SCALE_DEG, learn, mean_shift
     from .rules import DockPlacement, Rules, rules_from_grammar
     from .validate import Report, Violation, validate
 
 __all__ = [
     "Contact", "PartGeometry", "contacts", "prepare", "surface_centroid",
-    "DEFAULT_RELATIVE_TOLERANCE", "Assembly", "DockPlacement", "Part", "Report", "Rules", "ShapeWarning",
-    "Violation", "default_tolerance", "dock", "learn", "load_examples", "local_frame", "part_prototype",
-    "read_assembly", "relative_placement", "rules_from_grammar", "shape_graph", "type_from_name",
+    "ANGLE_SCALE_DEG", "DEFAULT_RELATIVE_TOLERANCE", "Assembly", "DockPlacement", "Part", "Report", "Rules", "ShapeWarning",
+    "Violation", "default_tolerance", "dock", "learn", "load_examples", "local_frame", "mean_shift", "part_prototype",
+    "read_assembly", "relative_placement", "rules_from_grammar", "shape_graph", "symmetry_offsets", "type_from_name",
     "validate", "write_assembly",
     # shape-graph machinery for back ends (graphops, incremental)
     "Cut", "adjacency_from_edges", "cut_layers", "distance_matrix", "histogram_key", "induced_edges",

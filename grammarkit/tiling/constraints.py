@@ -6,11 +6,14 @@ dict (`assembly` may be absent: the checks need only the graph). It returns viol
 naming the parts involved; an empty list means the constraint holds.
 
 - `connected`: the shape graph is one connected component.
-- `grounded` (Liu 2015 "support"): every part is connected through contacts to a part that
-  touches the ground plane z = min over all parts (within the contact tolerance).
-- `path(from=A, to=B, downhill=false)` (Liu 2015 "path"): every A part reaches some B part
-  through contacts; with `downhill=true` every step must not climb (centroid z may not rise by
-  more than the tolerance), as a ball track needs.
+- `grounded(ground=None, sideways=false)` (Liu 2015 "support"): every part is carried down to
+  the ground plane through contacts from below (contact normals along the up axis), and no part
+  reaches below it; `ground` is the plane's height along the up axis (default: the grammar's
+  examples' lowest point, else the shape's own); `sideways=true` also lets support pass
+  through side contacts (never downwards). See `grammarkit.tiling.support`.
+- `path(from=A, to=B, downhill=false)` (Liu 2015 "path"): there is at least one A part, and
+  every A part reaches some B part through contacts; with `downhill=true` every step must not
+  climb (centroid height may not rise by more than the tolerance), as a ball track needs.
 - `count(T, lo, hi)`: the number of T parts is within lo..hi (hi may be omitted).
 """
 from __future__ import annotations
@@ -50,21 +53,68 @@ def check_connected(graph: nx.Graph, args: dict[str, Any], context: dict | None 
 
 
 def check_grounded(graph: nx.Graph, args: dict[str, Any], context: dict | None = None) -> list[str]:
-    import networkx as nx
+    import numpy as np
+
+    from .support import carry_directions, support_problems
 
     if graph.number_of_nodes() == 0:
         return []
+    context = context or {}
+    rules = context.get("rules")
+    up = _up_of(rules)
     tol = float(graph.graph.get("tolerance", 1e-6))
-    zmin = {n: float(d["lo"][2]) for n, d in graph.nodes(data=True)}
-    ground = min(zmin.values())
-    floating = []
-    for comp in nx.connected_components(graph):
-        if not any(zmin[n] <= ground + tol for n in comp):
-            floating.extend(comp)
-    if not floating:
-        return []
-    return [f"{len(floating)} part(s) are not supported (no chain of contacts to a part on the "
-            f"ground z={ground:.4g}): {_ids(floating)}"]
+    data = dict(graph.nodes(data=True))  # one pass (NodeView lookups are slow on 100k parts)
+    nodes = sorted(data, key=lambda n: data[n].get("index", 0))
+    pos = {n: i for i, n in enumerate(nodes)}
+    lo = np.array([data[n]["lo"] for n in nodes], dtype=np.float64)
+    hi = np.array([data[n]["hi"] for n in nodes], dtype=np.float64)
+    edges = np.array([(pos[u], pos[v]) for u, v in graph.edges()], dtype=np.int64).reshape(-1, 2)
+    carry = context.get("carry")
+    if carry is None or len(carry) != len(edges):
+        boxy = np.array([bool(data[n].get("box", False)) for n in nodes])
+        assembly = context.get("assembly")
+        parts = None
+        if assembly is not None:
+            parts = [assembly.parts[data[n]["index"]] for n in nodes]
+        elif not boxy.all():
+            boxy[:] = True  # no geometry at hand: judge by the bounding boxes
+        keys = context.get("keys")
+        carry = carry_directions(lo, hi, boxy, edges, tol, up, parts=parts,
+                                 cache=context.get("support_cache"),
+                                 keys=None if keys is None else [keys[data[n]["index"]] for n in nodes])
+    ground = args.get("ground")
+    if ground is None and rules is not None:
+        ground = getattr(rules, "ground", None)
+    k = int(np.argmax(np.abs(up)))
+    sign = 1.0 if up[k] > 0 else -1.0
+    own = False
+    if ground is None:  # neither the grammar nor its examples say: the shape's own lowest point
+        ground = float(lo[:, k].min()) if sign > 0 else float(hi[:, k].max())
+        own = True
+    sideways = bool(args.get("sideways") or False)
+    sunk, floating = support_problems(lo, hi, carry, edges, tol, up, float(ground), sideways=sideways)
+    axis = "xyz"[k]
+    where = f"{axis}={float(ground):.4g}" + (" (the shape's lowest point)" if own else "")
+    out = []
+    if len(sunk):
+        depth = float(np.max(sign * ground - np.where(sign > 0, lo[sunk, k], -hi[sunk, k])))
+        out.append(f"{len(sunk)} part(s) reach below the ground {where} (by up to {depth:.4g}): "
+                   f"{_ids(nodes[i] for i in sunk)}")
+    if len(floating):
+        how = "contacts from below or from the side" if sideways else "contacts from below"
+        out.append(f"{len(floating)} part(s) are not carried down to the ground {where} (no chain of "
+                   f"{how}): {_ids(nodes[i] for i in floating)}")
+    return out
+
+
+def _up_of(rules: Any):  # noqa: ANN202
+    import numpy as np
+
+    from .orientation import up_vector
+
+    axis = getattr(rules, "up", "+z") if rules is not None else "+z"
+    v = up_vector(axis)
+    return v if v is not None else np.array([0.0, 0.0, 1.0])
 
 
 def check_path(graph: nx.Graph, args: dict[str, Any], context: dict | None = None) -> list[str]:
@@ -77,11 +127,13 @@ def check_path(graph: nx.Graph, args: dict[str, Any], context: dict | None = Non
     targets = {n for n, t in types.items() if t == dst}
     starts = sorted((n for n, t in types.items() if t == src), key=str)
     if not starts:
-        return []
+        # a path needs somewhere to start: a ball track without an entry is no ball track
+        return [f"no {src} part: nothing for the path from {src} to {dst} to start from"]
     if not targets:
         return [f"no {dst} part for the {len(starts)} {src} part(s) to reach: {_ids(starts)}"]
     # search backwards from all exits at once: a start is fine when it was reached
-    z = {n: float(d["centroid"][2]) for n, d in graph.nodes(data=True)}
+    up = _up_of((context or {}).get("rules"))
+    z = {n: float(d["centroid"] @ up) for n, d in graph.nodes(data=True)}  # height along the up axis
     reached = set(targets)
     queue = deque(targets)
     while queue:
@@ -116,15 +168,21 @@ def check_count(graph: nx.Graph, args: dict[str, Any], context: dict | None = No
 def grammarkit_constraints():  # noqa: ANN201
     return [
         ConstraintSpec("connected", (), "the shape graph is one connected piece", check_connected),
-        ConstraintSpec("grounded", (),
-                       "every part is supported: connected through contacts to a part on the ground "
-                       "plane (z = lowest point of the shape)", check_grounded),
+        ConstraintSpec("grounded",
+                       (Param("ground", "number", required=False, default=None,
+                              doc="the ground plane's height along the up axis (default: the examples' "
+                                  "lowest point)"),
+                        Param("sideways", "any", required=False, default=False,
+                              doc="support may also pass through side contacts (never downwards)")),
+                       "every part is carried down to the ground plane through contacts from below, "
+                       "and none reaches below it", check_grounded),
         ConstraintSpec(
             "path",
             (Param("from", "string", doc="entry part type"), Param("to", "string", doc="exit part type"),
              Param("downhill", "any", required=False, default=False,
                    doc="every step must not climb (ball tracks)")),
-            "every entry-type part reaches an exit-type part through contacts", check_path),
+            "there is an entry-type part and every one reaches an exit-type part through contacts",
+            check_path),
         ConstraintSpec(
             "count",
             (Param("type", "string"), Param("lo", "number", required=False, default=0),

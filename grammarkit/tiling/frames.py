@@ -94,14 +94,31 @@ def _frame_from(origin: np.ndarray, p1: np.ndarray, p2: np.ndarray, p3: np.ndarr
     return F
 
 
+# Bounds of the symmetry search (issue 19: round parts have thousands of tied vertices, and
+# walking every tie made a 10k-triangle icosphere take 30 s). At most MAX_TIE_PAIRS (p1, p2)
+# tie combinations and MAX_THIRD_TIES third points per pair are tried; each candidate frame is
+# verified on at most SYMMETRY_SAMPLE evenly strided vertices, each of which must land within
+# SYMMETRY_TOLERANCE x the part's bounding-box diagonal of some vertex (a k-d tree of all of
+# them). So a highly symmetric part (a sphere) gets some of its symmetries, not all: enough for
+# rigid copies, whose frames correspond anyway (same vertex order).
+MAX_TIE_PAIRS = 32
+MAX_THIRD_TIES = 32
+SYMMETRY_SAMPLE = 512
+SYMMETRY_TOLERANCE = 1e-5
+
+
 def symmetry_offsets(vertices: np.ndarray, faces: np.ndarray | None = None, *,
                      limit: int = 64) -> list[np.ndarray]:
     """Rotations S (4x4, in the part's local frame F) such that F @ S is another frame the
     construction could have picked for the same geometry - i.e. the part's rotational
     symmetries that the tie-breaking hides. Always contains the identity first.
 
-    Candidates come from every tie in the three farthest-point choices; a candidate is kept
-    only if the part's vertex set looks the same in it (a true symmetry)."""
+    Candidates come from the ties in the three farthest-point choices (bounded: MAX_TIE_PAIRS,
+    MAX_THIRD_TIES); a candidate is kept only if the part's vertex set looks the same in it (a
+    true symmetry, checked on a bounded sample: SYMMETRY_SAMPLE, SYMMETRY_TOLERANCE). Cost:
+    O(V log V + MAX_TIE_PAIRS x V + candidates x SYMMETRY_SAMPLE log V) on any mesh."""
+    from scipy.spatial import cKDTree
+
     verts = np.asarray(vertices, dtype=np.float64)
     F0 = local_frame(verts, faces)
     if len(verts) < 3:
@@ -109,19 +126,32 @@ def symmetry_offsets(vertices: np.ndarray, faces: np.ndarray | None = None, *,
     origin = F0[:3, 3]
     inv0 = np.linalg.inv(F0)
     size = float(np.linalg.norm(verts.max(axis=0) - verts.min(axis=0))) or 1.0
-    q = 1e-5 * size
+    tol = SYMMETRY_TOLERANCE * size
+    sample = verts[:: max(1, len(verts) // SYMMETRY_SAMPLE)][:SYMMETRY_SAMPLE]
+    local = (sample - origin) @ F0[:3, :3]  # the sample in F0's coordinates
+    probe = local[:: max(1, len(local) // 16)]
+    tree = None
 
-    def signature(F: np.ndarray) -> np.ndarray:
-        local = (verts - F[:3, 3]) @ F[:3, :3]
-        key = np.round(local / q).astype(np.int64)
-        return key[np.lexsort(key.T[::-1])]
+    def same_shape(F: np.ndarray) -> bool:
+        # the point with F0-coordinates l maps to the point with F-coordinates l
+        nonlocal tree
+        if tree is None:
+            tree = cKDTree(verts)
+        for pts in (probe, local):
+            d, _ = tree.query(pts @ F[:3, :3].T + F[:3, 3], distance_upper_bound=tol)
+            if not np.isfinite(d).all():
+                return False
+        return True
 
-    ref = signature(F0)
     out = [np.eye(4)]
     seen = {(np.round(np.eye(4), 6) + 0.0).tobytes()}
+    pairs = 0
     for i1 in _ties(np.linalg.norm(verts - origin, axis=1)):
         p1 = verts[i1]
         for i2 in _ties(np.linalg.norm(verts - p1, axis=1)):
+            pairs += 1
+            if pairs > MAX_TIE_PAIRS:
+                return out
             p2 = verts[i2]
             x = p2 - p1
             if np.linalg.norm(x) <= 0:
@@ -129,7 +159,7 @@ def symmetry_offsets(vertices: np.ndarray, faces: np.ndarray | None = None, *,
             x = x / np.linalg.norm(x)
             rel = verts - p1
             dist = np.linalg.norm(rel - np.outer(rel @ x, x), axis=1)
-            for i3 in _ties(dist):
+            for i3 in _ties(dist)[:MAX_THIRD_TIES]:
                 F = _frame_from(origin, p1, p2, verts[i3])
                 if F is None:
                     continue
@@ -138,8 +168,7 @@ def symmetry_offsets(vertices: np.ndarray, faces: np.ndarray | None = None, *,
                 if key in seen:
                     continue
                 seen.add(key)
-                sig = signature(F)
-                if sig.shape == ref.shape and np.abs(sig - ref).max() <= 1:
+                if same_shape(F):
                     out.append(S)
                     if len(out) >= limit:
                         return out
@@ -152,6 +181,9 @@ def _first_max(values: np.ndarray) -> np.ndarray:
     return np.argmax(values >= top - _TIE * np.maximum(np.abs(top), 1e-12), axis=1)
 
 
+FRAME_CHUNK = 4096
+
+
 def local_frames(meshes) -> np.ndarray:  # noqa: ANN001
     """`local_frame` of many meshes at once, batched over meshes with equal vertex/face counts
     (rigid copies: the common case); returns (n, 4, 4). Same result as `local_frame`."""
@@ -160,7 +192,10 @@ def local_frames(meshes) -> np.ndarray:  # noqa: ANN001
     groups: dict[tuple[int, int], list[int]] = {}
     for i, m in enumerate(meshes):
         groups.setdefault((len(m.vertices), len(m.faces)), []).append(i)
-    for (nv, nf), idx in groups.items():
+    # batches of at most FRAME_CHUNK meshes: the (g, nf, 3, 3) temporaries stay small on 100k parts
+    batches = [((nv, nf), idx[k:k + FRAME_CHUNK]) for (nv, nf), idx in groups.items()
+               for k in range(0, len(idx), FRAME_CHUNK)]
+    for (nv, nf), idx in batches:
         if nv < 3 or nf == 0:
             for i in idx:
                 out[i] = local_frame(np.asarray(meshes[i].vertices, dtype=np.float64),

@@ -10,7 +10,7 @@ import numpy as np
 
 from .assembly import Assembly
 from ..errors import ShapeError
-from .contacts import candidate_pairs, check_tolerance, contacts, default_tolerance, prepare
+from .contacts import candidate_pairs, check_tolerance, contact_arrays, default_tolerance, prepare
 
 __all__ = ["shape_graph"]
 
@@ -20,8 +20,9 @@ def shape_graph(assembly: Assembly, tolerance: float | None = None) -> nx.Graph:
 
     Nodes: part ids, with attributes `type` (str), `centroid` (np.ndarray (3,), area-weighted
     surface centroid: moves rigidly with the part), `lo`/`hi` (bounding box), `index` (position
-    in `assembly.parts`). Edges: `gap` (surface distance, <= tolerance), `kind` ("touch" or, for
-    box parts that interpenetrate deeper than the tolerance, "overlap"). Graph attributes:
+    in `assembly.parts`), `box` (the mesh is exactly its axis-aligned box). Edges: `gap`
+    (surface distance, <= tolerance), `kind` ("touch" or, for box parts that interpenetrate
+    deeper than the tolerance, "overlap"). Graph attributes:
     `tolerance`, `scale` (bounding-box diagonal), `name`.
     """
     if not isinstance(assembly, Assembly):
@@ -36,15 +37,17 @@ def shape_graph(assembly: Assembly, tolerance: float | None = None) -> nx.Graph:
     g.graph.update(tolerance=float(tolerance), scale=scale, name=assembly.name)
     for i, p in enumerate(parts):
         g.add_node(p.id, type=p.type, centroid=geom.centroid[i].copy(), lo=geom.lo[i].copy(),
-                   hi=geom.hi[i].copy(), index=i)
+                   hi=geom.hi[i].copy(), index=i, box=bool(geom.boxy[i]))
     if len(g) != len(parts):
         from collections import Counter
 
         dup = [k for k, v in Counter(p.id for p in parts).items() if v > 1]
         raise ShapeError(f"assembly {assembly.name!r}: duplicate part ids {dup[:5]}")
     ids = [p.id for p in parts]
+    a, b, gap, depth = contact_arrays(parts, tolerance, geom=geom, pairs=candidate_pairs(geom, tolerance))
+    tol = float(tolerance)
     g.add_edges_from(
-        (ids[c.a], ids[c.b], {"gap": c.gap, "kind": c.kind} if c.depth is None
-         else {"gap": c.gap, "kind": c.kind, "depth": c.depth})
-        for c in contacts(parts, tolerance, geom=geom, pairs=candidate_pairs(geom, tolerance)))
+        (ids[x], ids[y], {"gap": gp, "kind": "touch"} if d < 0
+         else {"gap": gp, "kind": "overlap" if d > tol else "touch", "depth": d})
+        for x, y, gp, d in zip(a.tolist(), b.tolist(), gap.tolist(), depth.tolist()))
     return g

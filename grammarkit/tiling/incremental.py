@@ -20,8 +20,7 @@ edges as (i, j) index pairs with i < j.
 """
 from __future__ import annotations
 
-from dataclasses import replace
-from typing import Iterable, Sequence
+from typing import Any, Iterable, Sequence
 
 import networkx as nx
 import numpy as np
@@ -70,6 +69,8 @@ class PartCache:
         self.limit = limit
         self.rows: dict = {}  # key -> (lo, hi, centroid, boxy)
         self.solids: dict = {}  # key -> manifold3d.Manifold or None (not a closed manifold)
+        self.frames: dict = {}  # key -> the part's Kalojanov frame (4x4, world)
+        self.support: dict = {}  # (key, key) -> support verdict of a contact (support.py)
 
     def geometry(self, parts: Sequence[Part], keys: Sequence) -> PartGeometry:
         """A PartGeometry of `parts` (keys[k] identifies parts[k]), with known solids seeded."""
@@ -78,6 +79,8 @@ class PartCache:
             if len(self.rows) + len(missing) > self.limit:
                 self.rows.clear()
                 self.solids.clear()
+                self.frames.clear()
+                self.support.clear()
                 missing = [k for k, key in enumerate(keys) if key not in self.rows]
             g = prepare([parts[k] for k in missing])
             for j, k in enumerate(missing):
@@ -172,40 +175,84 @@ def full_check(rule_set, meshes: Sequence[trimesh.Trimesh], types: Sequence[str]
 
 
 def graph_of(types: Sequence[str], edges, centroids, tolerance: float, lo: np.ndarray,
-             hi: np.ndarray) -> nx.Graph:
-    """A graph with the node/graph attributes `shape_graph` gives (ids = node indices as text)."""
+             hi: np.ndarray, boxy: Sequence[bool] | None = None) -> nx.Graph:
+    """A graph with the node/graph attributes `shape_graph` gives (ids = node indices as text).
+    `boxy` (per part: its mesh is exactly its axis-aligned box) sets the `box` attribute."""
     g = nx.Graph(tolerance=float(tolerance))
     for i, t in enumerate(types):
-        g.add_node(str(i), type=t, index=i, centroid=centroids[i], lo=lo[i], hi=hi[i])
+        g.add_node(str(i), type=t, index=i, centroid=centroids[i], lo=lo[i], hi=hi[i],
+                   box=bool(boxy[i]) if boxy is not None else False)
     g.add_edges_from((str(u), str(v)) for u, v in edges)
     return g
 
 
 def edit_violations(rule_set, types: Sequence[str], edges, meshes, centroids, tolerance: float,
-               new: Iterable[int], lo: np.ndarray | None = None,
-               hi: np.ndarray | None = None, max_violations: int = 1) -> list[str]:
-    """Rules an edited shape breaks, by `grammarkit.tiling.validate` on its graph `edges`.
+                    new: Iterable[int], lo: np.ndarray | None = None,
+                    hi: np.ndarray | None = None, max_violations: int = 1, *,
+                    keys: Sequence | None = None, cache: PartCache | None = None,
+                    registries: Any = None) -> list[str]:
+    """Rules an edited shape breaks, by `grammarkit.tiling.validate`'s checks on its graph `edges`.
 
-    With `new` (the edited nodes), the docking-placement check runs on the contacts that
-    involve an edited part only: a placement depends on the two parts alone, and the other
-    contacts are unchanged. Type pairs, neighbourhoods and global constraints are checked on
-    the whole graph. Returns the problems as text (empty: valid).
-    """
-    from .validate import validate
+    With `new` (the edited nodes), the checks that depend on one part or one contact only run
+    where something changed: orientation on the edited parts, docking placements on the
+    contacts that involve an edited part (a placement depends on the two parts alone, and the
+    other contacts are unchanged). Type pairs, neighbourhoods, required sites and global
+    constraints (support, counts, paths, ...) are checked on the whole graph. With `keys` (a
+    `part_key` per mesh) and `cache`, part frames and support verdicts of parts that recur are
+    reused. `registries` gives the global constraints (default: as `validate`). Returns the
+    problems as text (empty: valid)."""
+    from dataclasses import replace
 
-    assembly = Assembly(_parts(meshes, types, range(len(meshes))), name="variant")
+    from .validate import (
+        _dock_violations, _Full, _Shape, _type_violations, orientation_violations,
+        required_site_violations, validate,
+    )
+
+    parts = _parts(meshes, types, range(len(meshes)))
+    assembly = Assembly(parts, name="variant")
     if lo is None or hi is None:
         lo, hi = bounds_of(meshes)
-    g = graph_of(types, edges, centroids, tolerance, lo, hi)
-    report = validate(rule_set, assembly, graph=g, docks=False, max_violations=max_violations)
-    if not report.ok:
-        return [v.format() for v in report.violations]
-    if getattr(rule_set, "docks", None):
-        new_ids = {str(i) for i in new}
-        touched = [(u, v) for u, v in g.edges() if u in new_ids or v in new_ids]
-        if touched:
-            only_docks = replace(rule_set, neighbor_multisets={}, neighbor_counts={}, constraints=())
-            report = validate(only_docks, assembly, graph=g.edge_subgraph(touched), docks=True,
-                              max_violations=max_violations)
-            return [v.format() for v in report.violations]
-    return []
+    if cache is not None and keys is not None:
+        geom = cache.geometry(parts, keys)
+        boxy = geom.boxy
+    else:
+        boxy = prepare(parts).boxy
+    g = graph_of(types, edges, centroids, tolerance, lo, hi, boxy)
+    shape = _Shape(assembly, g)
+    if cache is not None and keys is not None:
+        shape.frame_keys, shape.frame_cache = list(keys), cache.frames
+    out: list[str] = []
+
+    def add(v) -> None:  # noqa: ANN001
+        out.append(v.format())
+        if len(out) >= max_violations:
+            raise _Full
+
+    new_idx = np.array(sorted({int(i) for i in new}), dtype=np.int64)
+    try:
+        _type_violations(rule_set, shape, add)
+        for v in orientation_violations(rule_set, shape, new_idx):
+            add(v)
+        for v in required_site_violations(rule_set, shape):
+            add(v)
+        if getattr(rule_set, "constraints", ()):
+            extra = {}
+            if cache is not None and keys is not None:
+                extra = {"support_cache": cache.support, "keys": list(keys)}
+            # the global constraints through `validate` (which owns the registries' default),
+            # with every other rule switched off: they were checked above
+            only = replace(rule_set, types=frozenset(), neighbor_multisets={}, neighbor_counts={},
+                           pairs=None, sites={}, configs={}, docks={})
+            report = validate(only, assembly, graph=g, docks=False, orientation=False,
+                              max_violations=max_violations, registries=registries,
+                              constraint_context=extra)
+            for v in report.violations:
+                add(v)
+        if (getattr(rule_set, "configs", None) or getattr(rule_set, "docks", None)) and len(shape.edges):
+            touched = np.flatnonzero(np.isin(shape.edges, new_idx).any(axis=1))
+            if len(touched):
+                for v in _dock_violations(rule_set, shape, touched):
+                    add(v)
+    except _Full:
+        pass
+    return out

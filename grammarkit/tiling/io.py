@@ -91,6 +91,11 @@ def read_assembly(path: str | os.PathLike, *, grammar: "Grammar | None" = None,
     if total > max_triangles:
         raise ShapeError(f"{path}: {total} triangles in {len(parts)} parts exceed the limit of "
                          f"{max_triangles} (read_assembly(max_triangles=...))")
+    from .orientation import normalize_mirrored
+
+    # A mirrored node transform of a mirror-symmetric part is the same solid as a turned copy:
+    # stored as one, its frame corresponds to every other copy's (see orientation.py).
+    parts = [normalize_mirrored(p) for p in parts]
     asm = Assembly(parts, name=name or path.stem, meta={"source": str(path)})
     finish_assembly(asm, str(path), grammar)
     return asm
@@ -376,12 +381,21 @@ def _atomic_write(path: Path, data: bytes) -> None:
 # --------------------------------------------------------------------------------------------
 # a grammar's parts and examples
 # --------------------------------------------------------------------------------------------
-def _base_dir(grammar: "Grammar") -> Path:
+def _base_dir(grammar: "Grammar", node: object = None) -> Path:
+    """The folder a statement's relative file names start from: the file the statement was
+    written in (an imported grammar's own folder), else the grammar's, else the working
+    directory."""
+    span = getattr(node, "span", None)
+    if span is not None and getattr(span, "file", None):
+        return Path(span.file).parent
     return Path(grammar.source_path).parent if grammar.source_path else Path.cwd()
 
 
-def part_prototype(grammar: "Grammar", type_name: str) -> trimesh.Trimesh:
-    """The geometry of `part TYPE = box(w, d, h)` (centred on the origin) or `= mesh("file")`."""
+def part_prototype(grammar: "Grammar", type_name: str, *, cache: dict | None = None) -> trimesh.Trimesh:
+    """The geometry of `part TYPE = box(w, d, h)` (centred on the origin) or `= mesh("file")`.
+
+    `cache` (a dict) keeps every source file read, by resolved path, so a grammar whose parts
+    come from one file reads it once (`rules_from_grammar` passes one per grammar)."""
     from .rules import eval_number
 
     for pd in grammar.parts:
@@ -402,8 +416,13 @@ def part_prototype(grammar: "Grammar", type_name: str) -> trimesh.Trimesh:
             if not call.args or not all(isinstance(a, Str) for a in call.args) or len(call.args) > 2:
                 raise ShapeError(f'{where}: mesh("file") or mesh("file", "PartId") takes file names', pd.span)
             f = Path(call.args[0].value)
-            f = f if f.is_absolute() else _base_dir(grammar) / f
-            asm = read_assembly(f)
+            f = f if f.is_absolute() else _base_dir(grammar, pd) / f
+            key = str(f.resolve()) if f.exists() else str(f)
+            asm = cache.get(key) if cache is not None else None
+            if asm is None:
+                asm = read_assembly(f)
+                if cache is not None:
+                    cache[key] = asm
             if len(call.args) == 2:  # one part of a segmented file, in its own frame
                 wanted = call.args[1].value
                 part = asm.by_id().get(wanted)
@@ -413,16 +432,17 @@ def part_prototype(grammar: "Grammar", type_name: str) -> trimesh.Trimesh:
                 mesh = part.mesh.copy()
                 mesh.apply_transform(np.linalg.inv(part.transform))
                 return mesh
-            return trimesh.util.concatenate([p.mesh for p in asm.parts]) if len(asm) > 1 else asm.parts[0].mesh
+            return trimesh.util.concatenate([p.mesh for p in asm.parts]) if len(asm) > 1 else asm.parts[0].mesh.copy()
         raise ShapeError(f"{where}: unknown part geometry {call.func}(...); use box(w, d, h) or mesh(\"file\")",
                          pd.span)
     raise ShapeError(f"grammar {grammar.name!r}: no `part {type_name} = ...` statement gives its geometry")
 
 
-def load_examples(grammar: "Grammar", *, check_types: bool = True) -> list[Assembly]:
+def load_examples(grammar: "Grammar", *, check_types: bool = True, cache: dict | None = None) -> list[Assembly]:
     """The grammar's `example` statements as assemblies: files are read relative to the grammar
     file; inline examples place each type's `part` geometry (`Type at (x,y,z) rot (rx,ry,rz)`,
-    degrees, extrinsic XYZ)."""
+    degrees, extrinsic XYZ). `cache` (as for `part_prototype`): files already read for the
+    grammar's parts are not read again (used with `check_types=False`)."""
     from .rules import placement_matrix
 
     out = []
@@ -430,15 +450,22 @@ def load_examples(grammar: "Grammar", *, check_types: bool = True) -> list[Assem
         if ex.source is not None:
             f = Path(ex.source)
             if not f.is_absolute():
-                f = _base_dir(grammar) / f
-            asm = read_assembly(f, grammar=grammar if check_types else None, name=ex.name)
+                f = _base_dir(grammar, ex) / f
+            key = str(f.resolve()) if f.exists() else str(f)
+            known = cache.get(key) if cache is not None and not check_types else None
+            if known is not None:
+                asm = Assembly(list(known.parts), name=ex.name, meta=dict(known.meta))
+            else:
+                asm = read_assembly(f, grammar=grammar if check_types else None, name=ex.name)
+                if cache is not None and not check_types:
+                    cache[key] = asm
         else:
             protos: dict[str, trimesh.Trimesh] = {}
             counts: dict[str, int] = {}
             parts = []
             for ip in ex.parts:
                 if ip.type not in protos:
-                    protos[ip.type] = part_prototype(grammar, ip.type)
+                    protos[ip.type] = part_prototype(grammar, ip.type, cache=cache)
                 T = placement_matrix(ip.placement, grammar)
                 mesh = protos[ip.type].copy()
                 mesh.apply_transform(T)

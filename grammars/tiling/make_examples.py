@@ -192,6 +192,8 @@ def main(argv: list[str] | None = None) -> int:
             grammar = Grammar(name=grammar.name, statements=(*grammar.statements, path))
         text = print_grammar(grammar)
         _atomic_write(folder / f"{gname}.grammar", text.encode())
+        # validate as the file reads: part geometry relative to the grammar's folder
+        grammar = grammar.model_copy(update={"source_path": str(folder / f"{gname}.grammar")})
         for a in asms:
             report = validate(grammar, a)
             if not report.ok:

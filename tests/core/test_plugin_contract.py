@@ -199,6 +199,10 @@ def test_a_plugin_exiting_on_import_is_reported_and_the_command_goes_on(sites, t
     r = gk(["check", str(GRAMMAR)], sites["exits"])
     assert r.returncode == 0, r.stdout + r.stderr
     assert "0 errors" in r.stderr
+    # check of a grammar that needs no third-party plugin does not even import one (issue 19)
+    assert "gk_exits" not in r.stderr
+    r = gk(["derive", str(GRAMMAR), "-o", str(tmp_path / "o.glb")], sites["exits"])
+    assert r.returncode == 0, r.stdout + r.stderr
     assert "warning: plugin 'exits': failed to load 'gk_exits': SystemExit: 2" in r.stderr
     r = gk(["plugins", "--json"], sites["exits"])
     infos = {p["name"]: p for p in json.loads(r.stdout)}
@@ -233,7 +237,12 @@ def test_help_version_and_fmt_import_no_plugin_code(sites, tmp_path):
         assert not marker.exists(), args
     assert "Plugins may add commands" in gk(["--help"], env=env).stdout
     r = gk(["check", str(GRAMMAR)], sites["noisy"], env=env)
-    assert marker.exists()  # check needs the functions: the plugin loads
+    assert not marker.exists()  # a grammar that needs no plugin is checked without them
+    g = tmp_path / "lerp.grammar"
+    g.write_text("Lot --> footprint(rect(4, 4)) extrude(lerp(1, 3, 0.5)) X.\n")
+    r = gk(["check", str(g)], sites["noisy"], env=env)
+    assert r.returncode == 0, r.stdout + r.stderr
+    assert marker.exists()  # check needs the plugin's function: the plugin loads
 
 
 def test_plugins_lists_each_backends_options():

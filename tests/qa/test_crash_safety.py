@@ -70,7 +70,11 @@ def test_killed_run_is_consistent_and_resumes_to_the_same_files(uninterrupted, t
     code = p.wait(timeout=60)
     err = p.stderr.read()
     assert "Traceback" not in err, err
-    if sig in (signal.SIGTERM, signal.SIGINT) and code != 0:
+    if sig in (signal.SIGTERM, signal.SIGINT) and code == -sig:
+        # the signal came after the run had finished and restored the default handler (a
+        # loaded machine can get there between our check and the kill): everything is written
+        assert len(listed(out)) == len(listed(uninterrupted))
+    elif sig in (signal.SIGTERM, signal.SIGINT) and code != 0:
         assert code == 130 and "run the same command again" in err
     if out.exists():
         consistent(out)

@@ -122,10 +122,10 @@ def test_example_parts_are_watertight():
 
     root = Path(__file__).resolve().parents[2] / "grammars" / "tiling"
     files = sorted(root.glob("*/*.glb"))
-    assert len(files) == 6
+    assert len(files) == 9  # castle, balltrack, facade: 2 each; wfc: tiles + 2 tilings
     for f in files:
         a = read_assembly(f)
-        assert 15 <= len(a) <= 70
+        assert 15 <= len(a) <= 70 or f.name == "tiles.glb"
         for p in a.parts:
             assert mesh_report(p.mesh).ok, (f, p.id)
 

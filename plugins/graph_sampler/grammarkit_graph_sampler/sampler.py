@@ -144,6 +144,16 @@ class _Context:
         return mesh
 
 
+def rejection_reason(detail: str) -> str:
+    """The rule named in a problem text ("part 3 (Wall): [orientation] ..." -> "orientation");
+    "pair" for a forbidden contact found while the graph is updated."""
+    start = detail.find("[")
+    end = detail.find("]", start + 1)
+    if start >= 0 and end > start:
+        return detail[start + 1:end]
+    return "pair" if "no dock" in detail else "other"
+
+
 def attempt_seed(seed: int, iteration: int, index: int) -> np.random.Generator:
     return np.random.default_rng(np.random.SeedSequence([int(seed) & 0xFFFFFFFF, iteration, index]))
 
@@ -292,6 +302,8 @@ class IterationStats:
     new: int = 0
     shapes_after: int = 0
     seconds: float = 0.0
+    # invalid attempts by the rule that rejected them first ("orientation", "constraint grounded", ...)
+    reasons: dict = field(default_factory=dict)
 
     def row(self) -> dict:
         return {"iteration": self.iteration, "shapes_before": self.shapes_before,
@@ -299,7 +311,7 @@ class IterationStats:
                 "matched": self.attempts - self.outcomes["no-cut"] - self.outcomes["no-match"],
                 "valid": self.outcomes["valid"], "new": self.new,
                 "shapes": self.shapes_after, "outcomes": dict(self.outcomes),
-                "seconds": round(self.seconds, 3)}
+                "reasons": dict(sorted(self.reasons.items())), "seconds": round(self.seconds, 3)}
 
 
 class GraphSampler:
@@ -396,6 +408,9 @@ class GraphSampler:
                     for res in session.map(_session_attempt, [(it, i) for i in indices]):
                         st.attempts += 1
                         st.outcomes[res.outcome] += 1
+                        if res.outcome == "invalid":
+                            why = rejection_reason(res.detail)
+                            st.reasons[why] = st.reasons.get(why, 0) + 1
                         if res.shape is None or emitted >= n:
                             continue
                         shape = res.shape.prepare(self.protos)

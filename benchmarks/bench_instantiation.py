@@ -1,0 +1,214 @@
+"""Strings to 3D shapes (Kalojanov 2019, section 6): edge-category accuracy, instantiation success,
+end-to-end yield against the graph sampler.
+
+    python benchmarks/bench_instantiation.py [--example castle] [--work DIR] [--graphs 300]
+        [--train-seconds 300] [--test-graphs 60] [--e2e-seconds 120] [--quick]
+
+1. Edge categories and the LSTM predictor, trained on the example's dataset (the one
+   bench_string_vae.py builds in --work, else a new one of --graphs graphs); accuracy on held-out
+   graphs per character (no voting) and per edge with voting over 8 strings of each graph
+   (the paper reports 90% validation accuracy; the target is >= 97% with voting).
+2. Instantiation of held-out graphs (graphs the sampler made, so they can be built): success rate
+   and average tries by size (parts) and by cycle edges, with the predicted categories and, as the
+   naive baseline, with no prediction (pure Monte-Carlo edge insertion). The paper's estimate for
+   naive assembly of a 15-part cycle with 6 configurations per edge is 1/6^15.
+3. End-to-end: valid 3D shapes per minute from `derive --backend string-vae` (the model of
+   bench_string_vae.py, masked decoding, with the categories) beside the graph sampler's new
+   variants per minute on the same example, for the same wall-clock budget.
+
+Every instantiated shape is validated against the grammar (the instantiation refuses others);
+the script re-validates the written ones and checks that each part is watertight.
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import statistics
+import sys
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def table(head, rows) -> str:  # noqa: ANN001
+    out = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    for r in rows:
+        out.append("| " + " | ".join(f"{x:.3f}" if isinstance(x, float) else str(x) for x in r) + " |")
+    return "\n".join(out)
+
+
+def dataset(args):  # noqa: ANN001, ANN201
+    from grammarkit.dsl import load
+    from grammarkit_string_vae.dataset import build_dataset, load_dataset, write_dataset
+
+    folder = args.work / f"{args.example}_ds"
+    if (folder / "dataset.json").exists():
+        ds = load_dataset(folder)
+        if any(v is not None for v in ds.variants) or args.example == "castle":
+            return ds
+    grammar = load(ROOT / "grammars" / "tiling" / args.example / f"{args.example}.grammar")
+    ds, _ = build_dataset(grammar, n=args.graphs, iterations=args.iterations, seed=args.seed,
+                          options={"dedupe": "isomorphism", "max_attempts": 8000})
+    write_dataset(ds, folder, overwrite=True)
+    return load_dataset(folder)
+
+
+def bin_of(x: int, edges: list[int]) -> str:
+    lo = 0
+    for e in edges:
+        if x <= e:
+            return f"{lo}-{e}"
+        lo = e + 1
+    return f">{edges[-1]}"
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--example", default="castle")
+    ap.add_argument("--work", type=Path, default=Path("/tmp/grammarkit_bench_string_vae"))
+    ap.add_argument("--graphs", type=int, default=400)
+    ap.add_argument("--iterations", type=int, default=5)
+    ap.add_argument("--train-graphs", type=int, default=600, help="dataset graphs used to train the predictor")
+    ap.add_argument("--train-seconds", type=float, default=300)
+    ap.add_argument("--epochs", type=int, default=30)
+    ap.add_argument("--test-graphs", type=int, default=60)
+    ap.add_argument("--tries", type=int, default=8)
+    ap.add_argument("--e2e-seconds", type=float, default=120)
+    ap.add_argument("--threads", type=int, default=1)
+    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--reuse", action="store_true", help="reuse the predictor saved in --work by an earlier run")
+    ap.add_argument("--vae", type=Path, default=None, help="string-VAE model for the end-to-end row "
+                    "(default: WORK/EXAMPLE.vae from bench_string_vae.py)")
+    ap.add_argument("--quick", action="store_true")
+    args = ap.parse_args()
+    if args.quick:
+        args.graphs, args.iterations, args.train_seconds, args.test_graphs, args.e2e_seconds = 60, 2, 40, 10, 30
+        args.train_graphs, args.epochs = 60, 3
+    import numpy as np
+    import torch
+
+    from grammarkit.dsl import load
+    from grammarkit.tiling import validate
+    from grammarkit_string_vae.dataset import Dataset
+    from grammarkit_string_vae.edgemodel import EdgeTrainConfig, evaluate, save_edge_model, train_edge_model, _examples
+    from grammarkit_string_vae.instantiate import Instantiator
+
+    torch.set_num_threads(args.threads)
+    args.work.mkdir(parents=True, exist_ok=True)
+    load_avg = " ".join(f"{x:.1f}" for x in os.getloadavg())
+    print(f"# bench_instantiation: {args.example}, load average {load_avg} (2 cores, shared: times are noisy)\n")
+    grammar = load(ROOT / "grammars" / "tiling" / args.example / f"{args.example}.grammar")
+    full = dataset(args)
+    rng = np.random.default_rng(args.seed)
+    idx = [i for i in rng.permutation(len(full)) if full.frames[i] is not None]
+    test_idx = idx[: args.test_graphs]
+    train_idx = idx[args.test_graphs: args.test_graphs + args.train_graphs]
+    pick = lambda ids: Dataset(dict(full.meta), [full.graphs[i] for i in ids], [full.strings[i] for i in ids],  # noqa: E731
+                               [full.ids[i] for i in ids], [full.sources[i] for i in ids],
+                               [full.frames[i] for i in ids], full.path, [full.variants[i] for i in ids])
+    train_ds = pick(train_idx)
+    model_path = args.work / f"{args.example}.edges"
+    if args.reuse and model_path.exists():
+        from grammarkit_string_vae.edgemodel import load_edge_model
+
+        em = load_edge_model(model_path, grammar)
+        train_s = float(em.meta["training"]["history"][-1]["seconds"])
+    else:
+        t0 = time.perf_counter()
+        em = train_edge_model(train_ds, grammar, EdgeTrainConfig(epochs=args.epochs, time_limit=args.train_seconds,
+                                                                 threads=args.threads, seed=args.seed,
+                                                                 val_fraction=0.1),
+                              progress=lambda r: print(f"  epoch {r['epoch']}: loss {r['loss']:.3f} char "
+                                                       f"{r['char_accuracy']:.3f} voted {r['edge_accuracy_voted']:.3f} "
+                                                       f"({r['seconds']:.0f} s)", flush=True))
+        train_s = time.perf_counter() - t0
+        save_edge_model(em, model_path)
+    cats = em.categories
+    print(f"\ncategories: {len(cats)} ("
+          + ", ".join(f"{a}-{b} {len(v)}" for (a, b), v in sorted(cats.by_pair.items()))
+          + f"); predictor trained {len(em.meta['training']['history'])} epochs in {train_s:.0f} s on "
+          f"{len(train_idx)} graphs")
+    # 1. accuracy on held-out graphs
+    test_ds = pick(test_idx)
+    rows = _examples(test_ds, list(range(len(test_ds))), cats, em.vocab, 8, args.seed + 7)
+    acc = evaluate(em.model, rows, cats, len(cats))
+    print("\n## Edge-category accuracy on held-out graphs\n")
+    print(table(["graphs", "edges", "per character (no voting)", "per edge, voting over 8 strings", "paper"],
+                [[len(test_ds), acc["val_edges"], acc["char_accuracy"], acc["edge_accuracy_voted"], "0.90 (no voting)"]]))
+    # 2. instantiation
+    from grammarkit_string_vae.categories import edge_labels
+
+    inst = Instantiator(grammar, cats)
+    results = {"predicted": [], "naive (no categories)": [], "true categories": []}
+    for j, g in enumerate(test_ds.graphs):
+        pred = em.rankings(g, strings=8, seed=j)
+        labels = edge_labels(g, test_ds.frames[j], cats, test_ds.variants[j])
+        truth = {(u, v): labels[(u, v)] for u, v in g.edges}
+        for name, p in (("predicted", pred), ("naive (no categories)", {}), ("true categories", truth)):
+            r = inst.instantiate(g, p, seed=j, max_tries=args.tries)
+            if r.ok:
+                assert validate(grammar, r.assembly).ok and all(pt.mesh.is_watertight for pt in r.assembly.parts)
+            results[name].append((len(g), g.cycle_rank, r.ok, r.tries, r.monte_carlo, r.seconds))
+    print(f"\n## Instantiation of {len(test_ds)} held-out graphs (at most {args.tries} tries each)\n")
+    head = ["categories", "graphs", "success", "mean tries (successes)",
+            "edges not by the first predicted category (successes, mean)", "seconds (mean)"]
+    rows_ = []
+    for name, rs in results.items():
+        ok = [r for r in rs if r[2]]
+        rows_.append([name, len(rs), len(ok) / max(1, len(rs)), statistics.mean(r[3] for r in ok) if ok else "-",
+                      statistics.mean(r[4] for r in ok) if ok else "-", statistics.mean(r[5] for r in rs)])
+    print(table(head, rows_))
+    for key, edges, label in ((0, [20, 40, 60], "parts"), (1, [1, 3, 6], "cycle edges")):
+        print(f"\nBy {label} (success rate / mean tries of successes):\n")
+        bins = sorted({bin_of(r[key], edges) for r in results["predicted"]}, key=lambda b: int(b.strip(">").split("-")[0]))
+        head = [label] + list(results)
+        rows_ = []
+        for b in bins:
+            row = [b]
+            for name, rs in results.items():
+                sel = [r for r in rs if bin_of(r[key], edges) == b]
+                ok = [r for r in sel if r[2]]
+                row.append(f"{len(ok)}/{len(sel)}" + (f" ({statistics.mean(r[3] for r in ok):.1f})" if ok else ""))
+            rows_.append(row)
+        print(table(head, rows_))
+    n_cat = statistics.mean(len(v) for v in cats.by_pair.values())
+    print(f"\nNaive estimate (the paper's): a cycle of L parts with c configurations per edge closes with "
+          f"probability (1/c)^L; here c = {n_cat:.1f} on average per type pair, so a 15-part cycle: "
+          f"{(1 / n_cat) ** 15:.2e} (paper: 1/6^15 = {6.0 ** -15:.2e}).")
+    # 3. end to end
+    vae = args.vae or args.work / f"{args.example}.vae"
+    if not vae.exists():
+        print("\n(end-to-end skipped: run bench_string_vae.py first to train the string VAE in --work)")
+        return 0
+    from grammarkit.run import iter_results
+
+    print(f"\n## End to end: valid 3D shapes per minute, {args.e2e_seconds:.0f} s each\n")
+    rows_ = []
+    for backend, opts in (("string-vae", {"model": str(vae), "categories": str(model_path), "mode": "perturb",
+                                          "tries": str(args.tries)}),
+                          ("graph-sampler", {"dedupe": "isomorphism"})):
+        t0 = time.perf_counter()
+        made = 0
+        deadline = t0 + args.e2e_seconds
+        try:
+            for res in iter_results(grammar, backend=backend, n=100000, seed=args.seed, iterations=20, options=opts,
+                                    workers=1, timeout=args.e2e_seconds * 3):
+                if res.model is not None:
+                    made += 1
+                if time.perf_counter() > deadline:
+                    break
+        except Exception as exc:  # noqa: BLE001 - the time budget ends the run: report what was made
+            print(f"  ({backend}: {type(exc).__name__}: {exc})")
+        secs = time.perf_counter() - t0
+        rows_.append([backend, made, secs, 60.0 * made / secs])
+    base = rows_[1][3] or 1e-9
+    for r in rows_:
+        r.append(f"{r[3] / base:.2f}x")
+    print(table(["back end", "valid shapes", "seconds", "shapes per minute", "vs graph sampler"], rows_))
+    print(f"\nload average at the end: {' '.join(f'{x:.1f}' for x in os.getloadavg())}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

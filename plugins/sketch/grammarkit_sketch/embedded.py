@@ -1,0 +1,68 @@
+"""The library a models file was trained on, carried inside the file.
+
+A models file stores the library's source text and the part meshes its snippets insert (a few
+KB), so that `recognize(image, "Roof")` needs no library path and no download: the first use
+writes them (atomically) to a folder named after the library's hash in the sketch cache, and
+loads the library from there, where its relative `i("parts/...")` paths resolve. The hash is
+checked again after loading.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+from .dataset import DEFAULT_CACHE
+from .library import SnippetLibrary, _asset_paths, load_library
+from .models import ModelFileError, SketchModels
+
+
+def library_files(library: SnippetLibrary) -> dict[str, bytes]:
+    """{relative path: bytes} of the library file and the part files it inserts, or {} when the
+    library cannot be carried (no file, imports, parts outside its folder)."""
+    if not library.path or library.grammar.imports:
+        return {}
+    src = Path(library.path).resolve()
+    base = src.parent
+    files = {src.name: src.read_bytes()}
+    try:
+        text = src.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError):
+        return {}
+    if "import " in text and any(line.lstrip().startswith("import ") for line in text.splitlines()):
+        return {}  # imported files would be needed too: use the library path instead
+    for p in _asset_paths(library.grammar):
+        try:
+            rel = p.resolve().relative_to(base)
+        except ValueError:
+            return {}
+        if not p.is_file():
+            return {}
+        files[rel.as_posix()] = p.read_bytes()
+    return files
+
+
+def embedded_library(models: SketchModels, cache: Path | None = None) -> SnippetLibrary:
+    """The library stored in a models file, written out once under the cache and loaded."""
+    from grammarkit.fileio import atomic_output
+
+    files = models.library_files
+    main = models.meta.get("library_file")
+    if not files or main not in files:
+        raise ModelFileError(f"{models.path or 'the models'}: the models file does not carry its "
+                             "library; pass the library it was trained on (--library / library=)",
+                             None, code="sketch-need-library")
+    root = Path(cache or DEFAULT_CACHE) / "libraries" / models.library_hash[:20]
+    for rel, data in files.items():
+        target = (root / rel).resolve()
+        if root.resolve() not in target.parents:
+            raise ModelFileError(f"{models.path}: bad library file name {rel!r} in the models file",
+                                 None, code="sketch-bad-models")
+        if target.is_file() and target.read_bytes() == data:
+            continue
+        target.parent.mkdir(parents=True, exist_ok=True)
+        with atomic_output(target) as tmp:
+            with open(tmp, "wb") as fh:
+                fh.write(data)
+    library = load_library(root / main)
+    models.check_library(library)
+    return library
+

@@ -1,0 +1,356 @@
+"""Recognising one sketch: which snippet, which parameter values, how well it matches.
+
+    from grammarkit_sketch import recognize
+    r = recognize("roof.png", "Roof")                 # the shipped models and library
+    r.snippet, r.probability, r.values, r.score
+    r.use_line()            # 'use roof_hip as Roof'
+    r.set_options()         # ['Roof.roof_deg=31.7', 'Roof.roof_over=0.42']
+
+The cascade of Nishida et al. 2016 (s. 6.1): the type's classifier picks the snippet, that
+snippet's regressor estimates its parameters, and optionally `refine` steps of a search
+against the sketch's distance transform improve them (refine.py).
+"""
+from __future__ import annotations
+
+import threading
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from grammarkit.errors import GrammarkitError
+
+from .dataset import quick_size, render_input, score_image, stage_view
+from .drawing import draw
+from .image import check_aspect, distance_map, fit_transform, level, load_ink, resize, to_input
+from .library import SnippetLibrary, load_library
+from .models import ModelFileError, SketchModels, TypeModel, load_models
+from .nets import require_torch
+from .refine import EXACT_STYLE, METHODS, Scorer, refine
+from .stages import StageDeriver, StageSpec
+
+TOP = 3
+
+
+@dataclass(frozen=True)
+class Candidate:
+    snippet: str
+    probability: float
+    same_drawing: tuple[str, ...] = ()  # snippets that draw exactly like it
+
+    def to_dict(self) -> dict:
+        return {"snippet": self.snippet, "probability": round(self.probability, 4),
+                "same_drawing": list(self.same_drawing)}
+
+
+@dataclass
+class Recognition:
+    """What a sketch shows: the snippet, its parameter values and the match score."""
+
+    object_type: str
+    snippet: str
+    probability: float
+    top: list[Candidate]
+    values: dict[str, float]  # every ranged parameter of the snippet
+    normalized: dict[str, float]  # the same, as (v - lo) / (hi - lo)
+    estimated: list[str]  # parameters read from the drawing (the rest keep their defaults)
+    hidden: list[str]  # parameters no drawing shows
+    score: float  # s = exp(-RMS(D(render) - D(sketch))), 1 = perfect
+    network_score: float  # the same before refinement
+    refine_steps: int = 0
+    method: str = "greedy"
+    evaluations: int = 0
+    timings: dict[str, float] = field(default_factory=dict)  # milliseconds
+    stage: StageSpec | None = None
+
+    def use_line(self, anchor: str | None = None) -> str:
+        return f"use {self.snippet} as {anchor or self.object_type}"
+
+    def set_options(self, anchor: str | None = None) -> list[str]:
+        """`--set` values for `grammarkit derive` that reproduce the recognised parameters."""
+        a = anchor or self.object_type
+        return [f"{a}.{k}={_fmt(self.values[k])}" for k in self.estimated]
+
+    def to_dict(self) -> dict:
+        return {
+            "object_type": self.object_type, "snippet": self.snippet,
+            "probability": round(self.probability, 4), "top": [c.to_dict() for c in self.top],
+            "values": {k: float(_fmt(v)) for k, v in self.values.items()},
+            "normalized": {k: round(v, 4) for k, v in self.normalized.items()},
+            "estimated": list(self.estimated), "hidden": list(self.hidden),
+            "score": round(self.score, 4), "network_score": round(self.network_score, 4),
+            "refine_steps": self.refine_steps, "method": self.method, "evaluations": self.evaluations,
+            "use": self.use_line(), "set": self.set_options(),
+            "timings_ms": {k: round(v, 2) for k, v in self.timings.items()},
+        }
+
+
+def _fmt(v: float) -> str:
+    return f"{float(v):.4g}" if abs(float(v)) < 1000 else f"{float(v):.1f}"
+
+
+class Recognizer:
+    """Models + library, with the derivers and networks kept warm between sketches."""
+
+    def __init__(self, models: SketchModels, library: SnippetLibrary):
+        models.check_library(library)
+        self.models = models
+        self.library = library
+        self._derivers: dict[StageSpec, StageDeriver] = {}
+
+    def deriver(self, stage: StageSpec) -> StageDeriver:
+        """The stage's deriver (a session's stages differ from the trained ones in their anchor)."""
+        key = stage  # a frozen dataclass: hashable
+        got = self._derivers.get(key)
+        if got is None:
+            if len(self._derivers) > 32:
+                self._derivers.clear()
+            got = self._derivers[key] = StageDeriver(self.library, stage)
+        return got
+
+    # -- the cascade -----------------------------------------------------------------------
+    def classify(self, tm: TypeModel, x: np.ndarray) -> list[Candidate]:
+        torch = require_torch()
+        if len(tm.classes) == 1:
+            probs = np.ones(1)
+        else:
+            with torch.no_grad():
+                logits = tm.network()(torch.from_numpy(x[None, None].astype(np.float32)))
+                probs = torch.softmax(logits, dim=1)[0].numpy().astype(float)
+        order = np.argsort(-probs, kind="stable")
+        return [Candidate(tm.classes[i][0], float(probs[i]), tuple(tm.classes[i][1:])) for i in order]
+
+    def regress(self, tm: TypeModel, snippet: str, x: np.ndarray) -> tuple[np.ndarray, list[str], list[str]]:
+        torch = require_torch()
+        reg = tm.regressors.get(snippet)
+        if reg is None or not reg.params:
+            hidden = list(reg.hidden) if reg else []
+            return np.zeros(0), [], hidden
+        with torch.no_grad():
+            u = reg.network()(torch.from_numpy(x[None, None].astype(np.float32)))[0].numpy()
+        return u.astype(float), list(reg.params), list(reg.hidden)
+
+    def recognize_input(self, x: np.ndarray, object_type: str, *, stage: StageSpec | None = None,
+                        refine_steps: int = 0, method: str = "greedy", snippet: str | None = None,
+                        seed: int = 0, t_load: float = 0.0, target: np.ndarray | None = None) -> Recognition:
+        """Recognise a network input (RES x RES ink); see `recognize`. `target` is the sketch's
+        score image (dataset.score_image); without it the input stands in (resized to the score
+        canvas, which loses the long side's detail of an elongated canvas)."""
+        if method not in METHODS:
+            raise GrammarkitError(f"unknown refinement method {method!r}; expected one of "
+                                  f"{', '.join(METHODS)}", None, code="sketch-bad-method")
+        if isinstance(refine_steps, bool) or not isinstance(refine_steps, int) or refine_steps < 0:
+            raise GrammarkitError(f"refine steps must be a whole number >= 0, got {refine_steps!r}", None,
+                                  code="sketch-bad-refine")
+        tm = self.models.type_model(object_type)
+        t = next(k for k, v in self.models.types.items() if v is tm)
+        stage = stage or tm.stage
+        t0 = time.perf_counter()
+        top = self.classify(tm, x)
+        t1 = time.perf_counter()
+        if snippet is not None:
+            if snippet not in self.library.snippets or self.library.snippets[snippet].object_type != t:
+                names = ", ".join(s.name for s in self.library.snippets_of(t))
+                raise GrammarkitError(f"{snippet!r} is not a {t} snippet of library "
+                                      f"{self.library.name!r} ({names})", None, code="sketch-bad-snippet")
+            chosen = snippet
+            prob = next((c.probability for c in top if c.snippet == snippet or snippet in c.same_drawing), 0.0)
+        else:
+            chosen, prob = top[0].snippet, top[0].probability
+        u, names, hidden = self.regress(tm, chosen, x)
+        t2 = time.perf_counter()
+        info = self.library.snippets[chosen]
+        values = info.defaults()
+        if target is None:
+            target = x if stage.framing == "fit" else level(resize(x, quick_size(stage)))
+        scorer = Scorer(self.deriver(stage), info, names, dict(values), distance_map(target))
+        net_score = scorer(u)
+        t3 = time.perf_counter()
+        u_ref, score = u, net_score
+        if refine_steps > 0 and len(u):
+            u_ref, score, _ = refine(scorer, u, refine_steps, method, seed)
+        t4 = time.perf_counter()
+        params = {p.name: p for p in info.params}
+        for n, val in zip(names, u_ref):
+            values[n] = params[n].value(val)
+        normalized = {n: params[n].normalise(v) for n, v in values.items()}
+        timings = {"load": t_load * 1e3, "classify": (t1 - t0) * 1e3, "regress": (t2 - t1) * 1e3,
+                   "score": (t3 - t2) * 1e3, "refine": (t4 - t3) * 1e3,
+                   "total": t_load * 1e3 + (t4 - t0) * 1e3}
+        return Recognition(t, chosen, prob, top[:TOP], values, normalized, names, hidden, score,
+                           net_score, refine_steps if len(u) else 0, method, scorer.evaluations,
+                           timings, stage)
+
+    def recognize(self, image: Any, object_type: str, *, stage: StageSpec | None = None, **kw: Any) -> Recognition:
+        """Recognise a sketch image (path, PIL image or array) of one object type."""
+        t0 = time.perf_counter()
+        ink = load_ink(image)
+        name = str(image) if isinstance(image, (str, Path)) else "sketch"
+        return self.recognize_ink(ink, object_type, stage=stage, what=name, t0=t0, **kw)
+
+    def recognize_ink(self, ink: np.ndarray, object_type: str, *, stage: StageSpec | None = None,
+                      what: str = "sketch", t0: float | None = None, **kw: Any) -> Recognition:
+        """Recognise an ink map (H x W, 1 = line) drawn on the stage's canvas."""
+        t0 = time.perf_counter() if t0 is None else t0
+        tm = self.models.type_model(object_type)
+        stage = stage or tm.stage
+        if stage.framing == "anchor":
+            check_aspect(ink, stage.canvas_size(), what)
+        x = to_input(ink, stage.framing)
+        target = score_image(ink, stage)
+        return self.recognize_input(x, object_type, stage=stage, t_load=time.perf_counter() - t0,
+                                    target=target, **kw)
+
+    # -- pictures --------------------------------------------------------------------------
+    def model_of(self, r: Recognition, stage: StageSpec | None = None) -> Any:
+        return self.deriver(stage or r.stage).derive(r.snippet, r.values)
+
+    def preview(self, image: Any, r: Recognition, path: Any = None, size: int = 512) -> Any:
+        """The sketch (grey) with the recognised model's lines (red) over it, on the sketch's
+        canvas (longest side `size`)."""
+        from PIL import Image
+
+        ink = load_ink(image)
+        stage = r.stage
+        h, w = ink.shape
+        k = size / max(w, h)
+        W, H = max(1, int(round(w * k))), max(1, int(round(h * k)))
+        sk = np.asarray(Image.fromarray((ink * 255).astype(np.uint8), "L").resize((W, H), Image.Resampling.BILINEAR),
+                        dtype=np.float32) / 255.0
+        model = self.model_of(r)
+        if stage.framing == "anchor":
+            mk = draw(model, stage_view(stage, model, (W, H)), EXACT_STYLE, stage.host_box())
+        else:
+            own = draw(model, stage_view(stage, model, (512, 512)), EXACT_STYLE, stage.host_box())
+            sm, mdx, mdy = fit_transform(own)
+            ss, sdx, sdy = fit_transform(sk)
+            # model canvas -> input -> sketch canvas: p_s = (sm * p_m + dm - ds) / ss
+            a = sm / ss
+            inv = (1 / a, 0.0, -((mdx - sdx) / ss) / a, 0.0, 1 / a, -((mdy - sdy) / ss) / a)
+            img = Image.fromarray((own * 255).astype(np.uint8), "L")
+            mk = np.asarray(img.transform((W, H), Image.Transform.AFFINE, inv, Image.Resampling.BILINEAR),
+                            dtype=np.float32) / 255.0
+        rgb = np.ones((H, W, 3), dtype=np.float32)
+        rgb -= sk[..., None] * 0.55
+        red = np.array([0.85, 0.1, 0.1], dtype=np.float32)
+        a = np.clip(mk, 0, 1)[..., None]
+        rgb = rgb * (1 - a) + red * a
+        out = Image.fromarray(np.clip(rgb * 255, 0, 255).astype(np.uint8), "RGB")
+        if path is not None:
+            from grammarkit.geometry.render import save_image
+
+            save_image(out, path)
+        return out
+
+    def canvas(self, object_type: str, path: Any = None, size: int | None = None) -> Any:
+        """A blank canvas of a type: the anchor's outline in light grey, where to draw."""
+        from PIL import Image
+
+        tm = self.models.type_model(object_type)
+        stage = tm.stage
+        W, H = stage.canvas_size()
+        if size:
+            k = size / max(W, H)
+            W, H = int(round(W * k)), int(round(H * k))
+        rgb = np.ones((H, W, 3), dtype=np.float32)
+        outline = anchor_outline(stage, (W, H))
+        rgb -= outline[..., None] * 0.25
+        out = Image.fromarray(np.clip(rgb * 255, 0, 255).astype(np.uint8), "RGB")
+        if path is not None:
+            from grammarkit.geometry.render import save_image
+
+            save_image(out, path)
+        return out
+
+
+def anchor_outline(stage: StageSpec, size: tuple[int, int]) -> np.ndarray:
+    """Ink of the anchor's outline (the host block's visible edges) on a stage canvas."""
+    from PIL import Image, ImageDraw
+
+    W, H = size
+    img = Image.new("L", (W, H), 0)
+    box = stage.host_box()
+    if stage.framing == "fit" or box is None:
+        w, d = stage.anchor_size  # the lot, seen from the stage camera framed on itself
+        pts = np.array([(0, 0, 0), (w, 0, 0), (w, d, 0), (0, d, 0)], float)
+        view = stage.camera().resolve(np.vstack([pts, pts + (0, 0, max(w, d))]), (W, H))
+        loops = [pts]
+    else:
+        view = stage.camera().resolve(stage.frame_points(), (W, H))
+        w, d = stage.anchor_size
+        if stage.anchor_kind == "top":
+            z = stage.host_height
+            loops = [np.array([(0, 0, z), (w, 0, z), (w, d, z), (0, d, z)], float)]
+        else:
+            x0, z0 = stage.anchor_origin()
+            loops = [np.array([(x0, 0, z0), (x0 + w, 0, z0), (x0 + w, 0, z0 + d), (x0, 0, z0 + d)], float)]
+    draw_ = ImageDraw.Draw(img)
+    for loop in loops:
+        px = view.to_pixels(loop)
+        draw_.line([tuple(p) for p in px.tolist()] + [tuple(px[0].tolist())], fill=255, width=2)
+    return np.asarray(img, dtype=np.float32) / 255.0
+
+
+# ------------------------------------------------------------------------------------------
+_lock = threading.Lock()
+_models: dict[tuple, SketchModels] = {}  # (resolved path, mtime) -> loaded models
+_recognizers: dict[tuple, Recognizer] = {}  # (id of models, library hash) -> recognizer
+
+
+def get_recognizer(models: Any = None, library: Any = None) -> Recognizer:
+    """A (cached) Recognizer: `models` a path or SketchModels (default: the shipped weights),
+    `library` a path, text or SnippetLibrary (default: the library the models embed)."""
+    from .embedded import embedded_library
+    from .models import SHIPPED
+
+    if isinstance(models, SketchModels):
+        m = models
+    else:
+        p = Path(models) if models is not None else SHIPPED
+        try:
+            key = (str(p.resolve()), p.stat().st_mtime_ns)
+        except OSError:
+            key = None
+        with _lock:
+            m = _models.get(key) if key else None
+        if m is None:
+            m = load_models(models)
+            if key:
+                with _lock:
+                    if len(_models) > 8:
+                        _models.clear()
+                    _models[key] = m
+    lib = embedded_library(m) if library is None else load_library(library)
+    rkey = (id(m), lib.hash, lib.path)
+    with _lock:
+        rec = _recognizers.get(rkey)
+    if rec is None or rec.models is not m:
+        rec = Recognizer(m, lib)
+        with _lock:
+            if len(_recognizers) > 8:
+                _recognizers.clear()
+            _recognizers[rkey] = rec
+    return rec
+
+
+def recognize(image: Any, object_type: str, *, models: Any = None, library: Any = None,
+              refine: int = 0, method: str = "greedy", snippet: str | None = None,
+              seed: int = 0) -> Recognition:
+    """Recognise a sketch of one object type.
+
+    image:   a path, a PIL image or an array (dark lines on light paper). An object type with
+             anchor framing needs the type's canvas aspect ratio (`Recognizer.canvas`).
+    models:  a models file (default: the weights shipped for grammars/library.grammar).
+    library: the snippet library (default: the copy embedded in the models file). A library
+             that differs from the one trained on is refused ("retrain").
+    refine:  refinement steps; `method` "greedy" (Nishida's code) or "metropolis" (the paper).
+    snippet: skip the classifier and estimate this snippet's parameters.
+    """
+    rec = get_recognizer(models, library)
+    return rec.recognize(image, object_type, refine_steps=refine, method=method, snippet=snippet, seed=seed)
+
+
+__all__ = ["Candidate", "ModelFileError", "Recognition", "Recognizer", "get_recognizer", "recognize",
+           "render_input"]

@@ -1,0 +1,135 @@
+"""The `string-vae` back end's work: sample latent points, decode, keep new valid graphs, and,
+with an edge-category model, instantiate them in 3D.
+
+Without `--option categories=...` results are data only (`Result.model` is None: the string and
+its graph, in the manifest). With it, each new graph's edge categories are predicted (voting
+over several strings) and the graph is instantiated (instantiate.py); a graph that cannot be
+instantiated within the tries is skipped and counted with its reason, never written half.
+"""
+from __future__ import annotations
+
+import re
+import time
+from typing import Iterator
+
+from grammarkit.errors import GrammarkitError
+from grammarkit.run import Request, Result
+
+from .requires import require_learning
+
+
+def generate(request: Request) -> Iterator[Result]:
+    require_learning("the string-vae back end")
+    from .graphs import GraphSet
+    from .modelfile import load_vae
+    from .sampling import Sampler, SamplingSettings
+    from .strings import convert
+
+    opts = request.options
+    t0 = time.perf_counter()
+    vae = load_vae(opts.model, grammar=request.grammar)
+    settings = SamplingSettings(decoding=opts.decoding, temperature=opts.temperature,
+                                magnitude=opts.magnitude, steps=opts.steps,
+                                local_magnitude=opts.local_magnitude, points=opts.points,
+                                path_length=opts.path_length, batch=opts.batch)
+    sampler = Sampler(vae, settings, seed=request.seed)
+    train = GraphSet()
+    for g in sampler.train_graphs:
+        train.add(g)
+    seen = GraphSet()
+    limit = opts.max_decodes or 200 * max(1, request.n)
+    em = inst = None
+    if opts.categories:
+        from .edgemodel import load_edge_model
+        from .instantiate import Instantiator
+
+        em = load_edge_model(opts.categories, request.grammar)
+        inst = Instantiator(request.grammar, em.categories)
+    failures: dict[str, int] = {}
+    inst_stats = {"instantiated": 0, "failed": 0, "tries": 0, "monte_carlo": 0, "seconds": 0.0}
+    advance = request.progress("string-vae", request.n)
+    index = 0
+    skipped = {"invalid": 0, "training": 0, "duplicate": 0}
+    while index < request.n and sampler.decoded_points < limit:
+        request.check_deadline()
+        for s in sampler.run(opts.mode, 1):
+            if index >= request.n:
+                break
+            if not s.valid:
+                skipped["invalid"] += 1
+                continue
+            g = s.decoded.graph
+            if not opts.include_training and g in train:
+                skipped["training"] += 1
+                continue
+            if not seen.add(g):
+                skipped["duplicate"] += 1
+                continue
+            model = None
+            extra_inst: dict = {}
+            if inst is not None:
+                gseed = int(request.seed) * 1_000_003 + sampler.decoded_points
+                predicted = em.rankings(g, strings=opts.votes, seed=gseed)
+                res = inst.instantiate(g, predicted, seed=gseed, max_tries=opts.tries, deadline=request.deadline)
+                inst_stats["tries"] += res.tries
+                inst_stats["seconds"] += res.seconds
+                if not res.ok:
+                    inst_stats["failed"] += 1
+                    # group failures by kind: the reason without part numbers and distances
+                    why = (res.reason or "?").split("most often: ")[-1]
+                    key = re.sub(r"\d+(\.\d+)?", "N", why.split(": placing")[0].split(" puts ")[0])[:90]
+                    failures[key] = failures.get(key, 0) + 1
+                    continue
+                inst_stats["instantiated"] += 1
+                inst_stats["monte_carlo"] += res.monte_carlo
+                model = res.assembly
+                model.name = f"{request.grammar.name}_string_{index:05d}"
+                extra_inst = {"categories": token_categories(s.text, vae.alphabet, em.categories, res.categories),
+                              "predicted": token_categories(s.text, vae.alphabet, em.categories,
+                                                            {e: r[0] for e, r in predicted.items() if r}),
+                              "instantiation": {"tries": res.tries, "insertions": res.insertions,
+                                                "monte_carlo": res.monte_carlo, "seconds": round(res.seconds, 3)}}
+            rid = f"{request.grammar.name}_string_{index:05d}"
+            yield Result(
+                id=rid, index=index, model=model, seed=request.seed,
+                parents=tuple(f"train:{p}" for p in s.parents),
+                metrics={"parts": len(g), "cycles": g.cycle_rank, "repaired": s.decoded.repaired},
+                extra={"string": s.text,
+                       "string2shape": convert(s.text, vae.alphabet, target="string2shape"),
+                       "graph": {"nodes": [{"id": i, "type": t} for i, t in enumerate(g.types)],
+                                 "edges": [list(e) for e in g.edges]},
+                       "histogram": g.histogram(), "mode": opts.mode, "decoding": opts.decoding,
+                       "novel": g not in train, **extra_inst})
+            index += 1
+            advance(1, decoded=sampler.decoded_points)
+    stats = {"decoded": sampler.decoded_points, "valid": sampler.valid_points,
+             "validity": round(sampler.valid_points / max(1, sampler.decoded_points), 4),
+             "yielded": index, "skipped": skipped, "mode": opts.mode, "decoding": opts.decoding,
+             "seconds": round(time.perf_counter() - t0, 2)}
+    if inst is not None:
+        stats["instantiation"] = {**inst_stats, "seconds": round(inst_stats["seconds"], 2), "failures": failures}
+    if index < request.n:
+        stats["shortfall"] = (f"{index} new graphs after decoding {sampler.decoded_points} latent points "
+                              f"(limit {limit}: --option max-decodes=N); skipped {skipped}"
+                              + (f"; {inst_stats['failed']} could not be instantiated ({failures})" if inst else ""))
+    return stats
+
+
+def token_categories(text: str, alphabet, cats, used: dict) -> list:  # noqa: ANN001
+    """Per token of `text`: the category of its edge as written (parent -> child, opener ->
+    closer), from `used` ({(u, v), u < v: category u -> v}); None for tokens without an edge."""
+    from .predictor import string_edges
+    from .vocab import Vocab
+
+    out = []
+    for e in string_edges(text, Vocab(alphabet, 99)):
+        if e is None:
+            out.append(None)
+            continue
+        u, v = e
+        k = used.get((min(u, v), max(u, v)))
+        out.append(None if k is None else (k if u < v else cats.reverse.get(k, k)))
+    return out
+
+
+__all__ = ["generate", "GrammarkitError"]

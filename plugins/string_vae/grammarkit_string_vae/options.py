@@ -1,0 +1,39 @@
+"""The string-VAE back end's options: its `--option key=value` settings, as a pydantic model.
+
+Kept apart from the sampler so that listing plugins does not import torch.
+"""
+from __future__ import annotations
+
+from typing import Literal, Optional
+
+from pydantic import BaseModel, ConfigDict, Field
+
+
+class StringVAEOptions(BaseModel):
+    """`grammarkit derive GRAMMAR --backend string-vae --option model=castle.vae ...`"""
+
+    model_config = ConfigDict(extra="forbid", frozen=True, protected_namespaces=())
+
+    model: str = Field(..., description="the trained model file (.vae, from `grammarkit train string-vae`), "
+                       "or builtin:castle for the shipped one")
+    mode: Literal["perturb", "interpolate", "path", "prior"] = Field(
+        "perturb", description="latent sampling: around training points, between two, along a latent "
+        "path, or from the prior N(0, I)")
+    decoding: Literal["masked", "free"] = Field(
+        "masked", description="masked: grammar-constrained, valid by construction; free: the paper's "
+        "decoding, invalid strings dropped")
+    temperature: float = Field(0.0, ge=0, description="0: most likely token; > 0: sample tokens")
+    magnitude: float = Field(0.25, gt=0, description="perturb: largest latent offset per dimension "
+                             "(paper: 0.25)")
+    steps: int = Field(8, ge=1, description="perturb: offset magnitudes tried per training point")
+    local_magnitude: float = Field(0.1, gt=0, description="interpolate/path: offsets around each point")
+    points: int = Field(8, ge=1, description="interpolate: points per segment")
+    path_length: int = Field(32, ge=2, description="path: latent points per path (paper: 32)")
+    batch: int = Field(128, ge=1, description="latent points decoded together")
+    max_decodes: Optional[int] = Field(None, ge=1, description="stop after decoding this many latent "
+                                       "points (default: 200 x n)")
+    include_training: bool = Field(False, description="also yield graphs of the training set")
+    categories: Optional[str] = Field(None, description="edge-category model (.edges, from `grammarkit train "
+                                      "edge-categories`): instantiate every graph in 3D and write it as a shape")
+    tries: int = Field(8, ge=1, description="instantiation: start edges tried per graph")
+    votes: int = Field(8, ge=1, description="instantiation: strings per graph that vote on each edge's category")

@@ -1,0 +1,216 @@
+"""Latent-space sampling (Kalojanov et al. 2019, section 5.2) and the prior.
+
+All modes start from the encodings of training strings (`LoadedVAE.train_mu`, one per
+training graph) and decode latent points with `decoding.decode_latents` (free or masked):
+
+- `prior`: z ~ N(0, I), the usual VAE sample.
+- `perturb`: around a training point p, add a random offset r (uniform in [-m, m] in every
+  dimension) with a magnitude m that grows step by step up to `magnitude` (0.25, the paper's
+  value) until the decoded string is valid and describes a graph other than p's.
+- `interpolate`: points at equal intervals on the segment between two training points, each
+  searched like `perturb` with smaller offsets (`local_magnitude`).
+- `path`: a path of `path_length` (32) latent points from one training point to another,
+  made by repeatedly splitting every segment at the training point closest to both of its
+  ends; its segments are then sampled like `interpolate`.
+
+`Sampler.run(n)` yields `Sample`s in order; each knows the latent point, the decoded string,
+whether it is valid and its graph, and which training graphs it came from. Everything is
+drawn from one numpy generator seeded by the caller: same seed, same samples.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Iterator
+
+import numpy as np
+import torch
+
+from .decoding import Decoded, decode_latents
+from .graphs import GraphSet, TypedGraph
+from .modelfile import LoadedVAE
+from .strings import decode
+
+__all__ = ["MODES", "Sample", "Sampler", "SamplingSettings"]
+
+MODES = ("prior", "perturb", "interpolate", "path")
+
+
+@dataclass(frozen=True)
+class SamplingSettings:
+    decoding: str = "masked"  # or "free"
+    temperature: float = 0.0
+    magnitude: float = 0.25  # perturb: largest offset per dimension (paper: 0.25)
+    steps: int = 8  # perturb: offsets of magnitude magnitude * k / steps, k = 1..steps
+    local_magnitude: float = 0.1  # interpolate / path: offsets around each point
+    local_steps: int = 3
+    points: int = 8  # interpolate: points per segment; path: points per path segment
+    path_length: int = 32
+    batch: int = 128  # seeds decoded together
+
+
+@dataclass
+class Sample:
+    z: np.ndarray
+    decoded: Decoded
+    mode: str
+    parents: tuple[int, ...] = ()  # indices of the training graphs it started from
+    attempt: int = 0  # decoded points spent on it (perturbation steps)
+
+    @property
+    def valid(self) -> bool:
+        return self.decoded.valid
+
+    @property
+    def text(self) -> str:
+        return self.decoded.text
+
+
+@dataclass
+class Sampler:
+    vae: LoadedVAE
+    settings: SamplingSettings = field(default_factory=SamplingSettings)
+    seed: int = 0
+    decoded_points: int = 0  # every latent point decoded (the yield's denominator)
+    valid_points: int = 0
+
+    def __post_init__(self) -> None:
+        self.rng = np.random.default_rng(self.seed)
+        self._train_graphs: list[TypedGraph] | None = None
+        self._calls = 0
+
+    # ---- helpers ---------------------------------------------------------------------------
+    @property
+    def train_graphs(self) -> list[TypedGraph]:
+        if self._train_graphs is None:
+            self._train_graphs = [decode(s, self.vae.alphabet).graph for s in self.vae.train_strings]
+        return self._train_graphs
+
+    def _decode(self, z: np.ndarray) -> list[Decoded]:
+        self._calls += 1
+        out = decode_latents(self.vae.model, torch.from_numpy(np.ascontiguousarray(z, dtype=np.float32)),
+                             vocab=self.vae.vocab, rules=self.vae.rules, mode=self.settings.decoding,
+                             temperature=self.settings.temperature, seed=self.seed * 7919 + self._calls)
+        self.decoded_points += len(out)
+        self.valid_points += sum(d.valid for d in out)
+        return out
+
+    def _search(self, centres: np.ndarray, avoid: list[list[int]], magnitude: float, steps: int,
+                mode: str, parents: list[tuple[int, ...]]) -> list[Sample | None]:
+        """For each centre, offsets of growing magnitude until a valid string whose graph is
+        none of `avoid[i]` (training graph indices) appears; None where none did."""
+        found: list[Sample | None] = [None] * len(centres)
+        todo = list(range(len(centres)))
+        D = centres.shape[1]
+        for k in range(1, steps + 1):
+            if not todo:
+                break
+            m = magnitude * k / steps
+            z = centres[todo] + self.rng.uniform(-m, m, size=(len(todo), D))
+            outs = self._decode(z)
+            left = []
+            for j, i, d in zip(range(len(todo)), todo, outs):
+                if d.valid and not any(_same(d.graph, self.train_graphs[a]) for a in avoid[i]):
+                    found[i] = Sample(z[j], d, mode, parents[i], k)
+                else:
+                    left.append(i)
+            todo = left
+        return found
+
+    # ---- modes -----------------------------------------------------------------------------
+    def prior(self, count: int) -> list[Sample]:
+        z = self.rng.standard_normal((count, self.vae.model.config.latent))
+        return [Sample(z[i], d, "prior") for i, d in enumerate(self._decode(z))]
+
+    def perturb(self, count: int) -> list[Sample | None]:
+        mu = self.vae.train_mu.numpy()
+        idx = self.rng.integers(0, len(mu), size=count)
+        return self._search(mu[idx], [[int(i)] for i in idx], self.settings.magnitude, self.settings.steps,
+                            "perturb", [(int(i),) for i in idx])
+
+    def interpolate(self, pairs: int) -> list[Sample | None]:
+        mu = self.vae.train_mu.numpy()
+        out: list[Sample | None] = []
+        P = self.settings.points
+        ts = np.arange(1, P + 1) / (P + 1)
+        for _ in range(pairs):
+            a, b = (int(x) for x in self.rng.choice(len(mu), size=2, replace=False))
+            centres = mu[a] + ts[:, None] * (mu[b] - mu[a])
+            out += self._search(centres, [[a, b]] * P, self.settings.local_magnitude, self.settings.local_steps,
+                                "interpolate", [(a, b)] * P)
+        return out
+
+    def latent_path(self, a: int, b: int) -> list[int]:
+        """Training-point indices of a path from a to b: every segment split at the training
+        point closest to both ends (smallest sum of distances) until `path_length` points."""
+        mu = self.vae.train_mu.numpy()
+        path = [a, b]
+        used = {a, b}
+        L = min(self.settings.path_length, len(mu))
+        while len(path) < L:
+            grew = False
+            new = [path[0]]
+            for p, q in zip(path, path[1:]):
+                if len(path) + (len(new) - 1 - path.index(p)) >= L:
+                    new.append(q)
+                    continue
+                d = np.linalg.norm(mu - mu[p], axis=1) + np.linalg.norm(mu - mu[q], axis=1)
+                d[list(used)] = np.inf
+                x = int(np.argmin(d))
+                if np.isfinite(d[x]) and len(new) + (len(path) - len(new)) < L:
+                    new.append(x)
+                    used.add(x)
+                    grew = True
+                new.append(q)
+            path = new[:L] if len(new) > L else new
+            if not grew:
+                break
+        return path
+
+    def path(self, paths: int) -> list[Sample | None]:
+        mu = self.vae.train_mu.numpy()
+        out: list[Sample | None] = []
+        P = max(1, self.settings.points // 4)
+        ts = np.arange(1, P + 1) / (P + 1)
+        for _ in range(paths):
+            a, b = (int(x) for x in self.rng.choice(len(mu), size=2, replace=False))
+            route = self.latent_path(a, b)
+            centres, avoid, parents = [], [], []
+            for p, q in zip(route, route[1:]):
+                for t in ts:
+                    centres.append(mu[p] + t * (mu[q] - mu[p]))
+                    avoid.append([p, q])
+                    parents.append((p, q))
+            out += self._search(np.array(centres), avoid, self.settings.local_magnitude,
+                                self.settings.local_steps, "path", parents)
+        return out
+
+    def run(self, mode: str, rounds: int) -> Iterator[Sample]:
+        """`rounds` batches of the mode's samples (perturb: `batch` seeds per round; interpolate:
+        `batch // points` pairs; path: one path; prior: `batch` points); None results skipped."""
+        if mode not in MODES:
+            raise ValueError(f"unknown sampling mode {mode!r}; known: {', '.join(MODES)}")
+        B = self.settings.batch
+        for _ in range(rounds):
+            if mode == "prior":
+                batch: list = self.prior(B)
+            elif mode == "perturb":
+                batch = self.perturb(B)
+            elif mode == "interpolate":
+                batch = self.interpolate(max(1, B // self.settings.points))
+            else:
+                batch = self.path(1)
+            for s in batch:
+                if s is not None:
+                    yield s
+
+
+def _same(g: TypedGraph | None, h: TypedGraph) -> bool:
+    if g is None:
+        return False
+    if g.types == h.types and g.edges == h.edges:
+        return True
+    if sorted(g.types) != sorted(h.types) or len(g.edges) != len(h.edges):
+        return False
+    s = GraphSet()
+    s.add(h)
+    return g in s

@@ -1,0 +1,102 @@
+"""Reading sketches (and refusing bad ones), the refinement score and the two searches."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from grammarkit_sketch.image import SketchError, check_aspect, distance_map, load_ink, to_input
+from grammarkit_sketch.refine import GREEDY_STEP, greedy, metropolis, score_from_distance
+
+
+def _square(size=200, width=3):
+    a = np.full((size, size), 255, np.uint8)
+    a[40:40 + width, 40:160] = 0
+    a[40:160, 40:40 + width] = 0
+    return a
+
+
+def test_reads_paths_images_and_arrays(tmp_path):
+    a = _square()
+    Image.fromarray(a).save(tmp_path / "s.png")
+    from_path = load_ink(tmp_path / "s.png")
+    from_array = load_ink(a)
+    rgba = Image.fromarray(np.dstack([np.zeros((200, 200, 3), np.uint8), 255 - a]), "RGBA")
+    from_rgba = load_ink(rgba)  # black lines on a transparent background
+    assert np.allclose(from_path, from_array) and np.allclose(from_array, from_rgba, atol=0.01)
+    assert from_path.max() == pytest.approx(1.0) and from_path[0, 0] == 0.0
+
+
+@pytest.mark.parametrize("make, message", [
+    (lambda p: None, "sketch image not found"),
+    (lambda p: p.write_text("not an image"), "not a readable image"),
+    (lambda p: Image.new("L", (300, 300), 255).save(p, format="PNG"), "blank: no strokes"),
+    (lambda p: Image.new("L", (20, 300), 0).save(p, format="PNG"), "at least 32 pixels"),
+    (lambda p: Image.new("L", (300, 300), 10).save(p, format="PNG"), "mostly dark"),
+])
+def test_bad_images_are_refused_with_the_reason(tmp_path, make, message):
+    p = tmp_path / "bad.png"
+    make(p)
+    with pytest.raises(SketchError, match=message) as err:
+        load_ink(p)
+    assert str(p) in str(err.value)
+
+
+def test_a_grey_scan_is_levelled():
+    a = _square().astype(np.float32)
+    scan = (a * 0.6 + 90).astype(np.uint8)  # grey paper, grey lines
+    assert load_ink(scan)[0, 0] == 0.0  # the paper becomes white
+    assert np.abs(to_input(load_ink(scan), "anchor") - to_input(load_ink(a), "anchor")).max() < 0.05
+
+
+def test_canvas_aspect_is_checked():
+    ink = np.zeros((100, 300), np.float32)
+    check_aspect(ink, (600, 200), "x")
+    with pytest.raises(SketchError, match="300x100 pixels .* canvas of this object type is 256x256"):
+        check_aspect(ink, (256, 256), "x")
+
+
+def test_input_levels_thin_lines_to_black():
+    a = np.zeros((512, 512), np.float32)
+    a[100, 50:450] = 1.0  # one-pixel line, a quarter pixel after reduction
+    x = to_input(a, "anchor")
+    assert x.shape == (128, 128) and x.max() == pytest.approx(1.0)
+
+
+def test_score_is_one_for_a_perfect_match_and_falls_with_distance():
+    x = np.zeros((128, 128), np.float32)
+    x[40, 20:100] = 1
+    d = distance_map(x)
+    assert score_from_distance(d, d) == 1.0
+    y = np.roll(x, 2, axis=0)
+    z = np.roll(x, 6, axis=0)
+    assert 1.0 > score_from_distance(distance_map(y), d) > score_from_distance(distance_map(z), d)
+    assert distance_map(np.zeros((8, 8))).min() == 8  # nothing drawn: as far as can be
+
+
+def _bowl(target):
+    return lambda u: float(np.exp(-np.abs(np.asarray(u) - target).sum() * 10))
+
+
+def test_greedy_walks_to_the_optimum_with_shrinking_steps():
+    target = np.array([0.3, 0.71])
+    u, s = greedy(_bowl(target), np.array([0.5, 0.5]), 40)
+    assert np.abs(u - target).max() <= GREEDY_STEP  # within a final step
+    calls = []
+
+    def counting(u):
+        calls.append(np.asarray(u).copy())
+        return _bowl(target)(u)
+    greedy(counting, np.array([0.5, 0.5]), 12)
+    steps = {round(abs(c - 0.5).max(), 6) for c in calls[1:5]}
+    assert steps == {GREEDY_STEP}  # first sweep: +/- 0.02 on each parameter
+
+
+def test_metropolis_keeps_the_best_state_and_is_seeded():
+    target = np.array([0.2, 0.8, 0.5])
+    f = _bowl(target)
+    start = np.array([0.5, 0.5, 0.5])
+    u1, s1 = metropolis(f, start, 60, seed=3)
+    u2, s2 = metropolis(f, start, 60, seed=3)
+    assert np.array_equal(u1, u2) and s1 == s2
+    assert s1 >= f(start) and s1 == pytest.approx(f(u1))
