@@ -730,7 +730,9 @@ def _op_step(apply: Callable, fns: tuple, block: tuple | None, span: Span | None
             # called sys.exit): report it located, no traceback, no silent exit
             raise fail(s, f"{who} failed: {type(exc).__name__}: {exc}", span) from None
         if type(r) is list:
-            if not all(type(c) is tuple and len(c) == 2 and isinstance(c[0], Shape) for c in r):
+            # (shape, slot) pairs, or (shape, slot, index, total) when the operation numbers
+            # its parts itself (comp: comp.index counts every face, not only the selected)
+            if not all(type(c) is tuple and len(c) in (2, 4) and isinstance(c[0], Shape) for c in r):
                 raise fail(s, f"{who} returned a list that is not of (shape, slot) pairs", span)
             ctx.spawn(s, r, name)
             return None
