@@ -97,7 +97,7 @@ def compose(ctx: Derivation, where: Any) -> tuple[Any, Any]:
         if len(ctx.surface[1]):
             empty = Manifold()
             return empty, empty.to_mesh()
-        raise DerivationError("the derivation produced nothing: no solid and no surface (every "
+        raise DerivationError("the derivation produced nothing: no volume (solid) and no surface (every "
                               "shape was deleted, or ended with no area)", where, code="empty-model")
     ctx.check_triangles(ctx.est_tris, where)
     if not adds:
