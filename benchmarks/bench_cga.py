@@ -6,7 +6,9 @@
 Per file: constructs total / translated / warned (approximated + dropped); whether the
 translation passes `grammarkit check`; whether it derives (`grammarkit.derive` on a 20 x 16 m
 rectangular lot, seed 0, in a child process with a time limit; a failure gives the reason);
-whether the model is watertight when read back by trimesh with default arguments; the import
+the triangles of the model's solid and of its surface layer (open faces, docs/language.md
+"Solids and surfaces"); whether the solid is watertight when read back by trimesh with
+default arguments ("no solid" when the model is made of surfaces only); the import
 time (median of several runs) and its ratio to parsing alone (the baseline measured in the
 same run). Then the corpus share of translated constructs and the missing features ranked by
 how many warned constructs each accounts for: the work order for the engine.
@@ -40,15 +42,20 @@ def _derive_child(text: str, filename: str, queue: "mp.Queue") -> None:
         from grammarkit.split import Limits
         g = grammarkit.parse(text, filename=filename)
         model = grammarkit.derive(g, seed=0, lot=LOT, limits=Limits(max_shapes=50_000))
-        mesh = model.mesh
-        back = trimesh.Trimesh(vertices=mesh.vertices, faces=mesh.faces)
-        queue.put(("ok", bool(back.is_watertight), int(len(mesh.faces))))
+        mesh = model.mesh  # the solid; the surface layer (open faces) is apart from it
+        n_surface = int(len(model.surface_faces))
+        if len(mesh.faces):
+            back = trimesh.Trimesh(vertices=mesh.vertices, faces=mesh.faces)
+            watertight: object = bool(back.is_watertight)
+        else:
+            watertight = "no solid"  # only surfaces: no solid to be watertight
+        queue.put(("ok", watertight, (int(len(mesh.faces)), n_surface)))
     except Exception as exc:  # noqa: BLE001 - the reason goes into the table
         first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
-        queue.put(("fail", f"{type(exc).__name__}: {first}", 0))
+        queue.put(("fail", f"{type(exc).__name__}: {first}", (0, 0)))
 
 
-def derive_in_child(text: str, filename: str, timeout: float) -> tuple[str, object, int]:
+def derive_in_child(text: str, filename: str, timeout: float) -> tuple[str, object, tuple[int, int]]:
     queue: mp.Queue = mp.get_context("spawn").Queue()
     proc = mp.get_context("spawn").Process(target=_derive_child, args=(text, filename, queue))
     proc.start()
@@ -56,11 +63,11 @@ def derive_in_child(text: str, filename: str, timeout: float) -> tuple[str, obje
     if proc.is_alive():
         proc.terminate()
         proc.join()
-        return "fail", f"timeout after {timeout:g} s", 0
+        return "fail", f"timeout after {timeout:g} s", (0, 0)
     try:
         return queue.get(timeout=5)
     except Exception:  # noqa: BLE001
-        return "fail", f"child exited with status {proc.exitcode}", 0
+        return "fail", f"child exited with status {proc.exitcode}", (0, 0)
 
 
 def median_time(fn, runs: int) -> float:
@@ -88,7 +95,8 @@ def main(argv: list[str] | None = None) -> int:
     features: Counter = Counter()
     total = translated = warned = 0
     header = (f"{'file':32s} {'total':>5s} {'transl':>6s} {'warned':>6s} {'share':>6s} {'check':>5s} "
-              f"{'derive':>6s} {'watertight':>10s} {'import ms':>9s} {'x parse':>7s}  reason")
+              f"{'derive':>6s} {'solid tri':>9s} {'surf tri':>8s} {'watertight':>10s} {'import ms':>9s} "
+              f"{'x parse':>7s}  reason")
     print(header)
     print("-" * len(header))
     for path in files:
@@ -97,9 +105,9 @@ def main(argv: list[str] | None = None) -> int:
         text, _ = read_cga(path)
         t_parse = median_time(lambda: parse_cga(text, str(path)), args.runs)
         t_import = median_time(lambda: translate_cga(path, missing_assets="drop"), args.runs)
-        derived, watertight, reason = False, None, ""
+        derived, watertight, reason, tris = False, None, "", (0, 0)
         if result.ok:
-            status, value, _ntri = derive_in_child(result.text, str(path.with_suffix(".grammar")),
+            status, value, tris = derive_in_child(result.text, str(path.with_suffix(".grammar")),
                                                    args.timeout)
             if status == "ok":
                 derived, watertight = True, value
@@ -116,19 +124,23 @@ def main(argv: list[str] | None = None) -> int:
         row = {"file": path.name, "total": rep.total, "translated": rep.translated,
                "warned": rep.warned, "share": round(share, 3), "checks": bool(rep.checks),
                "derived": derived, "watertight": watertight, "reason": reason,
+               "solid_triangles": tris[0], "surface_triangles": tris[1],
                "import_ms": round(t_import * 1000, 2), "parse_ms": round(t_parse * 1000, 2)}
         rows.append(row)
-        wt = "-" if watertight is None else ("yes" if watertight else "NO")
+        wt = ("-" if watertight is None else watertight if isinstance(watertight, str)
+              else ("yes" if watertight else "NO"))
         print(f"{path.name:32s} {rep.total:5d} {rep.translated:6d} {rep.warned:6d} {share:6.1%} "
-              f"{'yes' if rep.checks else 'no':>5s} {'yes' if derived else 'no':>6s} {wt:>10s} "
+              f"{'yes' if rep.checks else 'no':>5s} {'yes' if derived else 'no':>6s} {tris[0]:9d} {tris[1]:8d} {wt:>10s} "
               f"{t_import * 1000:9.1f} {t_import / t_parse if t_parse else 0:7.1f}  {reason[:90]}")
     print("-" * len(header))
     share = translated / total if total else 0.0
     n_derived = sum(r["derived"] for r in rows)
-    n_wt = sum(1 for r in rows if r["watertight"])
+    n_solid = sum(1 for r in rows if r["derived"] and r["watertight"] != "no solid")
+    n_wt = sum(1 for r in rows if r["watertight"] is True)
     print(f"corpus: {len(rows)} files, {total} constructs, {translated} translated ({share:.1%}), "
-          f"{warned} warned; {sum(r['checks'] for r in rows)} check, {n_derived} derive, "
-          f"{n_wt} of those watertight")
+          f"{warned} warned; {sum(r['checks'] for r in rows)} check, {n_derived} derive; "
+          f"{n_solid} of those emit a solid, {n_wt} of which read back watertight "
+          f"({n_derived - n_solid} emit surfaces only)")
     print("\nmissing features, ranked by the warned constructs they account for:")
     for feature, n in features.most_common():
         print(f"  {n:5d}  {feature}")

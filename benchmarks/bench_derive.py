@@ -9,9 +9,17 @@
 3. --variations N (default 1000) variations (`grammarkit derive --variations`): buildings per
    second, in one process and with --workers processes (default: all cores).
 
+4. Per building (issue 10): every example split grammar (grammars/*.grammar) and every CGA
+   corpus file that imports and derives (grammars/cga/*.cga, on a 20 x 16 m lot, assets
+   dropped): median derive time over --building-runs runs, split into the final booleans
+   (`grammarkit.split.model.compose`: union, cuts, mesh) and the rest (Python derivation),
+   with terminals, triangles (solid + surface layer) and the ratio Python / booleans.
+   --only-buildings skips 1-3.
+
 Targets (issue 3): median <= 30 ms per Paris building and <= 2x the floor.
 
     python benchmarks/bench_derive.py [--runs 20] [--variations 1000] [--workers 2]
+    python benchmarks/bench_derive.py --only-buildings [--building-runs 5]
 """
 from __future__ import annotations
 
@@ -115,13 +123,82 @@ def _variation_chunk(args):
     return n, tris
 
 
+LOT = [(0.0, 0.0), (20.0, 0.0), (20.0, 16.0), (0.0, 16.0)]
+
+
+def _buildings():
+    """(label, grammar, lot) of every example split grammar and derivable corpus file."""
+    import grammarkit
+    from grammarkit.cga import translate_cga
+
+    out = []
+    for path in sorted((ROOT / "grammars").glob("*.grammar")):
+        if path.name == "library.grammar":  # snippets only, no start rule of its own
+            continue
+        out.append((path.name, grammarkit.parse(path), None))
+    for path in sorted((ROOT / "grammars" / "cga").glob("*.cga")):
+        result = translate_cga(path, missing_assets="drop")
+        if result.ok:
+            out.append((path.name, grammarkit.parse(result.text, filename=str(path.with_suffix(".grammar"))), LOT))
+    return out
+
+
+def per_building(runs: int) -> None:
+    """Median derive time per building, split into booleans (compose) and Python derivation."""
+    import grammarkit
+    from grammarkit.split import model as split_model
+
+    compose = split_model.compose
+    spent = []
+
+    def timed_compose(*a, **kw):
+        t = time.perf_counter()
+        try:
+            return compose(*a, **kw)
+        finally:
+            spent.append(time.perf_counter() - t)
+    split_model.compose = timed_compose
+    try:
+        print(f"\n{'building':34s} {'terminals':>9s} {'triangles':>9s} {'derive ms':>9s} "
+              f"{'boolean ms':>10s} {'python ms':>9s} {'py/bool':>7s}  note")
+        for label, g, lot in _buildings():
+            try:
+                kw = {"lot": lot} if lot else {}
+                m = grammarkit.derive(g, seed=0, **kw)  # warm-up (compile cache, assets)
+            except Exception as exc:  # noqa: BLE001 - the reason goes into the table
+                print(f"{label:34s} {'-':>9s} {'-':>9s} {'-':>9s} {'-':>10s} {'-':>9s} {'-':>7s}  "
+                      f"does not derive: {type(exc).__name__}")
+                continue
+            totals, booleans = [], []
+            for _ in range(runs):
+                spent.clear()
+                t = time.perf_counter()
+                grammarkit.derive(g, seed=0, **kw)
+                totals.append(time.perf_counter() - t)
+                booleans.append(sum(spent))
+            d = statistics.median(totals) * 1e3
+            b = statistics.median(booleans) * 1e3
+            py = max(d - b, 0.0)
+            print(f"{label:34s} {len(m.parts):9d} {m.triangle_count:9d} {d:9.1f} {b:10.1f} {py:9.1f} "
+                  f"{py / b if b > 0 else float('inf'):7.2f}")
+    finally:
+        split_model.compose = compose
+    print(f"(building runs={runs}, load average={os.getloadavg()[0]:.2f}; the machine is shared: "
+          "numbers are noisy)")
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--runs", type=int, default=20)
     ap.add_argument("--variations", type=int, default=1000)
     ap.add_argument("--workers", type=int, default=os.cpu_count() or 1)
+    ap.add_argument("--building-runs", type=int, default=5)
+    ap.add_argument("--only-buildings", action="store_true")
     args = ap.parse_args(argv)
 
+    if args.only_buildings:
+        per_building(args.building_runs)
+        return 0
     from grammarkit.split import derive
 
     g = _load()
@@ -165,6 +242,7 @@ def main(argv=None):
         print(f"{f'variations: buildings/s, {args.workers} processes':44s} {n / par:10.1f} "
               f"{f'({n} in {par:.1f} s)':>10s}")
     print(f"(runs={args.runs}, cpu_count={os.cpu_count()}, load average={os.getloadavg()[0]:.2f})")
+    per_building(args.building_runs)
     return 0
 
 

@@ -23,7 +23,7 @@ Lot --> footprint(lshape(10, 8, 4, 4)) extrude(3) color("#c8b89a") Mass.
 Lot --> footprint(rect(8, 6)) taper(5, 0.4) color("#c8b89a") Spire.
 """,
     "comp": """
-Lot --> footprint(rect(8, 6)) extrude(4) comp(f) { front: extrude(0.4) color("#d9534f") F. | right: extrude(0.4) color("#5cb85c") R. | top: extrude(0.4) color("#5bc0de") T. | all: NIL }
+Lot --> footprint(rect(8, 6)) extrude(4) comp(f) { front: extrude(0.4) color("#d9534f") F. | right: extrude(0.4) color("#5cb85c") R. | top: extrude(0.4) color("#5bc0de") T. | all: NIL | volume: Mass. }
 """,
     "split": """
 Lot --> footprint(rect(10, 4)) split(x) { 1: extrude(5) color("#444444") A. | { ~2: extrude(3) color("#c8b89a") B. | 0.3: extrude(4) color("#8a3b2e") C. }* | 1: extrude(5) color("#444444") A. }
@@ -38,34 +38,34 @@ P --> extrude(3) color("#8a3b2e") P.
 Lot --> footprint(rect(8, 6)) offset(-1) { inside: extrude(1) color("#c8b89a") In. | border: extrude(2.5) color("#8a3b2e") Border. }
 """,
     "recess": """
-Lot --> footprint(rect(8, 6)) extrude(5) color("#d8cbb0") comp(f) { front: Facade | all: NIL }
+Lot --> footprint(rect(8, 6)) extrude(5) color("#d8cbb0") comp(f) { front: Facade | all: NIL | volume: Mass. }
 Facade --> split(x) { ~1: W. | { 1.4: Win | ~1: W. }* }
 Win --> split(y) { 1: W. | 2.2: [ extrude(0.08) color("#f2efe8") Frame. ] offset(-0.12) recess(0.3) color("#2f3d48") Glass. | ~1: W. }
 """,
     "roofGable": """
-Lot --> footprint(rect(8, 6)) extrude(3) color("#d8cbb0") comp(f) { top: roofGable(35, overhang=0.4, ridge=x) color("#8a3b2e") Roof. | all: NIL }
+Lot --> footprint(rect(8, 6)) extrude(3) color("#d8cbb0") comp(f) { top: roofGable(35, overhang=0.4, ridge=x) color("#8a3b2e") Roof. | all: NIL | volume: Mass. }
 """,
     "roofGable_ridge_y": """
-Lot --> footprint(rect(8, 6)) extrude(3) color("#d8cbb0") comp(f) { top: roofGable(35, overhang=0.4, ridge=y) color("#8a3b2e") Roof. | all: NIL }
+Lot --> footprint(rect(8, 6)) extrude(3) color("#d8cbb0") comp(f) { top: roofGable(35, overhang=0.4, ridge=y) color("#8a3b2e") Roof. | all: NIL | volume: Mass. }
 """,
     "roofHip": """
-Lot --> footprint(lshape(12, 10, 5, 5)) extrude(3) color("#d8cbb0") comp(f) { top: roofHip(35, overhang=0.3) color("#7b4a3a") Roof. | all: NIL }
+Lot --> footprint(lshape(12, 10, 5, 5)) extrude(3) color("#d8cbb0") comp(f) { top: roofHip(35, overhang=0.3) color("#7b4a3a") Roof. | all: NIL | volume: Mass. }
 """,
     "roofPyramid": """
-Lot --> footprint(rect(7, 7)) extrude(3) color("#d8cbb0") comp(f) { top: roofPyramid(40, overhang=0.3) color("#6d3a2c") Roof. | all: NIL }
+Lot --> footprint(rect(7, 7)) extrude(3) color("#d8cbb0") comp(f) { top: roofPyramid(40, overhang=0.3) color("#6d3a2c") Roof. | all: NIL | volume: Mass. }
 """,
     "roofShed": """
-Lot --> footprint(rect(8, 6)) extrude(3) color("#d8cbb0") comp(f) { top: roofShed(20, overhang=0.3) color("#5f6b73") Roof. | all: NIL }
+Lot --> footprint(rect(8, 6)) extrude(3) color("#d8cbb0") comp(f) { top: roofShed(20, overhang=0.3) color("#5f6b73") Roof. | all: NIL | volume: Mass. }
 """,
     "roofMansard": """
-Lot --> footprint(rect(8, 6)) extrude(3) color("#d8cbb0") comp(f) { top: roofMansard(70, 2, 18, overhang=0.15) color("#5f6b73") Roof. | all: NIL }
+Lot --> footprint(rect(8, 6)) extrude(3) color("#d8cbb0") comp(f) { top: roofMansard(70, 2, 18, overhang=0.15) color("#5f6b73") Roof. | all: NIL | volume: Mass. }
 """,
     "transforms": """
 Lot --> footprint(rect(8, 6)) extrude(2) color("#d8cbb0") Base
 Base --> [ s(2, 2, 3) center(xy) t(0, 0, 2) r(0, 0, 30) color("#8a3b2e") Tower. ] Base.
 """,
     "insert": """
-Lot --> footprint(rect(6, 4)) extrude(3) color("#d8cbb0") comp(f) { top: Top | all: NIL }
+Lot --> footprint(rect(6, 4)) extrude(3) color("#d8cbb0") comp(f) { top: Top | all: NIL | volume: Mass. }
 Top --> [ t(1, 1, 0) s(1.2, 0.6, 3) i("../../grammars/parts/chimney.glb") color("#a0522d") Chimney. ] color("#8c8c88") Deck.
 """,
     "stochastic": """

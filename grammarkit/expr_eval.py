@@ -289,6 +289,13 @@ class _Compiler:
         self.functions = functions
         self.fold_errors = fold_errors
 
+    def _lazy(self, name: str, args: list, span: Any) -> Compiled:
+        """select()/pick(): only the chosen argument is evaluated."""
+        g = _lazy_select(args, span) if name == "select" else _lazy_pick(args, span)
+        if all(is_constant(x) for x in args):
+            return self.fold(g)
+        return g
+
     def fold(self, g: Compiled) -> Compiled:
         """Evaluate a closure whose inputs are all constant once, now. An error is deferred to
         run time (the engine reports it with the derivation's context), or collected when
@@ -393,6 +400,8 @@ class _Compiler:
                 except (ValueError, TypeError, OverflowError) as exc:
                     raise _fail(f"rand(): {exc}", span, "function-error") from None
             return rand
+        if name in ("select", "pick"):
+            return self._lazy(name, args, span)
         impl = spec.impl
         if impl is None:
             if folding:
@@ -405,6 +414,32 @@ class _Compiler:
         if all(is_constant(x) for x in args):
             return self.fold(call)
         return call
+
+
+def _lazy_select(args: list, span: Any) -> Compiled:
+    cond, a, b = args
+
+    def select(env: Any) -> Any:
+        return a(env) if cond(env) else b(env)
+    return select
+
+
+def _lazy_pick(args: list, span: Any) -> Compiled:
+    u, rest = args[0], args[1:]
+    if len(rest) % 2 == 0:
+        def missing(env: Any) -> Any:
+            raise _fail("pick(u, p1, v1, ..., other) needs the 'other' value last", span, "function-error")
+        return missing
+    pairs, other = list(zip(rest[0:-1:2], rest[1:-1:2])), rest[-1]
+
+    def pick(env: Any) -> Any:
+        x, acc = u(env), 0.0
+        for p, v in pairs:
+            acc += p(env)
+            if x < acc:
+                return v(env)
+        return other(env)
+    return pick
 
 
 def compile_expr(expr: Any, resolve: Resolver, functions: Mapping[str, Any]) -> Compiled:
@@ -490,6 +525,11 @@ class _Folder:
             if spec is None or arity_problem(e.func, spec, len(e.args)) is not None:
                 for a in e.args:  # their own errors still count
                     self.fold(a)
+                return NOT_CONSTANT
+            if e.func == "select":  # lazy: only the chosen value may fail
+                c = self.fold(e.args[0])
+                return NOT_CONSTANT if c is NOT_CONSTANT else self.fold(e.args[1] if c else e.args[2])
+            if e.func == "pick":
                 return NOT_CONSTANT
             args = [self.fold(a) for a in e.args]
             if e.func == "rand" or spec.impl is None or any(a is NOT_CONSTANT for a in args):

@@ -63,6 +63,11 @@ BUILTIN_FUNCTIONS: tuple[FunctionSpec, ...] = (
     FunctionSpec("cos", 1, 1, "cosine of degrees", lambda d: math.cos(math.radians(d))),
     FunctionSpec("tan", 1, 1, "tangent of degrees", lambda d: math.tan(math.radians(d))),
     FunctionSpec("clamp", 3, 3, "clamp(x, lo, hi)", _clamp),
+    # conditional values (CGA's case and stochastic expressions); the evaluator evaluates only
+    # the chosen argument (see expr_eval: LAZY_FUNCTIONS), so `select(x == 0, 0, 1 / x)` is safe
+    FunctionSpec("select", 3, 3, "select(cond, a, b): a if cond holds, else b", None),
+    FunctionSpec("pick", 2, None, "pick(u, p1, v1, p2, v2, ..., other): v_k for the first k with "
+                 "u < p1 + ... + pk (percentages), else other; pick(rand(0, 100), 30, a, b)", None),
     FunctionSpec("rect", 2, 2, "rect(width, depth): rectangular footprint", rect),
     FunctionSpec("lshape", 4, 4, "lshape(width, depth, wing_width, wing_depth): L footprint", lshape),
     FunctionSpec("ushape", 4, 4, "ushape(width, depth, wing_width, base_depth): U footprint", ushape),

@@ -124,6 +124,17 @@ class ShapeView(Protocol):
     params: tuple  # the current rule's arguments
     seed: int  # the shape's seed (run seed mixed with its derivation path)
     entry: tuple | None  # (o, ax, sz) when the current rule was entered
+    # geometry id: copies keep it, derived shapes get a new one (see grammarkit/split/shape.py)
+    gid: int
+    # a face made by comp(f): (gid of the volume, its (o, ax, sz)); if that volume is emitted
+    # as a solid unmoved, the face is a view of its surface, else a surface of its own. An
+    # operation that moves a face off its plane sets it to None.
+    on: tuple | None
+    trims: tuple  # CGA trim planes ((world point, world normal), ...) that clip inserted meshes
+    trim_on: bool  # whether i() clips by them (CGA's trim.vertical; the trim() operation)
+    # the attr/const values the shape's expressions read, shared between shapes until an
+    # operation (CGA's set()) gives one shape a changed copy
+    values: dict
 
     @property
     def rule_name(self) -> str: ...  # the rule being applied (for messages)
@@ -192,6 +203,8 @@ class OperationContext(Protocol):
         """Make `shape` a terminal named `name` (as `Name.` does)."""
 
     def warn(self, message: str) -> None: ...  # a warning listed on the model
+
+    def report(self, key: str, value: Any) -> None: ...  # a value for Model.reports (CGA's report())
 
 
 Apply = Callable[[OperationContext, ShapeView, list, "tuple[BlockSlot, ...] | None"], Any]

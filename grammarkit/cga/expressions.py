@@ -29,10 +29,18 @@ _FUNCTIONS: dict[str, tuple[str, int, int | None]] = {
     "floor": ("floor", 1, 1), "ceil": ("ceil", 1, 1), "abs": ("abs", 1, 1),
     "sqrt": ("sqrt", 1, 1), "sin": ("sin", 1, 1), "cos": ("cos", 1, 1), "tan": ("tan", 1, 1),
     "rint": ("round", 1, 1), "clamp": ("clamp", 3, 3),
+    # string and list functions (grammarkit/split/strings.py)
+    "str": ("str", 1, 1), "len": ("len", 1, 1), "find": ("find", 2, 3),
+    "substring": ("substring", 3, 3), "listSize": ("listSize", 1, 1), "listItem": ("listItem", 2, 2),
+    "listIndex": ("listIndex", 2, 2), "listFirst": ("listFirst", 1, 1), "listLast": ("listLast", 1, 1),
+    "listRange": ("listRange", 3, 3), "replace": ("replace", 3, 3),
 }
+# functions whose value is text: `+` with one of them concatenates (CGA converts the other side)
+_TEXT_FUNCTIONS = {"str", "substring", "listItem", "listFirst", "listLast", "listRange", "replace"}
 _BINARY = {"+": "+", "-": "-", "*": "*", "/": "/", "%": "%", "==": "==", "!=": "!=",
            "<": "<", "<=": "<=", ">": ">", ">=": ">="}
 _INDEX_REFS = {"split.index", "split.total", "comp.index", "comp.total"}
+_GEOMETRY_REFS = {"geometry.area", "geometry.volume", "geometry.nVertices", "geometry.isRectangular"}
 MAX_INLINE_DEPTH = 16
 
 
@@ -45,6 +53,11 @@ class Untranslatable(Exception):
 
 
 def span_of(node: Any, filename: str | None) -> Span | None:
+    # nodes of an imported file carry that file's name (translate.py: _merge_import)
+    if isinstance(node, Token):
+        filename = getattr(node, "cga_file", filename)
+    else:
+        filename = getattr(getattr(node, "meta", None), "cga_file", filename)
     if isinstance(node, Token):
         if node.line is None:
             return None
@@ -125,8 +138,11 @@ def translate_expr(node: Any, ctx: ExprContext) -> Any:
                              "(per-edge values) is not supported", span)
     if kind == "binop":
         left, op, right = kids
-        return Binary(op=_BINARY[op.value], left=translate_expr(left, ctx),
-                      right=translate_expr(right, ctx), span=span)
+        a, b = translate_expr(left, ctx), translate_expr(right, ctx)
+        if op.value == "+" and (_is_text(a) or _is_text(b)):
+            # CGA's + joins text and turns the other side into text (str(3) is "3")
+            a, b = (x if _is_text(x) else Call(func="str", args=(x,), span=x.span) for x in (a, b))
+        return Binary(op=_BINARY[op.value], left=a, right=b, span=span)
     if kind in ("or_op", "and_op"):
         left, right = kids
         return Binary(op="||" if kind == "or_op" else "&&", left=translate_expr(left, ctx),
@@ -149,11 +165,35 @@ def translate_expr(node: Any, ctx: ExprContext) -> Any:
     if kind in ("array", "index"):
         raise Untranslatable("expr:array", "arrays are not supported", span)
     if kind == "case_expr":
-        raise Untranslatable("expr:case", "a case expression as a value is not supported", span)
+        # case c1: v1 case c2: v2 else: v3 -> select(c1, v1, select(c2, v2, v3)) (lazy)
+        parts = [k for k in kids if isinstance(k, Tree)]
+        conds, vals, other = parts[0:-1:2], parts[1:-1:2], parts[-1]
+        out = translate_expr(other, ctx)
+        for cond, val in reversed(list(zip(conds, vals))):
+            out = Call(func="select", args=(translate_expr(cond, ctx), translate_expr(val, ctx), out),
+                       span=span)
+        return out
     if kind == "stoch_expr":
-        raise Untranslatable("expr:stochastic", "a stochastic expression as a value is not "
-                             "supported", span)
+        # 30%: a 20%: b else: c -> pick(rand(0, 100), 30, a, 20, b, c)
+        parts = [k for k in kids if isinstance(k, Tree) or (isinstance(k, Token) and k.type != "PERCENT_COLON"
+                                                             and k.type != "ELSE")]
+        args: list = [Call(func="rand", args=(Num(value=0.0), Num(value=100.0)), span=span)]
+        for k in parts[:-1]:
+            args.append(translate_expr(k, ctx))
+        args.append(translate_expr(parts[-1], ctx))
+        return Call(func="pick", args=tuple(args), span=span)
     raise Untranslatable(f"expr:{kind}", f"expression {kind} is not supported", span)
+
+
+def _is_text(e: Any) -> bool:
+    """Whether an IR expression is statically text (a string, a text function, a join)."""
+    if isinstance(e, Str):
+        return True
+    if isinstance(e, Call):
+        return e.func in _TEXT_FUNCTIONS or (e.func == "select" and (_is_text(e.args[1]) or _is_text(e.args[2])))
+    if isinstance(e, Binary):
+        return e.op == "+" and (_is_text(e.left) or _is_text(e.right))
+    return False
 
 
 def _unquote(text: str) -> str:
@@ -187,7 +227,7 @@ def _ref(name: str, span: Span | None, ctx: ExprContext) -> Any:
     mapped = frames.scope_name(ctx.frame, name)
     if mapped is not None:
         return Ref(name=mapped, span=span)
-    if name in _INDEX_REFS:
+    if name in _INDEX_REFS or name in _GEOMETRY_REFS:
         return Ref(name=name, span=span)
     head = name.split(".", 1)[0]
     if head in ("geometry", "scope", "comp", "split", "initialShape", "material", "seedian",
@@ -201,18 +241,31 @@ def _call(name: str, args: list[Any], span: Span | None, ctx: ExprContext) -> An
     key = (name, len(args))
     if key in ctx.functions:
         return _inline(ctx.functions[key], args, span, ctx)
+    if name in _GEOMETRY_REFS and (not args or name == "geometry.isRectangular" and len(args) == 1):
+        # geometry.area() etc.: built-in names of grammarkit (isRectangular's tolerance in
+        # degrees is grammarkit's fixed one, see docs/cga.md)
+        return Ref(name=name, span=span)
     if name in _FUNCTIONS:
         gk, lo, hi = _FUNCTIONS[name]
         if len(args) < lo or (hi is not None and len(args) > hi):
             raise Untranslatable(f"fn:{name}", f"{name}() with {len(args)} arguments", span)
         return Call(func=gk, args=tuple(translate_expr(a, ctx) for a in args), span=span)
+    if name == "listRandom" and len(args) == 1:
+        # an item drawn uniformly: listItem(l, floor(rand(0, listSize(l))))
+        lst = translate_expr(args[0], ctx)
+        idx = Call(func="floor", args=(Call(func="rand", args=(Num(value=0.0), Call(
+            func="listSize", args=(lst,), span=span)), span=span),), span=span)
+        return Call(func="listItem", args=(lst, idx), span=span)
     if name == "pow" and len(args) == 2:
         return Binary(op="^", left=translate_expr(args[0], ctx), right=translate_expr(args[1], ctx),
                       span=span)
     if name == "p" and len(args) == 1:
         return Binary(op="<", left=Call(func="rand", span=span), right=translate_expr(args[0], ctx),
                       span=span)
-    if name in ("float", "bool") and len(args) == 1:
+    if name == "float" and len(args) == 1:
+        inner = translate_expr(args[0], ctx)
+        return Call(func="float", args=(inner,), span=span) if not isinstance(inner, Num) else inner
+    if name == "bool" and len(args) == 1:
         inner = translate_expr(args[0], ctx)
         if isinstance(inner, Str):
             raise Untranslatable(f"fn:{name}", f"{name}() of a string is not supported", span)

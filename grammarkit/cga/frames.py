@@ -38,7 +38,8 @@ _SCOPE: dict[str, dict[str, str]] = {
 _SELECTORS: dict[str, dict[str, tuple[str, ...]]] = {
     "Y": {"front": ("front",), "back": ("back",), "left": ("left",), "right": ("right",),
           "top": ("top",), "bottom": ("bottom",), "side": ("side",), "all": ("all",),
-          "vertical": ("side",), "horizontal": ("top", "bottom")},
+          "vertical": ("vertical",), "horizontal": ("horizontal",), "aslant": ("aslant",),
+          "nutant": ("nutant",)},
     "Z": {"front": ("top",), "back": ("bottom",), "left": ("left",), "right": ("right",),
           "top": ("back",), "bottom": ("front",), "side": ("top", "bottom", "left", "right"),
           "all": ("all",)},

@@ -48,7 +48,7 @@ _UI_ANNOTATIONS = {"@Order", "@Group", "@Description", "@Hidden", "@Color", "@Di
 # feature is `op:<name>`; listed here only to word the message.
 _TEXTURING = {"setupProjection", "projectUV", "texture", "tileUV", "translateUV", "rotateUV",
               "scaleUV", "normalizeUV", "deleteUV", "setNormals", "softenNormals"}
-_METADATA = {"report", "print", "label"}
+_METADATA = {"print", "label"}
 
 
 @dataclass
@@ -59,6 +59,7 @@ class RuleDef:
     span: Span | None
     start: bool = False
     annotations: list = field(default_factory=list)
+    imported: bool = False  # from an imported file (counted in that file's own report)
 
 
 @dataclass
@@ -68,6 +69,7 @@ class ValueDef:
     value: Any
     span: Span | None
     annotations: list
+    imported: bool = False  # declared in an imported file (counted in that file's own report)
 
 
 @dataclass
@@ -98,12 +100,15 @@ class Translator:
         self.imports: dict[str, Span | None] = {}
         self.value_names: dict[str, str] = {}
         self.inlined: set[str] = set()
+        self.imported_functions: set[str] = set()
         self._rule_names: dict[tuple[tuple[str, int], str], str] = {}
         self._used_names: set[str] = set()
         self._pending: list[tuple[tuple[str, int], str]] = []
         self._seen_assets: set[str] = set()
 
     # -- reporting ------------------------------------------------------------------------------
+    frame_change: str | None = None  # set by a handler that changes the frame of what follows
+
     def _record(self, kind: str, name: str, status: str, span: Span | None, *,
                 feature: str | None = None, message: str | None = None, counting: bool = True) -> None:
         if not counting:
@@ -164,9 +169,105 @@ class Translator:
             self.imports[alias] = span
         for a in annotations:
             self.report.ignored[a.children[0].value] += 1
-        self._record("import", alias or path, "dropped", span, feature="import",
-                     message=f"import of {path!r}: import the file separately; calls into it "
-                     "become leaves")
+        found = self._import_file(path) if alias else None
+        if found is None:
+            why = ("an import without a name" if not alias else
+                   "the file was not found beside this one" if found is None else "")
+            self._record("import", alias or path, "dropped", span, feature="import",
+                         message=f"import of {path!r}: {why}; calls into it become leaves")
+            return
+        child, problem = self._load_import(found)
+        if child is None:
+            self._record("import", alias, "dropped", span, feature="import",
+                         message=f"import of {path!r}: {problem}; calls into it become leaves")
+            return
+        overrides = {}
+        args = next((c for c in decl.children if isinstance(c, Tree) and c.data == "import_args"), None)
+        for arg in (args.children if args is not None else ()):
+            if isinstance(arg, Tree) and arg.data == "import_set":
+                overrides[arg.children[0].value] = arg.children[1]
+        self._merge_import(alias, child, overrides)
+        self._record("import", alias, "translated", span)
+
+    MAX_IMPORT_DEPTH = 8
+
+    def _import_file(self, path: str) -> Path | None:
+        """The imported file: the path relative to this file's folder, else (CityEngine's
+        project paths like /ESRI.lib/rules/...) a file of that name beside this one."""
+        base = Path(self.filename).parent if self.filename else Path(".")
+        for cand in (base / path.lstrip("/"), base / Path(path).name):
+            if cand.is_file():
+                return cand
+        return None
+
+    def _load_import(self, path: Path) -> tuple["Translator | None", str]:
+        from .parser import parse_cga, read_cga
+
+        chain = getattr(self, "_import_chain", ())
+        key = str(path.resolve())
+        if key in chain or (self.filename and key == str(Path(self.filename).resolve())):
+            return None, "an import cycle"
+        if len(chain) >= self.MAX_IMPORT_DEPTH:
+            return None, f"imports nested more than {self.MAX_IMPORT_DEPTH} deep"
+        text, diags = read_cga(path)
+        if text is None:
+            return None, diags[0].message if diags else "unreadable"
+        parsed = parse_cga(text, str(path))
+        if not parsed.ok:
+            return None, "the file has syntax errors (import it on its own to see them)"
+        child = Translator(parsed.tree, str(path), parsed.source, asset_dirs=self.asset_dirs,
+                           missing_assets=self.missing_assets, operations=self.operations)
+        child._import_chain = (*chain, key)  # type: ignore[attr-defined]
+        child.collect()
+        return child, ""
+
+    def _merge_import(self, alias: str, child: "Translator", overrides: dict) -> None:
+        """The imported file's declarations under `alias.` (CGA's `alias.Rule`, `alias.attr`).
+        Its attrs take the value given in the import's arguments, else the value of this
+        file's attr of the same name (CGA's attribute propagation), else their own."""
+        names = ({k[0] for k in child.rules} | {v.name for v in child.values}
+                 | {k[0] for k in child.functions})
+        own_attrs = {v.name for v in self.values if v.kind == "attr"}
+
+        def rename(node: Any, params: frozenset) -> Any:
+            if isinstance(node, Token):
+                tok = node
+                if node.type == "NAME" and node.value in names and node.value not in params:
+                    tok = node.update(value=f"{alias}.{node.value}")
+                try:
+                    tok.cga_file = getattr(node, "cga_file", child.filename)  # type: ignore[attr-defined]
+                except AttributeError:
+                    pass
+                return tok
+            if isinstance(node, Tree):
+                kids = [rename(c, params) for c in node.children]
+                out = Tree(node.data, kids, meta=node.meta)
+                if not getattr(node.meta, "empty", True) and not hasattr(node.meta, "cga_file"):
+                    node.meta.cga_file = child.filename  # type: ignore[attr-defined]
+                return out
+            return node
+        for (name, n), r in child.rules.items():
+            key = (f"{alias}.{name}", n)
+            if key in self.rules:
+                continue
+            body = rename(r.body, frozenset(r.params))
+            self.rules[key] = RuleDef(f"{alias}.{name}", r.params, body, r.span, False, [], imported=True)
+            self.rule_arities.setdefault(key[0], set()).add(n)
+        for (name, n), fn in child.functions.items():
+            key = (f"{alias}.{name}", n)
+            self.functions[key] = Function(key[0], fn.params, rename(fn.body, frozenset(fn.params)))
+            self.function_spans[key] = child.function_spans.get((name, n))
+            self.imported_functions.add(key[0])
+        for v in child.values:
+            if v.name in overrides:
+                value = overrides[v.name]  # an expression of this file
+            elif v.kind == "attr" and v.name in own_attrs:
+                value = Tree("ref", [Token("NAME", v.name)])
+            else:
+                value = rename(v.value, frozenset())
+            self.values.append(ValueDef(v.kind, f"{alias}.{v.name}", value, v.span, [], imported=True))
+        for sub, span in child.imports.items():
+            self.imports.setdefault(f"{alias}.{sub}", span)
 
     # -- names ----------------------------------------------------------------------------------
     def _claim(self, base: str) -> str:
@@ -203,7 +304,7 @@ class Translator:
         if not self.rules:
             self.diagnostics.append(Diagnostic("error", "the CGA file has no rules", Span(
                 file=self.filename, line=1, column=1), code="cga-no-rules"))
-        starts = [k for k, r in self.rules.items() if r.start] or list(self.rules)[:1]
+        starts = [k for k, r in self.rules.items() if r.start] or self._default_start()
         rules_out: list[Rule] = []
         translated_keys: set[tuple[str, int]] = set()
         for key in starts:
@@ -215,9 +316,12 @@ class Translator:
                 if (key, frame) in done:
                     continue
                 done.add((key, frame))
-                rules_out.append(self._rule(key, frame, counting=key not in translated_keys))
+                rules_out.append(self._rule(key, frame, counting=key not in translated_keys
+                                            and not self.rules[key].imported))
                 translated_keys.add(key)
-            unreached = [k for k in self.rules if k not in translated_keys]
+            # rules nothing calls are translated too (a file of rules for other files); those
+            # of imported files only when called
+            unreached = [k for k in self.rules if k not in translated_keys and not self.rules[k].imported]
             if not unreached:
                 break
             self._rule_name(unreached[0], "Y")
@@ -229,8 +333,53 @@ class Translator:
                                  f"{': ' + os.path.basename(self.filename) if self.filename else ''}",),
                        span=Span(file=self.filename, line=1, column=1))
 
+    def _default_start(self) -> list:
+        """Without @StartRule: the first rule, unless it takes parameters (a lot gets no
+        arguments); then, of the rules without parameters that no other rule calls (roots of
+        the file's call graph), the one that reaches the most rules."""
+        keys = [k for k, r in self.rules.items() if not r.imported]
+        if not keys:
+            return []
+        if not self.rules[keys[0]].params:
+            return keys[:1]
+        names = {k[0] for k in keys}
+        calls: dict[str, set[str]] = {}
+        for key, r in self.rules.items():
+            toks = r.body.scan_values(lambda v: isinstance(v, Token)) if isinstance(r.body, Tree) else ()
+            calls.setdefault(key[0], set()).update(t.value for t in toks if t.value in names and t.value != key[0])
+        called = set().union(*calls.values()) if calls else set()
+
+        def reach(name: str) -> int:
+            seen, todo = {name}, [name]
+            while todo:
+                for nxt in calls.get(todo.pop(), ()):
+                    if nxt not in seen:
+                        seen.add(nxt)
+                        todo.append(nxt)
+            return len(seen)
+        plain = [k for k in keys if not self.rules[k].params]
+        pool = [k for k in plain if k[0] not in called] or plain
+        chosen = max(pool, key=lambda k: (reach(k[0]), -keys.index(k))) if pool else None
+        first = self.rules[keys[0]]
+        if chosen is None or reach(chosen[0]) * 4 < len(names):
+            # no parameterless rule leads to most of the file (a library of rules called with
+            # arguments from another file): keep the first rule; deriving then says that the
+            # start rule takes parameters, rather than deriving a small side branch
+            self._record("start-rule", first.name, "dropped", first.span, feature="start:params",
+                         message=f"the first rule {first.name!r} takes parameters and no rule without "
+                         "parameters leads to most of the file: the file needs a start rule that "
+                         "calls it with arguments", counting=True)
+            return keys[:1]
+        self._record("start-rule", first.name, "approximated", first.span, feature="start:params",
+                     message=f"the first rule {first.name!r} takes parameters and cannot start from "
+                     f"the lot: {chosen[0]!r} (the rule without parameters that reaches the most "
+                     "rules) is the start rule", counting=True)
+        return [chosen]
+
     def _functions_report(self) -> None:
         for key, fn in self.functions.items():
+            if fn.name in self.imported_functions:
+                continue  # reported when its file is imported on its own
             span = self.function_spans.get(key)
             if fn.name in self.inlined:
                 self._record("function", fn.name, "translated", span)
@@ -265,7 +414,8 @@ class Translator:
                 value = Num(value=0) if not _looks_like_string(v.value) else Str(value="")
                 message = (f"{v.kind} {v.name}: {exc.message}; defined as "
                            f"{'0' if isinstance(value, Num) else chr(34) * 2} instead")
-        self._record(v.kind, v.name, status, v.span, feature=feature, message=message)
+        self._record(v.kind, v.name, status, v.span, feature=feature, message=message,
+                     counting=not v.imported)
         if v.kind == "const":
             for a in v.annotations:
                 self.report.ignored[a.children[0].value] += 1
@@ -418,6 +568,8 @@ class Translator:
                 i += 1
                 continue
             items = self._item(node, frame, rctx, out)
+            if self.frame_change is not None:  # alignScopeToGeometry(yUp | zUp, ...)
+                frame, self.frame_change = self.frame_change, None
             is_last = i == len(nodes) - 1
             for it in items:
                 if isinstance(it, OpCall) and it.block is not None and not is_last:
@@ -643,6 +795,10 @@ class Translator:
             if mode == "offset-parts":
                 mapped = (sel,) if sel in ("inside", "border") else None
                 body_frame = frame
+            elif sel is not None and key_tree.data == "number":
+                # an index: CGA's and grammarkit's face orders agree (bottom 0, top 1, sides)
+                mapped = (int(float(sel)),) if float(sel).is_integer() and float(sel) >= 0 else None
+                body_frame = "Z"
             else:
                 mapped = frames.comp_selectors(frame, sel) if sel else None
                 body_frame = "Z"
@@ -659,7 +815,8 @@ class Translator:
             else:
                 self._record("selector", sel, "translated", span, counting=rctx.counting)
             for gsel in mapped:
-                out.append(Branch(key=Ref(name=gsel), body=Seq(items=tuple(body)), span=span))
+                key = Num(value=float(gsel)) if isinstance(gsel, int) else Ref(name=gsel)
+                out.append(Branch(key=key, body=Seq(items=tuple(body)), span=span))
         return out
 
     # -- assets -----------------------------------------------------------------------------------------
@@ -930,11 +1087,26 @@ def _h_set(t, args, block, star, frame, rctx, ctx, span, out):
         return [OpCall(name="material", args=(Arg(value=translate_expr(args[1], ctx)),), span=span)], None
     if target in ("material.color.rgb",) and len(args) == 2:
         return _h_color(t, args[1:], block, star, frame, rctx, ctx, span, out)
+    if target in ("trim.vertical", "trim.horizontal") and len(args) == 2:
+        value = translate_expr(args[1], ctx)
+        if target == "trim.vertical":
+            return [OpCall(name="trim", args=(Arg(value=value),), span=span)], None
+        # grammarkit makes vertical trim planes only: turning horizontal ones off changes nothing
+        if isinstance(value, Bool) and not value.value:
+            return [], None
+        return [], ("set(trim.horizontal)", "grammarkit makes no horizontal trim planes")
     if target and target.startswith("material."):
         raise Untranslatable("op:set(material.*)", f"set({target}, ...): texturing and material "
                              "properties are not supported", span)
-    raise Untranslatable("op:set", f"set({target}, ...): setting attrs during the derivation is "
-                         "not supported", span)
+    if target and len(args) == 2:
+        kinds = {v.name: v.kind for v in t.values}
+        if kinds.get(target) == "attr":
+            value = translate_expr(args[1], ctx)
+            return [OpCall(name="set", args=(Arg(value=Ref(name=t.value_names[target])), Arg(value=value)),
+                           span=span)], None
+        if kinds.get(target) == "const":
+            raise Untranslatable("op:set(const)", f"set({target}, ...) of a const", span)
+    raise Untranslatable("op:set", f"set({target}, ...): only attrs of this file can be set", span)
 
 
 def _h_i(t, args, block, star, frame, rctx, ctx, span, out):
@@ -944,7 +1116,7 @@ def _h_i(t, args, block, star, frame, rctx, ctx, span, out):
     if not isinstance(path, Str):
         raise Untranslatable("i:expression", "i() of a computed file name", span)
     if path.value.startswith("builtin:"):
-        raise Untranslatable("i:builtin", f"built-in primitive {path.value!r}", span)
+        return _builtin(path.value[len("builtin:"):], frame, span, len(args) > 1)
     found = t.asset(path.value, span)
     if not found and t.missing_assets == "drop":
         raise Untranslatable("asset:missing", f"asset {path.value!r} was not found (the i() is "
@@ -959,12 +1131,104 @@ def _h_nil_op(t, args, block, star, frame, rctx, ctx, span, out):
     return [Nil(span=span)], None
 
 
-def _h_primitive_cube(t, args, block, star, frame, rctx, ctx, span, out):
-    prev = out[-1] if out else None
-    if isinstance(prev, OpCall) and prev.name == "s" and not args:
-        return [], ("op:primitiveCube", "the cube is the scope box that s() with a depth already "
-                    "makes of a face")
-    raise Untranslatable("op:primitiveCube", "built-in primitives are not supported", span)
+def _literal_number(tree: Any) -> float | None:
+    if isinstance(tree, Tree) and tree.data == "number":
+        return float(tree.children[0].value)
+    if isinstance(tree, Tree) and tree.data == "neg":
+        v = _literal_number(tree.children[-1])
+        return None if v is None else -v
+    return None
+
+
+def _h_align_scope_to_geometry(t, args, block, star, frame, rctx, ctx, span, out):
+    """alignScopeToGeometry(upAxis, faceIndex, edgeIndex | longest): x along the edge; the up
+    axis says which CGA frame the shape is in afterwards (yUp: the normal is CGA's y)."""
+    _need(args, 2, 3, "alignScopeToGeometry", span)
+    up = _axis_name(args[0])
+    if up not in ("yUp", "zUp"):
+        raise Untranslatable("alignScopeToGeometry:up", f"up axis {up!r}", span)
+    approx = None
+    face = args[1]
+    if _literal_number(face) != 0:
+        approx = ("alignScopeToGeometry:face", "the face index is read as face 0 (the shape's "
+                  "outline)")
+    edge: Any = Num(value=0)
+    if len(args) == 3:
+        if _axis_name(args[2]) == "longest":
+            edge = Str(value="longest")
+        elif _axis_name(args[2]) is not None and "." in (_axis_name(args[2]) or ""):
+            raise Untranslatable("alignScopeToGeometry:orientation", f"edge orientation "
+                                 f"{_axis_name(args[2])!r}", span)
+        else:
+            edge = translate_expr(args[2], ctx)
+    t.frame_change = "Y" if up == "yUp" else "Z"
+    return [OpCall(name="alignScopeToGeometry", args=(Arg(value=edge),), span=span)], approx
+
+
+def _h_align_scope_to_axes(t, args, block, star, frame, rctx, ctx, span, out):
+    _need(args, 0, 1, "alignScopeToAxes", span)
+    if args and _axis_name(args[0]) != "y":
+        raise Untranslatable("alignScopeToAxes:axis", f"alignScopeToAxes({_axis_name(args[0])})", span)
+    if frame != "Y":
+        raise Untranslatable("alignScopeToAxes:face", "alignScopeToAxes() on a face of a volume "
+                             "(grammarkit turns only scopes whose up axis is vertical)", span)
+    return [OpCall(name="alignScopeToAxes", span=span)], None
+
+
+def _h_report(t, args, block, star, frame, rctx, ctx, span, out):
+    _need(args, 2, 2, "report", span)
+    key, value = translate_expr(args[0], ctx), translate_expr(args[1], ctx)
+    return [OpCall(name="report", args=(Arg(value=key), Arg(value=value)), span=span)], None
+
+
+def _h_reverse_normals(t, args, block, star, frame, rctx, ctx, span, out):
+    _need(args, 0, 0, "reverseNormals", span)
+    return [OpCall(name="reverseNormals", span=span)], None
+
+
+def _h_rotate_scope(t, args, block, star, frame, rctx, ctx, span, out):
+    _need(args, 3, 3, "rotateScope", span)
+    # the axis normal to the face: CGA's y in frame Y, its z in frame Z (grammarkit's z both)
+    about = 1 if frame == "Y" else 2
+    others = [a for k, a in enumerate(args) if k != about]
+    if any(_literal_number(a) != 0 for a in others):
+        raise Untranslatable("rotateScope:axes", "rotateScope() about an axis in the face plane",
+                             span)
+    angle = translate_expr(args[about], ctx)
+    zero = Num(value=0)
+    return [OpCall(name="rotateScope", args=(Arg(value=zero), Arg(value=zero), Arg(value=angle)),
+                   span=span)], None
+
+
+# CGA's built-in assets and primitive operations -> grammarkit's built-in primitives
+# (grammarkit/split/assets.py). CGA's primitives are y-up; in frame Y that is grammarkit's z.
+_BUILTIN_NAMES = {"cube": "cube", "cube:notex": "cube:notex", "cylinder": "cylinder",
+                  "sphere": "sphere", "cone": "cone", "quad": "quad", "disk": "disk"}
+_PRIMITIVE_OPS = {"primitiveCube": "cube", "primitiveCylinder": "cylinder", "primitiveSphere": "sphere",
+                  "primitiveCone": "cone", "primitiveQuad": "quad", "primitiveDisk": "disk"}
+
+
+def _builtin(name: str, frame: str, span: Span | None, options: bool) -> tuple:
+    gk = _BUILTIN_NAMES.get(name)
+    if gk is None:
+        raise Untranslatable("i:builtin", f"built-in asset 'builtin:{name}' has no grammarkit "
+                             "counterpart", span)
+    if gk == "cylinder" and frame == "Z":
+        gk = "cylinder:y"  # CGA's cylinder axis is its scope's y: grammarkit's y on a face
+    call = OpCall(name="i", args=(Arg(value=Str(value="builtin:" + gk)),), span=span)
+    if options:
+        return [call], ("i:options", "the up axis and insert mode arguments are ignored")
+    return [call], None
+
+
+def _h_primitive(cga: str):
+    def handler(t, args, block, star, frame, rctx, ctx, span, out):
+        items, approx = _builtin(_PRIMITIVE_OPS[cga], frame, span, False)
+        if args:
+            approx = (f"{cga}:options", "the number of segments (and other arguments) is "
+                      "grammarkit's fixed 16")
+        return items, approx
+    return handler
 
 
 def _h_taper(t, args, block, star, frame, rctx, ctx, span, out):
@@ -977,11 +1241,13 @@ _HANDLERS = {
     "roofGable": _roof("roofGable", 5), "roofHip": _roof("roofHip", 3),
     "roofPyramid": _roof("roofPyramid", 1), "roofShed": _roof("roofShed", 2),
     "s": _h_s, "t": _h_t, "r": _h_r, "center": _h_center, "color": _h_color, "set": _h_set,
-    "i": _h_i, "primitiveCube": _h_primitive_cube,
+    "i": _h_i, **{name: _h_primitive(name) for name in _PRIMITIVE_OPS},
+    "alignScopeToGeometry": _h_align_scope_to_geometry, "alignScopeToAxes": _h_align_scope_to_axes,
+    "rotateScope": _h_rotate_scope, "report": _h_report, "reverseNormals": _h_reverse_normals,
 }
 # Operations CGA writes without parentheses.
 _BARE_OPS = {"reverseNormals", "cleanupGeometry", "deleteHoles", "resetGeometry", "resetMaterial",
              "convexify", "innerRectangle", "alignScopeToAxes", "alignScopeToGeometry",
-             "primitiveCube", "primitiveQuad", "setPivot", "trim"}
+             "primitiveCube", "primitiveQuad", "primitiveDisk", "setPivot", "trim"}
 
 __all__ = ["Translator"]

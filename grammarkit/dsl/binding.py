@@ -230,6 +230,13 @@ def check_block(call: OpCall, spec: OperationSpec) -> list[Diagnostic]:
             continue
         if selectors:
             key = it.key
+            if isinstance(key, Num) and it.mode == "abs" and "<index>" in spec.selectors:
+                # an index selector (comp(f) { 0: A | 2: B }): a whole number >= 0
+                if key.value < 0 or not float(key.value).is_integer():
+                    problems.append(_error(f"an index selector of {call.name} must be a whole number "
+                                           f">= 0, got {key.value:g}", key.span or it.span,
+                                           "unknown-selector"))
+                continue
             if it.mode != "abs" or not isinstance(key, Ref) or "." in key.name:
                 problems.append(_error(f"{call.name} takes selectors ({', '.join(spec.selectors)}), "
                                        "not sizes", it.span, "block-kind"))

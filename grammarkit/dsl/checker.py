@@ -28,6 +28,8 @@ from .suggest import closest_first, known_hint
 BUILTIN_REFS = frozenset({
     "scope.sx", "scope.sy", "scope.sz", "scope.tx", "scope.ty", "scope.tz",
     "split.index", "split.total", "comp.index", "comp.total",
+    # the shape's geometry (split grammars; grammarkit/split/geometry_queries.py)
+    "geometry.area", "geometry.volume", "geometry.nVertices", "geometry.isRectangular",
 })
 # Global constraints of tiling grammars that are always known, even before their plugin loads.
 BUILTIN_CONSTRAINTS = frozenset({"connected", "grounded", "path", "count"})

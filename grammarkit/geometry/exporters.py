@@ -75,6 +75,8 @@ class Material:
 
     name: str | None
     rgba: tuple[int, int, int, int]
+    # surfaces (open faces, see docs/language.md "Solids and surfaces") are seen from both sides
+    double_sided: bool = False
 
     @property
     def label(self) -> str:
@@ -358,6 +360,10 @@ class _GltfBuilder:
                      "extras": {"srgb": mat.label if not mat.name else "#{:02x}{:02x}{:02x}".format(*mat.rgba[:3])}}
             if mat.rgba[3] < 255:
                 entry["alphaMode"] = "BLEND"
+            if mat.double_sided:
+                entry["doubleSided"] = True
+                entry["extras"]["surface"] = True
+                name = entry["name"] = f"{name} (surface)"
             if mat.name:
                 entry["extras"]["material"] = mat.name
             self.materials.append(entry)
@@ -519,14 +525,19 @@ def encode_obj(obj: Any) -> bytes:
     return "".join(out).encode("utf-8")
 
 
-def _world_mesh(obj: Any) -> Any:
-    """All solids as one mesh in world coordinates with face colours."""
+def _world_mesh(obj: Any, surfaces: bool = True) -> Any:
+    """All solids as one mesh in world coordinates with face colours (without a split model's
+    surface layer when `surfaces` is False)."""
     import trimesh
 
     scene = solids_of(obj)
     verts, faces, colors = [], [], []
     offset = 0
-    for s in scene.solids:
+    chosen = [s for s in scene.solids if surfaces or not s.extras.get("surface")]
+    if not chosen:
+        raise ShapeError("nothing to export as STL: the model has no solid, only surfaces "
+                         "(open faces); write GLB, glTF, OBJ or PLY instead")
+    for s in chosen:
         v = s.world_vertices()
         verts.append(v)
         faces.append(s.world_faces() + offset)
@@ -538,7 +549,8 @@ def _world_mesh(obj: Any) -> Any:
 
 
 def encode_stl(obj: Any) -> bytes:
-    return _world_mesh(obj).export(file_type="stl")
+    # STL is for solids (3D printing): a split model's surface layer is left out
+    return _world_mesh(obj, surfaces=False).export(file_type="stl")
 
 
 def encode_ply(obj: Any) -> bytes:

@@ -139,7 +139,11 @@ def _iter_meshes(obj: Any) -> Iterable[tuple[trimesh.Trimesh, np.ndarray | None]
             if isinstance(geom, trimesh.Trimesh):  # paths and point clouds are not rendered
                 yield geom, np.asarray(matrix, dtype=np.float64)
     elif isinstance(getattr(obj, "mesh", None), trimesh.Trimesh):  # a derived Model, a Part
-        yield obj.mesh, None
+        if len(obj.mesh.faces):
+            yield obj.mesh, None
+        surface = getattr(obj, "surface_mesh", None)  # a model's surface layer (open faces)
+        if isinstance(surface, trimesh.Trimesh):
+            yield surface, None
     elif hasattr(obj, "parts") and not isinstance(obj, (str, bytes)):  # an Assembly
         for part in obj.parts:
             yield from _iter_meshes(part)

@@ -20,7 +20,8 @@ from typing import Any
 import manifold3d
 import numpy as np
 
-__all__ = ["ASSET_CACHE_VERSION", "asset_cache_path", "load_asset_mesh", "load_asset_solid"]
+__all__ = ["ASSET_CACHE_VERSION", "BUILTINS", "asset_cache_path", "builtin_asset", "load_asset",
+           "load_asset_mesh", "load_asset_solid"]
 
 # Bump when the way a file becomes a solid changes (it is part of every cache key).
 ASSET_CACHE_VERSION = 1
@@ -118,3 +119,69 @@ def load_asset_solid(path: str) -> manifold3d.Manifold:
     # the solid as a later process rebuilds it from the cache: results never depend on
     # whether the cache was warm
     return _from_arrays(vp, tv)
+
+
+# -- open meshes and built-in primitives ------------------------------------------------------
+# CGA inserts open meshes as they are (most real assets are: a window pane, a leaf, a sign).
+# A file whose mesh is not a closed manifold becomes a surface part
+# (grammarkit.geometry.surfaces.SurfaceMesh): moved, scaled and split like a solid, emitted in
+# the model's surface layer, never in a boolean, so the solid stays watertight.
+
+BUILTINS = ("cube", "cube:notex", "cylinder", "cylinder:y", "cone", "sphere", "quad", "disk")
+BUILTIN_SEGMENTS = 16  # circular primitives: segments around (CGA's primitiveCylinder default)
+
+
+@lru_cache(maxsize=None)
+def builtin_asset(name: str) -> Any:
+    """A built-in primitive in the unit box [0, 1]^3 (`i("builtin:cube")`, as CGA's
+    `builtin:` assets): solids for cube, cylinder (axis z; `cylinder:y` axis y), cone (apex
+    up z), sphere; open surfaces for quad (the unit square at z = 0, normal +z) and disk."""
+    from ..geometry.surfaces import SurfaceMesh
+
+    key = name[len("builtin:"):] if name.startswith("builtin:") else name
+    M = manifold3d.Manifold
+    n = BUILTIN_SEGMENTS
+    if key in ("cube", "cube:notex"):
+        return M.cube((1.0, 1.0, 1.0))
+    if key == "cylinder":
+        return M.cylinder(1.0, 0.5, 0.5, n).translate((0.5, 0.5, 0.0))
+    if key == "cylinder:y":  # CGA's y-up cylinder in a face's frame
+        return M.cylinder(1.0, 0.5, 0.5, n).rotate((-90.0, 0.0, 0.0)).translate((0.5, 0.0, 0.5))
+    if key == "cone":
+        return M.cylinder(1.0, 0.5, 0.0, n).translate((0.5, 0.5, 0.0))
+    if key == "sphere":
+        return M.sphere(0.5, 2 * n).translate((0.5, 0.5, 0.5))
+    if key == "quad":
+        V = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], dtype=np.float64)
+        return SurfaceMesh(V, np.array([[0, 1, 2], [0, 2, 3]]))
+    if key == "disk":
+        a = np.linspace(0.0, 2 * np.pi, n, endpoint=False)
+        V = np.column_stack([0.5 + 0.5 * np.cos(a), 0.5 + 0.5 * np.sin(a), np.zeros(n)])
+        V = np.vstack([[0.5, 0.5, 0.0], V])
+        F = np.array([[0, 1 + k, 1 + (k + 1) % n] for k in range(n)])
+        return SurfaceMesh(V, F)
+    raise ValueError(f"i(): unknown built-in primitive {name!r}; known: "
+                     + ", ".join("builtin:" + b for b in BUILTINS))
+
+
+@lru_cache(maxsize=64)
+def load_asset(path: str) -> Any:
+    """The asset of `i(path)`: a manifold3d solid when the mesh is closed (cached on disk, see
+    `load_asset_solid`), else a SurfaceMesh of its triangles. Read once per process."""
+    if path.startswith("builtin:"):
+        return builtin_asset(path)
+    from ..errors import ShapeError
+
+    try:
+        return load_asset_solid(path)
+    except ShapeError as exc:
+        if "not a closed manifold" not in str(exc):
+            raise
+    from ..geometry.surfaces import SurfaceMesh
+
+    mesh = load_asset_mesh(path)
+    V = np.asarray(mesh.vertices, dtype=np.float64)
+    F = np.asarray(mesh.faces, dtype=np.int64)
+    if len(F) == 0:
+        raise ShapeError(f"{path}: the mesh has no triangles")
+    return SurfaceMesh(V, F)

@@ -302,6 +302,9 @@ class _Compiler:
         # A grammar attr named like a snippet attr configures it: the copy uses the grammar's
         # attr (value and range) instead of its own, so a building can tune its snippets.
         self.grammar_attrs = {a.name for a in grammar.attrs}
+        # attrs that `set(attr, value)` changes somewhere: their value depends on the shape, so
+        # expressions reading them are not shape-free (split layouts are not cached for them)
+        self.set_attrs = frozenset(_set_targets(grammar))
         self.pending: list[tuple[CRule, S.Rule, _Scope]] = []
 
     def _check_snippet(self, name: str, span: Span | None) -> None:
@@ -324,6 +327,13 @@ class _Compiler:
         axiom = self._lookup(start, _Scope(), None)
         if axiom is None:
             raise GrammarError(f"start rule {start!r} is not defined", None, code="no-axiom")
+        if axiom.params:
+            # the lot is handed to the start rule without arguments: a rule with parameters
+            # would read missing ones (CityEngine's start rules take none either)
+            raise GrammarError(
+                f"start rule {axiom.name!r} takes parameters ({', '.join(axiom.params)}): the start "
+                "rule is applied to the lot without arguments", axiom.span, code="axiom-params",
+                hint="start from a rule without parameters (put it first, or pass start=...)")
         out.axiom = axiom
         while self.pending:
             crule, rule, scope = self.pending.pop()
@@ -407,6 +417,14 @@ class _Compiler:
                 return lambda s: s.si
             if name in ("split.total", "comp.total"):
                 return lambda s: s.st
+            if name.startswith("geometry."):
+                from .geometry_queries import GEOMETRY_QUERIES
+
+                query = GEOMETRY_QUERIES.get(name)
+                if query is not None:
+                    # attr and const values are evaluated without a shape (ValueEnv: the scope
+                    # is 0 there too), so the geometry reads as 0 / false in them
+                    return lambda s, _q=query: _q(s) if type(s) is not ValueEnv else 0
             # attrs and consts: the derivation's values, carried by the shape evaluated on
             if name in scope.local_attrs and name not in grammar_attrs:
                 key = f"{scope.anchor}.{name}"
@@ -416,7 +434,7 @@ class _Compiler:
             return None
         f = compile_expr(e, resolve, self.functions)
         try:
-            f._shape_free = _shape_free(e, params)  # type: ignore[attr-defined]
+            f._shape_free = _shape_free(e, params, self.set_attrs)  # type: ignore[attr-defined]
         except AttributeError:  # a shared constant closure: constants are shape-free anyway
             pass
         return f
@@ -531,7 +549,9 @@ class _Compiler:
         plugin = "" if hasattr(apply, "target") else (spec.plugin or "?")
         apply = apply.target() if hasattr(apply, "target") else apply
         fns = self._args(call, spec, scope, params)
-        if call.name == "i" and fns and is_constant(fns[0]):
+        if call.name == "set" and fns:
+            fns[0] = constant(self._set_key(call, scope))
+        if call.name == "i" and fns and is_constant(fns[0]) and not str(fns[0](None)).startswith("builtin:"):
             base = Path(call.span.file).parent if call.span and call.span.file else (
                 Path(self.out.base_dir) if self.out.base_dir else Path("."))
             fns[0] = constant(str((base / str(fns[0](None))).resolve()))
@@ -540,6 +560,19 @@ class _Compiler:
         if call.block is not None:
             block = self._block(call, spec, scope, params, rule, index)
         return _op_step(apply, tuple(fns), block, call.span, call.name, plugin)
+
+    def _set_key(self, call: S.OpCall, scope: _Scope) -> str:
+        """The values key of the attr `set(name, ...)` changes (a snippet's own attr, or the
+        grammar's); a const, a parameter or an unknown name is an error at the name."""
+        ref = call.args[0].value
+        name = ref.name
+        if name in scope.local_attrs and name not in self.grammar_attrs:
+            return f"{scope.anchor}.{name}"
+        if name in self.grammar_attrs:
+            return name
+        what = "a const" if name in self.global_names else "not an attr"
+        raise GrammarError(f"set() changes attrs: {name!r} is {what}", ref.span or call.span,
+                           code="set-not-attr", hint="declare it with `attr` to change it per shape")
 
     def _block(self, call: S.OpCall, spec: Any, scope: _Scope, params: tuple[str, ...], rule: CRule,
                index: int) -> tuple:
@@ -556,6 +589,8 @@ class _Compiler:
                 if sizes:
                     out.append(Slot(it.mode, size=self._expr(it.key, scope, params), body=body,
                                     label=lab, span=it.span))
+                elif isinstance(it.key, E.Num):  # an index selector (check_block checked it)
+                    out.append(Slot("sel", sel=int(it.key.value), body=body, label=lab, span=it.span))
                 else:  # check_block made sure the key is one of the spec's selectors
                     out.append(Slot("sel", sel=it.key.name, body=body, label=lab, span=it.span))
             return tuple(out)
@@ -588,20 +623,38 @@ class _Compiler:
         return _op_step(apply, (axis_fn, size_fn, sep_fn), _make_block(slots), call.span, "repeat")
 
 
-def _shape_free(e: Any, params: tuple[str, ...]) -> bool:
+def _shape_free(e: Any, params: tuple[str, ...], mutable: frozenset = frozenset()) -> bool:
     """True if an expression reads only attrs, consts and literals (no scope, split index, rule
-    parameter or rand): its value is the same for every shape of one derivation."""
+    parameter, rand, or attr that `set()` changes): its value is the same for every shape of
+    one derivation."""
     if isinstance(e, E.Ref):
-        return e.name not in params and not e.name.startswith(("scope.", "split.", "comp."))
+        return (e.name not in params and e.name not in mutable
+                and not e.name.startswith(("scope.", "split.", "comp.", "geometry.")))
     if isinstance(e, E.Call):
-        return e.func != "rand" and all(_shape_free(a, params) for a in e.args)
+        return e.func != "rand" and all(_shape_free(a, params, mutable) for a in e.args)
     if isinstance(e, E.Unary):
-        return _shape_free(e.operand, params)
+        return _shape_free(e.operand, params, mutable)
     if isinstance(e, E.Binary):
-        return _shape_free(e.left, params) and _shape_free(e.right, params)
+        return _shape_free(e.left, params, mutable) and _shape_free(e.right, params, mutable)
     if isinstance(e, E.Vector):
-        return all(_shape_free(a, params) for a in e.items)
+        return all(_shape_free(a, params, mutable) for a in e.items)
     return True
+
+
+def _set_targets(node: Any) -> set[str]:
+    """Names of the attrs that `set(name, value)` calls anywhere in `node` change."""
+    out: set[str] = set()
+    if isinstance(node, S.OpCall) and node.name == "set" and node.args and isinstance(node.args[0].value, E.Ref):
+        out.add(node.args[0].value.name)
+    if isinstance(node, (list, tuple)):
+        for x in node:
+            out |= _set_targets(x)
+    elif hasattr(node, "__pydantic_fields__") or hasattr(type(node), "model_fields"):
+        for name in type(node).model_fields:
+            v = getattr(node, name, None)
+            if isinstance(v, (list, tuple)) or hasattr(type(v), "model_fields"):
+                out |= _set_targets(v)
+    return out
 
 
 def _block_is_fixed(items: tuple) -> bool:
@@ -677,7 +730,9 @@ def _op_step(apply: Callable, fns: tuple, block: tuple | None, span: Span | None
             # called sys.exit): report it located, no traceback, no silent exit
             raise fail(s, f"{who} failed: {type(exc).__name__}: {exc}", span) from None
         if type(r) is list:
-            if not all(type(c) is tuple and len(c) == 2 and isinstance(c[0], Shape) for c in r):
+            # (shape, slot) pairs, or (shape, slot, index, total) when the operation numbers
+            # its parts itself (comp: comp.index counts every face, not only the selected)
+            if not all(type(c) is tuple and len(c) in (2, 4) and isinstance(c[0], Shape) for c in r):
                 raise fail(s, f"{who} returned a list that is not of (shape, slot) pairs", span)
             ctx.spawn(s, r, name)
             return None

@@ -25,6 +25,7 @@ from ..errors import DerivationError, LimitError
 from ..geometry.footprints import cross_section
 from ..geometry.solids import frame_matrix as frame
 from .seeds import M64, label_of, mix  # noqa: F401 - label_of re-exported
+from ..geometry.surfaces import SurfaceMesh
 from .shape import FACE, Shape, fail  # noqa: F401 - fail re-exported
 
 Manifold = manifold3d.Manifold
@@ -102,12 +103,22 @@ class Derivation:
         self.nodes: list[tuple] = []
         self.tags: list[list] = []  # [name, rule, object type, colour, material, node, role]
         self.adds: list[Any] = []  # world-space solids to unite
-        self.cuts: list[Any] = []  # world-space solids to subtract
+        # recess cuts: (world-space solid, `on` of the face, tag, origin, axes, size, poly,
+        # depth); subtracted when the face lies on an emitted solid, else shown as a reveal
+        self.cuts: list[tuple] = []
         self.post_adds: list[Any] = []  # solids to add after the cuts (built inside a recess)
         self.id_tag: dict[int, int] = {}  # manifold original ID -> tag index
-        self.faces: list[tuple] = []  # face terminals: (tag, origin, axes, size, poly)
+        self.faces: list[tuple] = []  # face terminals: (tag, origin, axes, size, poly, on)
+        # geometry id of every volume emitted as a solid -> (scope when emitted, tag): a face
+        # of that volume (its `on`) is a view of the solid's surface (see Shape.on)
+        self.solid_of: dict[int, tuple] = {}
+        # open surfaces: (tag, world vertices (n, 3), triangles (m, 3)), e.g. open inserts
+        self.surfaces: list[tuple] = []
         self.leaves: list[tuple] = []  # (tag, origin, axes, size) of each terminal, in order
         self.warnings: list[str] = []
+        self.warned: set[str] = set()
+        # report(key, value) calls in derivation order: key -> values (CGA's reports)
+        self.reports: dict[str, list] = {}
         self.est_tris = 0
         self.context = OperationContext(self)
 
@@ -158,10 +169,14 @@ class Derivation:
         seed = s.seed
         pending = []
         total = len(children)
-        for i, (c, slot) in enumerate(children):
+        for i, item in enumerate(children):
+            c, slot = item[0], item[1]
             c.depth = depth
             c.seed = mix(seed, slot.label + i)
-            c.si, c.st = i, total  # split.index / split.total of the child
+            if len(item) > 2:  # (child, slot, index, total): the operation numbers its parts
+                c.si, c.st = item[2], item[3]
+            else:
+                c.si, c.st = i, total  # split.index / split.total of the child
             c._rng = None
             self._node(c, parent, via)
             pending.append((c, slot.body))
@@ -225,15 +240,32 @@ class Derivation:
 
     def _add(self, s: Shape, tag: int) -> None:
         self.check_extent(s)
+        if type(s.solid) is SurfaceMesh:  # an open mesh (an inserted asset): a surface
+            self.add_surface(tag, s.solid.world(s.o, s.ax), s.solid.F, s)
+            return
         self.check_solids(s)
         solid, oid, tris = local_solid(s)
         if solid is not None and s.solid is not None:
             self.check_extent(s, solid.bounding_box())
         if solid is None:
-            self.warnings.append(f"rule {s.rule.name!r}: a volume of size {tuple(round(v, 4) for v in s.sz)} "
-                                 "has no thickness and was left out of the mesh")
+            # a volume without thickness (extrude(0), CGA's flat "volumes"): what CityEngine
+            # shows is its footprint; it cannot be a solid, so it is that face in the surface
+            # layer (only when the thin axis is z; a box thin along x or y is left out)
+            flat = s.solid is None and s.sz[2] <= 1e-9 and s.sz[0] > 1e-9 and s.sz[1] > 1e-9
+            message = (f"rule {s.rule.name!r}: a volume of size {tuple(round(v, 4) for v in s.sz)} "
+                       "has no thickness: " + ("its footprint is emitted as a surface" if flat
+                                               else "it was left out of the mesh"))
+            if message not in self.warned:
+                self.warned.add(message)
+                self.warnings.append(message)
+            if flat:
+                from ..geometry.surfaces import face_triangles
+
+                V, F = face_triangles(s.o, s.ax, s.sz, s.poly)
+                self.add_surface(tag, V, F, s)
             return
         self.id_tag[oid] = tag
+        self.solid_of[s.gid] = ((s.o, s.ax, s.sz), tag)
         # solids built inside a recess (a mullion) are added after the cuts, or the cut eats them
         n = len(self.adds) + len(self.post_adds)
         (self.post_adds if s.cut >= 0 else self.adds).append(
@@ -245,11 +277,24 @@ class Derivation:
                 f"more than {self.limits.max_triangles} (while applying rule {s.rule.name!r})",
                 s.rule.span, code="limit-triangles")
 
+    def add_surface(self, tag: int, V: Any, F: Any, s: Shape) -> None:
+        """Emit an open surface (world vertices, triangles) with the tags of `tag`."""
+        n = len(F)
+        if n == 0:
+            return
+        self.est_tris += n
+        if self.est_tris > self.limits.max_triangles:
+            raise LimitError(
+                f"triangle limit exceeded: the model so far has about {self.est_tris} triangles, "
+                f"more than {self.limits.max_triangles} (while applying rule {s.rule.name!r})",
+                s.rule.span, code="limit-triangles")
+        self.surfaces.append((tag, V, F))
+
     def leaf(self, s: Shape, name: str) -> None:
         """`s` becomes a terminal named `name`."""
         if s.kind == FACE:
             tag = self._tag(s, name, "face")
-            self.faces.append((tag, s.o, s.ax, s.sz, s.poly))
+            self.faces.append((tag, s.o, s.ax, s.sz, s.poly, s.on))
             if s.cut >= 0:  # the recess this face came from takes the terminal's tags
                 t = self.tags[s.cut]
                 if t[6] == "cut-pending":
@@ -292,9 +337,17 @@ class Derivation:
             d = (0.0, 0.0, -depth)
         self.id_tag[solid.original_id()] = tag
         o = tuple(s.o[k] + x[k] * d[0] + y[k] * d[1] + z[k] * d[2] for k in range(3))
-        self.cuts.append(solid.transform(frame(o, s.ax)))
+        self.cuts.append((solid.transform(frame(o, s.ax)), s.on, tag, s.o, s.ax, s.sz, s.poly, depth))
         self.est_tris += 12
         return tag
+
+    def is_on_solid(self, on: tuple | None) -> bool:
+        """Whether a face made by comp(f) of a volume (`Shape.on`) lies on an emitted solid:
+        that very volume, unmoved, ended as a solid (kept by `volume:` or a push)."""
+        if on is None:
+            return False
+        hit = self.solid_of.get(on[0])
+        return hit is not None and hit[0] == on[1]
 
     def check_triangles(self, n: int, where: Any) -> None:
         if n > self.limits.max_triangles:
@@ -348,9 +401,17 @@ class OperationContext:
         """Make `shape` (a face or a volume) a terminal named `name`, as `Name.` does."""
         self._derivation.leaf(shape, name)
 
+    def report(self, key: str, value: Any) -> None:
+        """Record a value under a report key (CGA's report(); summed up in `Model.reports`)."""
+        self._derivation.reports.setdefault(key, []).append(value)
+
     def warn(self, message: str) -> None:
-        """A warning of the derivation (listed on the model and by the CLI)."""
-        self._derivation.warnings.append(message)
+        """A warning of the derivation (listed on the model and by the CLI); a message already
+        given is not repeated (a split in a facade runs for every floor)."""
+        d = self._derivation
+        if message not in d.warned:
+            d.warned.add(message)
+            d.warnings.append(message)
 
 
 def weld_of(n: int) -> float:

@@ -1,7 +1,9 @@
 """The result of a derivation: one watertight mesh, the tagged terminals, and the derivation tree."""
 from __future__ import annotations
 
+
 import json
+import math
 import os
 from dataclasses import dataclass, field
 from functools import cached_property
@@ -75,17 +77,34 @@ class TreeNode:
 
 
 def compose(ctx: Derivation, where: Any) -> tuple[Any, Any]:
-    """Unite the added solids, subtract the cuts (one batched boolean each); check the result."""
+    """Unite the added solids, subtract the cuts (one batched boolean each); check the result.
+    Also sorts the face terminals and recesses into views of the solid and the surface layer
+    (`ctx.surface`, see `surface_layer`)."""
     adds, post = ctx.adds, ctx.post_adds
+    on_solid = ctx.is_on_solid
+    cuts = []
+    for cut in ctx.cuts:
+        if on_solid(cut[1]):
+            cuts.append(cut[0])
+            ctx.tags[ctx.solid_of[cut[1][0]][1]][6] = "body"
+    ctx.painting = []
+    for f in ctx.faces:
+        if on_solid(f[5]):
+            ctx.painting.append(f)
+            ctx.tags[ctx.solid_of[f[5][0]][1]][6] = "body"
+    ctx.surface = surface_layer(ctx)
     if not adds and not post:
-        raise DerivationError("the derivation produced no volume: extrude a footprint (or end in a "
-                              "volume) somewhere, faces alone have no thickness", where, code="empty-model")
+        if len(ctx.surface[1]):
+            empty = Manifold()
+            return empty, empty.to_mesh()
+        raise DerivationError("the derivation produced nothing: no volume (solid) and no surface (every "
+                              "shape was deleted, or ended with no area)", where, code="empty-model")
     ctx.check_triangles(ctx.est_tris, where)
     if not adds:
         adds, post = post, []
     body = adds[0] if len(adds) == 1 else Manifold.batch_boolean(adds, manifold3d.OpType.Add)
-    if ctx.cuts:
-        body = Manifold.batch_boolean([body, *ctx.cuts], manifold3d.OpType.Subtract)
+    if cuts:
+        body = Manifold.batch_boolean([body, *cuts], manifold3d.OpType.Subtract)
     if post:
         body = Manifold.batch_boolean([body, *post], manifold3d.OpType.Add)
     body = _drop_slivers(body)
@@ -94,17 +113,48 @@ def compose(ctx: Derivation, where: Any) -> tuple[Any, Any]:
     if status != manifold3d.Error.NoError:
         raise DerivationError(f"the mesh boolean failed ({status.name})", where, code="boolean-failed")
     n = len(mesh.tri_verts)
-    if n == 0:
+    if n == 0 and not len(ctx.surface[1]):
         raise DerivationError("the resulting mesh is empty (everything was cut away?)", where,
                               code="empty-model")
     # Solids touching exactly along an edge or at a point leave distinct vertices at one
     # position, which a reader welding by position turns into non-manifold edges: pull them
     # apart (sub-millimetre; see pinches.py). Costs ~0.1 ms when there is nothing to do.
-    groups = coincident_groups(mesh.vert_properties)
+    groups = coincident_groups(mesh.vert_properties) if n else None
     if groups:
         body, mesh = separate(body, mesh, groups)
     ctx.check_triangles(n, where)
     return body, mesh
+
+
+def surface_layer(ctx: Derivation) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The surface layer: world vertices, triangles and the tag of each triangle, from the
+    face terminals that are not views of an emitted solid, the reveals of recesses without a
+    solid behind them, and open surfaces (inserted open meshes), in that order."""
+    from ..geometry.surfaces import face_triangles, reveal_triangles
+
+    on_solid = ctx.is_on_solid
+    pieces: list[tuple[int, np.ndarray, np.ndarray]] = []
+    for tag, o, ax, sz, poly, on in ctx.faces:
+        if not on_solid(on):
+            V, F = face_triangles(o, ax, sz, poly)
+            if len(F):
+                pieces.append((tag, V, F))
+    for _solid, on, tag, o, ax, sz, poly, depth in ctx.cuts:
+        if not on_solid(on):
+            V, F = reveal_triangles(o, ax, sz, poly, depth)
+            if len(F):
+                pieces.append((tag, V, F))
+    pieces.extend(ctx.surfaces)
+    if not pieces:
+        return np.zeros((0, 3)), np.zeros((0, 3), dtype=np.int64), np.zeros(0, dtype=np.int64)
+    verts, tris, tags = [], [], []
+    offset = 0
+    for tag, V, F in pieces:
+        verts.append(V)
+        tris.append(F + offset)
+        tags.append(np.full(len(F), tag, dtype=np.int64))
+        offset += len(V)
+    return np.concatenate(verts), np.concatenate(tris), np.concatenate(tags)
 
 
 # A shell of the union whose volume is below this (cubic model units) is a degenerate sliver
@@ -155,6 +205,27 @@ class Model:
         self.bindings = bindings
 
     @cached_property
+    def reports(self) -> dict[str, dict]:
+        """CGA's reports: per key of `report(key, value)`, the number of values `n`, and for
+        numbers (booleans count as 0/1) `sum`, `mean`, `min`, `max`; for strings the count of
+        each distinct value (`values`). Keys in the order they were first reported."""
+        out: dict[str, dict] = {}
+        for key, values in self._ctx.reports.items():
+            nums = [float(v) for v in values if isinstance(v, (int, float))]
+            texts = [v for v in values if isinstance(v, str)]
+            entry: dict[str, Any] = {"n": len(values)}
+            if nums:
+                total = math.fsum(nums)
+                entry.update(sum=total, mean=total / len(nums), min=min(nums), max=max(nums))
+            if texts:
+                counts: dict[str, int] = {}
+                for v in texts:
+                    counts[v] = counts.get(v, 0) + 1
+                entry["values"] = dict(sorted(counts.items()))
+            out[key] = entry
+        return out
+
+    @cached_property
     def tags(self) -> list[Tag]:
         """Semantic tags of every solid and face terminal (indexed by `triangle_tags`)."""
         return [Tag(*t) for t in self._ctx.tags]
@@ -170,7 +241,38 @@ class Model:
 
     @property
     def triangle_count(self) -> int:
-        return len(self._mesh.tri_verts)
+        """Triangles of the solid and of the surface layer."""
+        return len(self._mesh.tri_verts) + len(self._ctx.surface[1])
+
+    # -- the surface layer -----------------------------------------------------------------
+    @property
+    def surface_vertices(self) -> np.ndarray:
+        """World vertices of the surface layer (face terminals that are not views of an
+        emitted solid, recess reveals without a solid behind them, open inserted meshes)."""
+        return self._ctx.surface[0]
+
+    @property
+    def surface_faces(self) -> np.ndarray:
+        return self._ctx.surface[1]
+
+    @property
+    def surface_tags(self) -> np.ndarray:
+        """Tag index (into `tags`) of every surface triangle."""
+        return self._ctx.surface[2]
+
+    @cached_property
+    def surface_mesh(self) -> Any:
+        """The surface layer as a trimesh with face colours (open: not part of the solid's
+        watertight guarantee), or None when the model has no surfaces."""
+        import trimesh
+
+        if not len(self.surface_faces):
+            return None
+        palette = np.array([_rgba(t.color, CUT_COLOR if t.role == "cut" else DEFAULT_COLOR) for t in self.tags],
+                           dtype=np.uint8)
+        return trimesh.Trimesh(vertices=self.surface_vertices, faces=self.surface_faces,
+                               face_colors=palette[self.surface_tags], process=False,
+                               metadata={"name": self.name, "seed": self.seed, "surface": True})
 
     @cached_property
     def triangle_tags(self) -> np.ndarray:
@@ -189,7 +291,7 @@ class Model:
     def _paint_faces(self, out: np.ndarray) -> None:
         """Face terminals have no volume: they colour the body triangles lying in their region."""
         raw = self._ctx.tags  # plain lists [name, rule, otype, color, material, node, role]
-        faces = [f for f in self._ctx.faces if raw[f[0]][3] or raw[f[0]][4]]
+        faces = [f for f in self._ctx.painting if raw[f[0]][3] or raw[f[0]][4]]
         if not faces:
             return
         is_body = np.array([t[6] == "body" for t in raw] + [False], dtype=bool)
@@ -295,7 +397,7 @@ class Model:
         return {
             "grammar": self.name, "seed": self.seed, "attrs": self.attrs, "bindings": self.bindings,
             "shape_count": self.shape_count, "terminal_count": len(self._ctx.leaves),
-            "triangles": self.triangle_count, "warnings": self.warnings,
+            "triangles": self.triangle_count, "warnings": self.warnings, "reports": self.reports,
             "nodes": [n.to_dict() for n in self._tree_nodes],
         }
 
@@ -357,23 +459,44 @@ class Model:
                 if line:
                     d["sources"].add(f"{os.path.basename(file or self.name)}:{line}")
         tag_group, tag_material = kind_group[tag_kind], kind_material[tag_kind]
-        tri_tags = self.triangle_tags  # -1 (untagged) picks the entry appended last
-        face_group = tag_group[tri_tags]
-        groups = []
-        for d in info:
-            extras = {k: (sorted(v) if isinstance(v, set) else v) for k, v in d.items()}
-            groups.append((d["terminal"], extras))
-        counts = np.bincount(face_group, minlength=len(groups))
-        for g, (_name, extras) in enumerate(groups):
-            extras["triangles"] = int(counts[g])
         name = self.name or "building"
-        solid = Solid(name, self.vertices, self.faces, face_group, groups, tag_material[tri_tags], materials,
-                      extras={"grammar": self.name, "seed": self.seed})
+        solids = []
+
+        def group_list(face_group: np.ndarray, surface: bool) -> list:
+            counts = np.bincount(face_group, minlength=len(info))
+            out = []
+            for g, d in enumerate(info):
+                extras = {k: (sorted(v) if isinstance(v, set) else v) for k, v in d.items()}
+                extras["triangles"] = int(counts[g])
+                if surface:
+                    extras["surface"] = True
+                out.append((d["terminal"], extras))
+            return out
+        if self.faces.shape[0]:
+            tri_tags = self.triangle_tags  # -1 (untagged) picks the entry appended last
+            face_group = tag_group[tri_tags]
+            solids.append(Solid(name, self.vertices, self.faces, face_group, group_list(face_group, False),
+                                tag_material[tri_tags], materials,
+                                extras={"grammar": self.name, "seed": self.seed}))
+        if len(self.surface_faces):
+            # the surface layer: its own node, flagged as a surface (no inside, not part of the
+            # solid's watertight guarantee), double-sided materials (docs/language.md, "Solids and surfaces")
+            stags = self.surface_tags
+            face_group = tag_group[stags]
+            used = np.unique(tag_material[stags])
+            remap = np.zeros(len(materials), dtype=np.int64)
+            remap[used] = np.arange(len(used))
+            smats = [Material(materials[m].name, materials[m].rgba, double_sided=True) for m in used.tolist()]
+            solids.append(Solid(f"{name} surfaces", self.surface_vertices, self.surface_faces, face_group,
+                                group_list(face_group, True), remap[tag_material[stags]], smats,
+                                extras={"grammar": self.name, "seed": self.seed, "surface": True}))
         extras = {"grammar": self.name, "seed": self.seed,
                   "attrs": {k: v for k, v in self.attrs.items() if isinstance(v, (int, float, str, bool))},
                   "bindings": dict(self.bindings),
                   "materials": sorted({t[4] for t in raw if t[4]})}
-        return Scene(name, [solid], extras)
+        if self._ctx.reports:
+            extras["reports"] = self.reports  # CGA's reports, in the building node's extras
+        return Scene(name, solids, extras)
 
     def save(self, path: Any, format: str | None = None) -> Any:
         """Write the model through grammarkit's exporters (format from `format` or the suffix:
@@ -406,6 +529,8 @@ class Model:
         extras = {"grammar": self.name, "seed": self.seed,
                   "attrs": {k: v for k, v in self.attrs.items() if isinstance(v, (int, float, str, bool))},
                   "materials": sorted({t.material for t in self.tags if t.material})}
+        if self._ctx.reports:
+            extras["reports"] = self.reports
         scene.add_geometry(self.mesh, node_name=self.name or "building", geom_name=self.name or "building",
                            metadata=extras)
         scene.metadata.update(extras)

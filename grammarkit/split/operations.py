@@ -15,6 +15,8 @@ from ..registry import FitSpec, OperationSpec, Param
 
 AXES = ("x", "y", "z")
 FACE_SELECTORS = ("top", "bottom", "side", "front", "back", "left", "right", "all")
+# comp's selectors (grammarkit/split/comp.py); "<index>" stands for the integer selectors 0, 1, ...
+COMP_SELECTORS = FACE_SELECTORS + ("vertical", "horizontal", "aslant", "nutant", "volume", "<index>")
 
 class LazyApply:
     """`apply` of a built-in operation: imports grammarkit.split.ops when first called.
@@ -42,7 +44,9 @@ _SPECS: tuple[OperationSpec, ...] = (
     OperationSpec("taper", (Param("height"), Param("top_scale", required=False, default=0.0)),
                   doc="Extrude a face, scaling the top about the centroid (0: to a point)."),
     OperationSpec("comp", (Param("mode", "axis", choices=("f",)),), block="selectors",
-                  selectors=FACE_SELECTORS, doc="Decompose a volume into its faces."),
+                  selectors=COMP_SELECTORS,
+                  doc="Decompose a shape into its faces (the shape is consumed unless `volume:` "
+                      "keeps it); selectors by orientation, `all`, an index, `volume`."),
     OperationSpec("split", (Param("axis", "axis", choices=AXES),), block="sizes",
                   doc="Split the scope along an axis into absolute, relative and floating parts."),
     OperationSpec("repeat", (Param("axis", "axis", choices=AXES), Param("size"),
@@ -79,6 +83,21 @@ _SPECS: tuple[OperationSpec, ...] = (
                   doc="Insert a mesh file fitted to the scope (`fit=scale`: scaled to it)."),
     OperationSpec("color", (Param("value", "color"),), doc="Tag the shape with a colour (#rrggbb)."),
     OperationSpec("material", (Param("name", "string"),), doc="Tag the shape with a material name."),
+    OperationSpec("alignScopeToGeometry", (Param("edge", "any", required=False, default=0),),
+                  doc="Turn the scope about z so x runs along an edge of the outline (an index, "
+                      "or \"longest\"); the geometry stays."),
+    OperationSpec("alignScopeToAxes", (),
+                  doc="Turn the scope about its (vertical) z so x runs along the world x axis."),
+    OperationSpec("reverseNormals", (),
+                  doc="Turn a face (or an open mesh) to look the other way; a closed volume keeps its outside."),
+    OperationSpec("rotateScope", (Param("x"), Param("y"), Param("z")),
+                  doc="Turn the scope (not the geometry) about its z axis by z degrees."),
+    OperationSpec("trim", (Param("enabled", "any"),),
+                  doc="Whether i() clips inserts by the trim planes of comp(f) side faces (CGA's trim.vertical)."),
+    OperationSpec("report", (Param("key", "string"), Param("value", "any")),
+                  doc="Collect a value under a report key (Model.reports; the model's metadata)."),
+    OperationSpec("set", (Param("attr", "name"), Param("value", "any")),
+                  doc="Change an attr for this shape and everything derived from it (CGA's set)."),
 )
 
 
@@ -109,3 +128,11 @@ FITS: tuple[FitSpec, ...] = (
 @hookimpl
 def grammarkit_insert_fits() -> Iterable[FitSpec]:
     return FITS
+
+
+@hookimpl
+def grammarkit_functions() -> Iterable[Any]:
+    """CGA's string and list functions (grammarkit/split/strings.py; pure Python, light)."""
+    from .strings import STRING_FUNCTIONS
+
+    return STRING_FUNCTIONS

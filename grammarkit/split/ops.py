@@ -23,8 +23,9 @@ from ..dsl.binding import parse_color
 from ..geometry import footprints as fp
 from ..geometry import roofs
 from ..geometry.solids import insert_fitted, taper as taper_solid
-from .assets import load_asset_mesh, load_asset_solid
+from .assets import builtin_asset, load_asset, load_asset_mesh
 from .engine import rotation
+from .scope_ops import op_align_scope_to_axes, op_align_scope_to_geometry, op_reverse_normals, op_rotate_scope
 from .shape import FACE, VOLUME, Shape
 
 Manifold = manifold3d.Manifold
@@ -97,8 +98,13 @@ def op_footprint(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
 def op_extrude(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
     h = _num(args[0], "extrude height")
     _face_only(s, "extrude")
-    if h <= 0:
-        raise ValueError(f"extrude height must be > 0, got {h:g} (use recess(d) to cut into a face)")
+    if h < 0:
+        # CGA extrudes against the normal: the volume lies below the face, [h, 0] along z
+        z = s.ax[2]
+        o = (s.o[0] + z[0] * h, s.o[1] + z[1] * h, s.o[2] + z[2] * h)
+        return s.derived(o, (s.sz[0], s.sz[1], -h), s.poly, VOLUME)
+    # extrude(0) makes a volume without thickness (comp(f) gives its faces; as a terminal it
+    # is left out of the solid with a warning)
     return s.derived(s.o, (s.sz[0], s.sz[1], h), s.poly, VOLUME)
 
 
@@ -122,57 +128,8 @@ def op_recess(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
     return ctx.recess(s, d)
 
 
-# -- comp ------------------------------------------------------------------------------------
-def _classify(nx: float, ny: float) -> str:
-    if abs(ny) >= abs(nx):
-        return "front" if ny < 0 else "back"
-    return "right" if nx > 0 else "left"
-
-
-def op_comp(ctx: Any, s: Shape, args: Any, block: Any) -> list:
-    if s.kind != VOLUME:
-        raise ValueError("comp(f) needs a volume (e.g. after extrude), got a face")
-    if s.solid is not None:
-        raise ValueError("comp(f) works on boxes and extruded footprints, not on roofs, tapers "
-                         "or inserted meshes")
-    sx, sy, h = s.sz
-    (ax, ay, az) = s.ax
-    ctx.add_body(s)
-    faces: list[tuple[frozenset, Shape]] = []
-    contours = s.contours()
-    # side faces: one per contour edge, x along the edge, y up, z outwards
-    for contour in contours:
-        n = len(contour)
-        hole = fp.area(contour) < 0
-        for i in range(n):
-            (x0, y0), (x1, y1) = contour[i], contour[(i + 1) % n]
-            dx, dy = x1 - x0, y1 - y0
-            ln = math.hypot(dx, dy)
-            if ln < 1e-9:
-                continue
-            ux, uy = dx / ln, dy / ln
-            ex = (ax[0] * ux + ay[0] * uy, ax[1] * ux + ay[1] * uy, ax[2] * ux + ay[2] * uy)
-            ez = (ex[1] * az[2] - ex[2] * az[1], ex[2] * az[0] - ex[0] * az[2], ex[0] * az[1] - ex[1] * az[0])
-            side = _classify(uy, -ux)  # outward normal of a CCW contour edge is (dy, -dx)
-            sel = frozenset(("side", "all", side, "hole") if hole else ("side", "all", side))
-            faces.append((sel, s.derived(s.world(x0, y0, 0.0), (ln, h, 0.0), None, FACE, ax=(ex, az, ez))))
-    top = s.derived(s.world(0.0, 0.0, h), (sx, sy, 0.0), s.poly, FACE)
-    faces.append((frozenset(("top", "all")), top))
-    if s.poly is None:
-        bpoly = None
-    else:
-        bpoly = tuple(tuple(reversed([(x, sy - y) for x, y in c])) for c in s.poly)
-    neg_y = (-ay[0], -ay[1], -ay[2])
-    neg_z = (-az[0], -az[1], -az[2])
-    bottom = s.derived(s.world(0.0, sy, 0.0), (sx, sy, 0.0), bpoly, FACE, ax=(ax, neg_y, neg_z))
-    faces.append((frozenset(("bottom", "all")), bottom))
-    out = []
-    for sel, face in faces:
-        for slot in block:
-            if slot.sel in sel:
-                out.append((face, slot))
-                break
-    return out
+# -- comp: grammarkit/split/comp.py --------------------------------------------------------
+from .comp import op_comp  # noqa: E402
 
 
 # -- split -----------------------------------------------------------------------------------
@@ -213,7 +170,7 @@ def layout(ctx: Any, s: Shape, items: tuple, length: float) -> list[tuple[Any, f
     return out
 
 
-def _sizes(s: Shape, items: tuple, total: float) -> list[tuple[Any, str, float]]:
+def _sizes(ctx: Any, s: Shape, items: tuple, total: float) -> list[tuple[Any, str, float]]:
     out = []
     for it in items:
         if it.mode == "repeat":
@@ -222,19 +179,28 @@ def _sizes(s: Shape, items: tuple, total: float) -> list[tuple[Any, str, float]]
         v = it.size(s)
         if isinstance(v, bool) or not isinstance(v, (int, float)):
             raise ValueError(f"split size must be a number, got {v!r}")
+        if not math.isfinite(v):
+            raise ValueError(f"split size must be finite, got {v!r}")
+        if v < 0:
+            # CGA makes no part for a negative size and lays out the rest as if it were not
+            # there; so do we, but say so (it is almost always a mistake in the rule)
+            where = f"{it.span}: " if getattr(it, "span", None) is not None else ""
+            ctx.warn(f"{where}split size {v:g} is negative in rule {s.rule_name!r}: that part "
+                     "is skipped (as in CGA)")
+            v = 0.0
         if it.mode == "rel":
             v *= total
         out.append((it, it.mode, float(v)))
     return out
 
 
-def _nominal(s: Shape, items: tuple, total: float) -> tuple[float, bool]:
+def _nominal(ctx: Any, s: Shape, items: tuple, total: float) -> tuple[float, bool]:
     """Length of one instance of a repeat group at nominal sizes, and whether it can stretch."""
     n = 0.0
     stretch = False
-    for it, mode, v in _sizes(s, items, total):
+    for it, mode, v in _sizes(ctx, s, items, total):
         if mode == "repeat":
-            m, st = _nominal(s, it.items, total)
+            m, st = _nominal(ctx, s, it.items, total)
             n += m
             stretch = stretch or st
         else:
@@ -244,10 +210,10 @@ def _nominal(s: Shape, items: tuple, total: float) -> tuple[float, bool]:
 
 
 def _expand(ctx: Any, s: Shape, items: tuple, avail: float, total: float, flat: list) -> None:
-    sized = _sizes(s, items, total)
+    sized = _sizes(ctx, s, items, total)
     fixed = sum(v for _, mode, v in sized if mode in ("abs", "rel"))
     floating = sum(v for _, mode, v in sized if mode == "float")
-    reps = [(it, *_nominal(s, it.items, total)) for it, mode, _ in sized if mode == "repeat"]
+    reps = [(it, *_nominal(ctx, s, it.items, total)) for it, mode, _ in sized if mode == "repeat"]
     counts: dict[int, int] = {}
     if reps:
         room = avail - fixed - floating
@@ -255,8 +221,14 @@ def _expand(ctx: Any, s: Shape, items: tuple, avail: float, total: float, flat: 
         stretch = any(st for _, _, st in reps)
         if nominal <= EPS:
             raise ValueError("a repeat group needs a positive total size")
-        ratio = room / nominal
-        n = max(1, int(math.floor(ratio + 0.5)) if stretch else int(math.floor(ratio + 1e-9)))
+        ratio = room / nominal if room > 0 else 0.0
+        n = int(math.floor(ratio + 0.5)) if stretch else int(math.floor(ratio + 1e-9))
+        # CGA repeats zero times when the other parts of the block already fill the space
+        # (`{ ~w: W | d: Wall }* | ~w: W` on 1.5 w is one W); a block that is nothing but
+        # repeat groups still makes one instance (clipped), as CGA's `{ 2: A }*` on 1 does.
+        if n < 1 and len(reps) == len(sized):
+            n = 1
+        n = max(n, 0)
         if n > ctx.limits.max_repeat:
             from ..errors import LimitError
             raise LimitError(
@@ -265,7 +237,7 @@ def _expand(ctx: Any, s: Shape, items: tuple, avail: float, total: float, flat: 
                 reps[0][0].span, code="limit-repeat")
         for it, nom, _ in reps:
             counts[id(it)] = n
-        share = {id(it): (room * nom / nominal / n if n else 0.0) for it, nom, _ in reps}
+        share = {id(it): (max(room, 0.0) * nom / nominal / n if n else 0.0) for it, nom, _ in reps}
     for it, mode, v in sized:
         if mode == "repeat":
             for _ in range(counts[id(it)]):
@@ -420,6 +392,8 @@ def op_t(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
     c = s
     c.o = (s.o[0] + a0 * x + b0 * y + c0 * z, s.o[1] + a1 * x + b1 * y + c1 * z,
            s.o[2] + a2 * x + b2 * y + c2 * z)
+    if c.on is not None and (x or y or z):
+        c.on = None  # a face moved off its volume is a surface of its own
     return c
 
 
@@ -431,6 +405,8 @@ def op_r(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
     new = tuple(tuple(sum(R[i][j] * ax[i][k] for i in range(3)) for k in range(3)) for j in range(3))
     c = s
     c.ax = new  # type: ignore[assignment]
+    if c.on is not None and (rx or ry or rz):
+        c.on = None
     return c
 
 
@@ -466,6 +442,8 @@ def op_center(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
         for k in range(3):
             o[k] += a[k] * t
     c = s
+    if c.on is not None and tuple(o) != s.o:
+        c.on = None
     c.o = tuple(o)  # type: ignore[assignment]
     return c
 
@@ -480,15 +458,43 @@ def fitted_size(extent: tuple, size: tuple) -> tuple[float, float, float]:
                  for s, e in zip(size, extent))
 
 
-def op_insert(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
+def _trimmed(solid: Any, s: Shape) -> Any:
+    """Clip an inserted solid or surface by the shape's trim planes (CGA: the bisector planes
+    at the corners of the faces comp(f) made; a cornice inserted along a facade is mitred at
+    the building's corners). The planes are in world coordinates; the solid is in the scope's."""
+    for point, normal in s.trims:
+        ln = [sum(normal[k] * s.ax[i][k] for k in range(3)) for i in range(3)]  # world -> scope
+        lp = [sum((point[k] - s.o[k]) * s.ax[i][k] for k in range(3)) for i in range(3)]
+        offset = ln[0] * lp[0] + ln[1] * lp[1] + ln[2] * lp[2]
+        x0, y0, z0, x1, y1, z1 = solid.bounding_box()
+        # the lowest value of dot(n, p) over the bounding box: nothing to cut when it is kept
+        low = sum(min(n * a, n * b) for n, a, b in zip(ln, (x0, y0, z0), (x1, y1, z1)))
+        if low >= offset - 1e-9:
+            continue
+        solid = solid.trim_by_plane(tuple(ln), offset)
+    return solid
+
+
+def op_insert(ctx: Any, s: Shape, args: Any, block: Any) -> Shape | None:
     rel = str(args[0])  # the compiler made constant paths absolute (relative to their file)
     fit = str(args[1]) if len(args) > 1 else "scale"
-    path = Path(rel) if Path(rel).is_absolute() else (Path(ctx.base_dir or ".") / rel).resolve()
-    if not path.is_file():
-        raise ValueError(f"i(): mesh file not found: {path}")
+    if rel.startswith("builtin:"):
+        asset = builtin_asset(rel)
+        path = Path(rel)
+    else:
+        path = Path(rel) if Path(rel).is_absolute() else (Path(ctx.base_dir or ".") / rel).resolve()
+        if not path.is_file():
+            raise ValueError(f"i(): mesh file not found: {path}")
+        asset = load_asset(str(path)) if fit == "scale" else None
     if fit == "scale":  # the built-in fit, on the manifold directly (no mesh round trip)
-        solid, size = insert_fitted(load_asset_solid(str(path)), s.sz)
+        solid, size = insert_fitted(asset, s.sz)
+        if s.trims and s.trim_on:
+            solid = _trimmed(solid, s)
+            if solid.is_empty():
+                return None  # trimmed away entirely
         return s.derived(s.o, size, None, VOLUME, solid=solid)
+    if rel.startswith("builtin:"):
+        raise ValueError(f"i(): fit {fit!r} needs a mesh file, not the built-in {rel!r}")
     fits = ctx.registries.fits if ctx.registries is not None else {}
     spec = fits.get(fit)
     if spec is None or spec.fit is None:
@@ -529,13 +535,47 @@ def op_material(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
     return c
 
 
+def op_set(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
+    """CGA's `set(attr, value)`: the shape and its descendants see the new value; other shapes
+    keep theirs (each shape carries its values, shared until one is changed)."""
+    key, value = str(args[0]), args[1]
+    if isinstance(value, tuple):
+        raise ValueError(f"set({key}, ...): the value must be a number, a string or a boolean")
+    c = s
+    c.values = {**s.values, key: value}
+    return c
+
+
+def op_trim(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
+    """`trim(false)` / `trim(true)`: whether `i()` clips inserts by the trim planes (CGA's
+    `set(trim.vertical, ...)`), for this shape and what is derived from it."""
+    c = s
+    c.trim_on = bool(args[0])
+    return c
+
+
+def op_report(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
+    """CGA's `report(key, value)`: the value is collected under the key (Model.reports: count,
+    sum, mean, min, max of numbers; counts of strings)."""
+    key, value = args[0], args[1]
+    if not isinstance(key, str) or not key:
+        raise ValueError(f"report(): the key must be a non-empty string, got {key!r}")
+    if isinstance(value, tuple):
+        raise ValueError(f"report({key!r}, ...): the value must be a number, a string or a boolean")
+    ctx.report(key, value)
+    return s
+
+
 BUILTIN_APPLY = {
     "footprint": op_footprint, "extrude": op_extrude, "taper": op_taper, "recess": op_recess,
     "comp": op_comp, "split": op_split, "offset": op_offset,
     "roofGable": op_roof_gable, "roofHip": op_roof_hip, "roofPyramid": op_roof_pyramid,
     "roofShed": op_roof_shed, "roofMansard": op_roof_mansard,
     "t": op_t, "r": op_r, "s": op_s, "center": op_center, "i": op_insert,
-    "color": op_color, "material": op_material,
+    "color": op_color, "material": op_material, "set": op_set,
+    "alignScopeToGeometry": op_align_scope_to_geometry, "alignScopeToAxes": op_align_scope_to_axes,
+    "rotateScope": op_rotate_scope, "report": op_report, "reverseNormals": op_reverse_normals,
+    "trim": op_trim,
 }
 
 

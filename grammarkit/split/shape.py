@@ -18,6 +18,7 @@ expressions read attrs from the shape they are evaluated on, never from shared s
 """
 from __future__ import annotations
 
+import itertools
 import random
 from typing import Any
 
@@ -28,11 +29,18 @@ Vec = tuple[float, float, float]
 FACE = "F"
 VOLUME = "V"
 
+# Geometry ids: every new geometry (a derived shape) gets a fresh one, copies keep it. A face
+# made by comp(f) remembers the id (and scope) of the volume it came from (`on`), so that the
+# engine can tell at the end whether that very volume was emitted as a solid (then the face is
+# a view of the solid's surface) or consumed (then the face is emitted as a surface).
+_GIDS = itertools.count(1)
+
 
 class Shape:
     __slots__ = (
         "o", "ax", "sz", "kind", "poly", "solid", "color", "material", "rule", "params",
-        "seed", "node", "depth", "si", "st", "entry", "cut", "values", "_rng",
+        "seed", "node", "depth", "si", "st", "entry", "cut", "values", "_rng", "gid", "on",
+        "trims", "trim_on",
     )
 
     def __init__(self, o: Vec, ax: tuple[Vec, Vec, Vec], sz: Vec, kind: str = FACE,
@@ -56,6 +64,12 @@ class Shape:
         self.cut = -1  # tag id of a recess cut made from this face, coloured by its terminal
         self.values: dict | None = None  # the derivation's attr/const values (set by the engine)
         self._rng: random.Random | None = None
+        self.gid = next(_GIDS)  # geometry id (see _GIDS)
+        # a face made by comp(f): (volume gid, volume origin, axes, size) of the volume it is a
+        # face of; None for other shapes
+        self.on: tuple | None = None
+        self.trims: tuple = ()  # CGA trim planes (world point, world normal) for inserts
+        self.trim_on = True  # CGA's trim.vertical: whether i() clips by the trim planes
 
     def copy(self) -> "Shape":
         c = Shape.__new__(Shape)
@@ -63,6 +77,7 @@ class Shape:
         c.color, c.material, c.rule, c.params = self.color, self.material, self.rule, self.params
         c.seed, c.node, c.depth, c.si, c.st = self.seed, self.node, self.depth, self.si, self.st
         c.entry, c.cut, c.values, c._rng = self.entry, self.cut, self.values, None
+        c.gid, c.on, c.trims, c.trim_on = self.gid, self.on, self.trims, self.trim_on
         return c
 
     def derived(self, o: Vec, sz: Vec, poly: Any = None, kind: str | None = None,
@@ -75,6 +90,9 @@ class Shape:
         c.color, c.material, c.rule, c.params = self.color, self.material, self.rule, self.params
         c.seed, c.node, c.depth, c.si, c.st = self.seed, self.node, self.depth, self.si, self.st
         c.entry, c.cut, c.values, c._rng = self.entry, self.cut, self.values, None
+        c.gid = next(_GIDS)
+        c.on = self.on if c.kind == FACE else None
+        c.trims, c.trim_on = self.trims, self.trim_on
         return c
 
     def rng(self) -> random.Random:

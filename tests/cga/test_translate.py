@@ -174,14 +174,14 @@ def test_block_before_more_items_keeps_the_shape():
 
 
 def test_untranslatable_constructs_warn_with_location_and_feature():
-    text = ("Lot -->\n  setupProjection(0, scope.xy, 2, 2)\n  extrude(geometry.area() * 0.1)\n"
-            "  report(\"h\", 3)\n  X.\n")
+    text = ("Lot -->\n  setupProjection(0, scope.xy, 2, 2)\n  extrude(geometry.angle(zenith) * 0.1)\n"
+            "  print(\"h\")\n  X.\n")
     result = translate_cga(text, filename="w.cga")
     assert result.ok
     warnings = [d for d in result.diagnostics if d.severity == "warning"]
     assert [(d.span.line, d.span.column) for d in warnings] == [(2, 3), (3, 3), (4, 3)]
     assert {c.feature for c in result.report.constructs if c.status != "translated"} == {
-        "op:setupProjection", "fn:geometry.area", "op:report"}
+        "op:setupProjection", "fn:geometry.angle", "op:print"}
     formatted = warnings[0].format(text)
     assert formatted.startswith("w.cga:2:3: warning: not translated: setupProjection()")
     assert "    ^" in formatted
@@ -224,3 +224,107 @@ Win --> split(y) { 1: W. | 1.5: extrude(0.2) Frame. | ~1: W. }
     assert a.mesh.volume == pytest.approx(b.mesh.volume, rel=1e-9)
     assert (a.mesh.bounds == b.mesh.bounds).all()
     assert a.mesh.is_watertight
+
+
+def test_a_first_rule_with_parameters_is_not_the_start_rule():
+    # a parameterless root that leads to the rest of the file starts instead (with a warning)
+    r = translate_cga("Part(h) --> extrude(h) P.\nLot --> Part(3)\n", filename="s.cga")
+    assert r.ok and r.grammar.rules[0].name == "Lot"
+    assert any(c.feature == "start:params" for c in r.report.constructs)
+    assert grammarkit.derive(r.grammar, lot=LOT).mesh.is_watertight
+    # a library of rules with parameters: the first rule stays first, and deriving says why
+    # it cannot start (not an IndexError deep in the engine)
+    r = translate_cga("Vol(i, use) --> case use == \"a\": Sub(i) else: B.\n"
+                      "Sub(i) --> extrude(i) A.\n", filename="l.cga")
+    assert r.ok and r.grammar.rules[0].name == "Vol"
+    assert any(c.feature == "start:params" and c.status == "dropped" for c in r.report.constructs)
+    with pytest.raises(grammarkit.errors.GrammarError) as e:
+        grammarkit.derive(r.grammar, lot=LOT)
+    assert "start rule 'Vol' takes parameters (i, use_)" in str(e.value) and e.value.span.line == 1
+
+
+def test_case_and_stochastic_values_become_select_and_pick():
+    text = ('attr type = "tall"\n'
+            'attr h = case type == "tall": 30 case type == "mid": 20 else: 10\n'
+            'const w = 40%: 2 30%: 3 else: 4\n'
+            'inv(x) = case x == 0: 0 else: 1 / x\n'
+            "Lot --> extrude(h + inv(0)) s(w, '1, '1) X.\n")
+    r = imported(text)
+    assert not [c for c in r.report.constructs if c.status != "translated"]
+    assert 'select(type == "tall", 30, select(type == "mid", 20, 10))' in r.text
+    assert "pick(rand(0, 100), 40, 2, 30, 3, 4)" in r.text
+    tops = {t: grammarkit.derive(r.grammar, attrs={"type": t}, lot=LOT).mesh.bounds[1][2]
+            for t in ("tall", "mid", "low")}
+    assert tops == pytest.approx({"tall": 30, "mid": 20, "low": 10}, abs=0.01)
+    widths = {round(grammarkit.derive(r.grammar, seed=s, lot=LOT).mesh.bounds[1][0]) for s in range(40)}
+    assert widths == {2, 3, 4}  # every arm is drawn for some seed
+
+
+def test_scope_alignment_operations_and_the_frame_they_leave():
+    text = ("Lot --> alignScopeToAxes(y) rotateScope(0, 30, 0) alignScopeToGeometry(yUp, 0, longest) "
+            "extrude(3) comp(f) { front: alignScopeToGeometry(yUp, 0, 0) split(z) { 1: A | ~1: B } }\n"
+            "A --> extrude(1) A.\nB --> extrude(2) B.\n")
+    r = imported(text)
+    assert not [c for c in r.report.constructs if c.status != "translated"]
+    assert ('alignScopeToAxes() rotateScope(0, 0, 30) alignScopeToGeometry("longest")' in r.text)
+    # after alignScopeToGeometry(yUp, ...) the face is in CGA's y-up frame: split(z) is
+    # grammarkit's split(y), reversed
+    assert "alignScopeToGeometry(0) split(y) { ~1: B | 1: A }" in r.text
+    m = grammarkit.derive(r.grammar, lot=LOT)
+    assert m.mesh.is_watertight
+    # rotateScope about an axis in the face plane is reported, not guessed
+    r = translate_cga("Lot --> rotateScope(90, 0, 0) X.\n", filename="r.cga")
+    assert [c.feature for c in r.report.constructs if c.status != "translated"] == ["rotateScope:axes"]
+
+
+def test_text_joins_and_list_functions():
+    r = imported('attr id = 7\nattr names = "a;b;c;"\n'
+                 'Lot --> report("Height." + id, 3) report(listItem(names, 1) + 2, listSize(names)) '
+                 'extrude(float("4")) X.\n')
+    assert 'report("Height." + str(id), 3)' in r.text
+    assert "report(listItem(names, 1) + str(2), listSize(names))" in r.text
+    m = grammarkit.derive(r.grammar, lot=LOT)
+    assert set(m.reports) == {"Height.7", "b2"} and m.reports["b2"]["sum"] == 3
+
+
+def test_reverse_normals_replace_and_list_random():
+    r = imported('attr l = "a;b;c;"\nLot --> reverseNormals report(replace(listRandom(l), "a", "x"), 1) X.\n')
+    assert "reverseNormals()" in r.text and "listItem(l, floor(rand(0, listSize(l))))" in r.text
+    drawn = set()
+    for seed in range(30):
+        drawn |= set(grammarkit.derive(r.grammar, seed=seed, lot=LOT).reports)
+    assert drawn == {"x", "b", "c"}
+
+
+def test_imports_are_translated_under_their_alias(tmp_path):
+    (tmp_path / "lib.cga").write_text('attr h = 1\nattr c = "#ff0000"\nconst k = 2\n'
+                                      'tall(x) = x * k\n'
+                                      'Block --> extrude(tall(h)) color(c) Part(h)\nPart(h) --> B.\n'
+                                      'Unused --> X.\n')
+    main = tmp_path / "main.cga"
+    main.write_text('attr c = "#00ff00"\nimport lib : "/some/project/rules/lib.cga" (h = 3)\n'
+                    "@StartRule\nLot --> lib.Block\n")
+    r = translate_cga(main)
+    assert r.ok, [d.message for d in r.diagnostics]
+    # the import and its call are translated; the imported file's own constructs are counted
+    # when it is imported on its own
+    assert {c.kind for c in r.report.constructs} >= {"import", "successor"}
+    assert not [c for c in r.report.constructs if c.status != "translated"]
+    assert "attr lib_h = 3" in r.text and "attr lib_c = c" in r.text  # argument, propagation
+    assert "Unused" not in r.text  # imported rules only when called
+    m = grammarkit.derive(r.grammar, lot=LOT)
+    assert m.mesh.bounds[1][2] == pytest.approx(6, abs=0.01)  # tall(3) = 3 * 2
+    assert {p.color for p in m.parts} == {"#00ff00"}
+    # a missing file, and a cycle, are reported, not followed
+    (tmp_path / "loop.cga").write_text('import me : "loop.cga"\nLot --> me.Lot\n')
+    r = translate_cga(tmp_path / "loop.cga")
+    assert [c.feature for c in r.report.constructs if c.status != "translated"][:1] == ["import"]
+    r = translate_cga('import gone : "nowhere.cga"\nLot --> gone.X\n', filename=str(tmp_path / "g.cga"))
+    assert any("not found" in (c.message or "") for c in r.report.constructs)
+
+
+def test_set_trim_vertical_is_trim():
+    r = imported("Lot --> extrude(3) comp(f) { side: set(trim.vertical, false) set(trim.horizontal, false) "
+                 "s('1, '1, 1) i(\"builtin:cube\") C }\n")
+    assert "trim(false)" in r.text and "trim.horizontal" not in r.text
+    assert not [c for c in r.report.constructs if c.status != "translated"]

@@ -60,7 +60,10 @@ def test_argument_checks():
 def test_block_kind_checks():
     assert "needs a block of sizes" in one("A --> split(x)", "block-kind").message
     assert "takes no { } block" in one("A --> extrude(1) { 1: B. }", "block-kind").message
-    assert "not sizes" in one("A --> comp(f) { 1: B. }", "block-kind").message
+    assert "not sizes" in one("A --> comp(f) { ~1: B. }", "block-kind").message
+    # a whole number is an index selector (CGA: comp(f) { 0: A }); a fraction is not
+    assert one("A --> comp(f) { 1.5: B. }", "unknown-selector")
+    assert not [d for d in diags("A --> comp(f) { 0: B. | 2: C. }") if d.code in ("block-kind", "unknown-selector")]
     d = one("A --> comp(f) { topp: B. }", "unknown-selector")
     assert d.hint.startswith("did you mean 'top'?")
     assert one("A --> comp(f) { { top: B. }* }", "block-kind")

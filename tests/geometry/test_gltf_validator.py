@@ -39,6 +39,14 @@ def _glb_json(path: Path) -> dict:
     return json.loads(data[20:20 + length])
 
 
+SURFACE_MODELS = {
+    "faces_only": "Lot --> extrude(4) comp(f) { side: color(\"#aa3322\") Wall. | top: Roof. }\n",
+    "hybrid": ("Lot --> [ extrude(3) comp(f) { side: Wall. | volume: Mass. } ] t(0, 0, 3) extrude(2) "
+               "comp(f) { side: split(x) { ~1: Panel. | 1: recess(0.2) material(\"glass\") Glass. "
+               "| ~1: Panel. } }\n"),
+}
+
+
 @pytest.fixture(scope="module")
 def written(tmp_path_factory):
     out = tmp_path_factory.mktemp("gltf")
@@ -46,6 +54,10 @@ def written(tmp_path_factory):
     for path in EXAMPLES:
         m = grammarkit.derive(path, seed=0)
         files += [m.save(out / f"{path.stem}.glb"), m.save(out / f"{path.stem}.gltf")]
+    # the surface layer: a model of faces only, and a solid with surfaces beside it
+    for name, text in SURFACE_MODELS.items():
+        m = grammarkit.derive(text, seed=0)
+        files += [m.save(out / f"{name}.glb"), m.save(out / f"{name}.gltf")]
     from grammarkit.tiling import load_examples, write_assembly
 
     tiling = grammarkit.parse(GRAMMARS / "tiling" / "castle" / "castle.grammar") \
@@ -102,3 +114,25 @@ def test_layout_root_rotation_materials_and_terminal_nodes(written):
     positions = {p["attributes"]["POSITION"] for i in building["children"]
                  for p in doc["meshes"][doc["nodes"][i]["mesh"]]["primitives"]}
     assert len(positions) == 1
+
+
+def test_surface_layer_is_its_own_flagged_node(written):
+    hybrid = next(f for f in written if f.name == "hybrid.glb")
+    doc = _glb_json(hybrid)
+    root = doc["nodes"][doc["scenes"][0]["nodes"][0]]
+    solid, surface = [doc["nodes"][i] for i in root["children"]]
+    assert "surface" not in (solid.get("extras") or {})
+    assert surface["extras"]["surface"] is True and surface["name"].endswith("surfaces")
+    kids = [doc["nodes"][i] for i in surface["children"]]
+    assert {k["name"] for k in kids} == {"Panel", "Glass"}  # the Glass terminal tags its reveal
+    assert all(k["extras"]["surface"] is True for k in kids)
+    mats = {p["material"] for k in kids for p in doc["meshes"][k["mesh"]]["primitives"]}
+    assert all(doc["materials"][m]["doubleSided"] and doc["materials"][m]["extras"]["surface"] for m in mats)
+    # the solid's materials are single-sided and its primitives share one POSITION accessor
+    smats = {p["material"] for i in solid["children"] for p in doc["meshes"][doc["nodes"][i]["mesh"]]["primitives"]}
+    assert not any(doc["materials"][m].get("doubleSided") for m in smats)
+    # read back: the solid alone is watertight, the surface layer is separate
+    from grammarkit.geometry.meshio import read_gltf_solids
+
+    solids = read_gltf_solids(hybrid)
+    assert [bool(s.extras.get("surface")) for s in solids] == [False, True]

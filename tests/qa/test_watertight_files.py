@@ -43,7 +43,7 @@ def test_roof_solids_have_no_pinched_vertices(make, poly):
 
 
 def test_neighbouring_recesses_leave_no_sliver_walls():
-    text = ("Lot --> footprint(rect(12, 8)) extrude(6) comp(f) { side: F | top: T. | bottom: NIL }\n"
+    text = ("Lot --> footprint(rect(12, 8)) extrude(6) comp(f) { side: F | top: T. | bottom: NIL | volume: M. }\n"
             "F --> split(y) { 1: W. | ~1: split(x) { { ~1.5: recess(0.3) G. }* } | 1: W. }\n")
     m = grammarkit.derive(text)
     assert _coincident(m.mesh.vertices) == 0

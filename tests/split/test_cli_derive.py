@@ -14,7 +14,7 @@ SMALL = """
 grammar small
 attr h = 6 @range(3, 12)
 attr roof = "gable" @enum("gable", "hip")
-Lot --> footprint(rect(8, 6)) extrude(h) comp(f) { top: Roof | side: Facade | bottom: NIL }
+Lot --> footprint(rect(8, 6)) extrude(h) comp(f) { top: Roof | side: Facade | bottom: NIL | volume: Mass. }
 Roof --> case roof == "gable": roofGable(30) color("#aa3322") R. else: roofHip(30) color("#aa3322") R.
 Facade --> split(x) { ~1: Wall. | { 1: recess(0.2) color("#223344") Glass. | ~2: Wall. }* }
 """

@@ -46,8 +46,18 @@ def test_comp_face_frames(G):
     assert by["T"].axes[2] == pytest.approx((0, 0, 1)) and by["T"].origin == pytest.approx((0, 0, 4))
     assert by["D"].axes[2] == pytest.approx((0, 0, -1))
     assert by["F"].size[:2] == pytest.approx((10, 4)) and by["R"].size[:2] == pytest.approx((6, 4))
-    # the comp'd volume stays as the body: the mesh is the box
-    assert ok(m).volume == near(240.0)
+    # comp(f) consumes the volume (CGA): no solid, the six faces are the surface layer
+    assert len(m.faces) == 0 and len(m.surface_faces) == 12
+    surf = m.surface_mesh
+    assert surf.area == pytest.approx(2 * (10 * 6 + 10 * 4 + 6 * 4))
+    # ... and the faces, read as one surface, close the box with outward normals
+    welded = surf.copy()
+    welded.merge_vertices()
+    assert welded.is_watertight and welded.volume == pytest.approx(240.0)
+    # `volume:` keeps it: the solid is the box, the faces colour its surface
+    kept = derive(G(BOX.replace("Mass", "Mass\nMass --> comp(f) { top: T. | side: S. | volume: Body. }")))
+    assert ok(kept).volume == near(240.0) and len(kept.surface_faces) == 0
+    assert {t.name for t in kept.tags if t.role == "body"} == {"Body"}
 
 
 def test_side_selector_first_match_wins(G):
@@ -69,12 +79,12 @@ Bay(i, n) --> extrude(1 + i) color("#00ff00") Bay.
 
 def test_offset_inside_border_and_recess(G):
     g = G("""
-Lot --> footprint(rect(10, 10)) extrude(5) comp(f) { front: Win | all: NIL }
+Lot --> footprint(rect(10, 10)) extrude(5) comp(f) { front: Win | all: NIL | volume: Body. }
 Win --> offset(-1) { inside: recess(0.5) Glass. | border: Frame. }
 """)
     m = derive(g)
     names = sorted(p.name for p in m.parts)
-    assert names == ["Frame", "Glass"]
+    assert names == ["Body", "Frame", "Glass"]
     glass = next(p for p in m.parts if p.name == "Glass")
     assert glass.size[:2] == pytest.approx((8, 3))
     assert glass.origin[1] == pytest.approx(0.5)  # moved to the bottom of the recess (into +y)
@@ -82,11 +92,24 @@ Win --> offset(-1) { inside: recess(0.5) Glass. | border: Frame. }
     assert rep.volume == near(500 - 8 * 3 * 0.5)
 
 
-def test_extrude_negative_is_a_clear_error(G):
-    g = G("Lot --> footprint(rect(4, 4)) extrude(-1) A.")
-    with pytest.raises(DerivationError) as e:
-        derive(g)
-    assert "extrude" in str(e.value) and e.value.span is not None and e.value.span.line == 1
+def test_extrude_negative_goes_against_the_normal(G):
+    # CGA: extrude(-d) makes the volume below the face
+    m = derive(G("Lot --> footprint(rect(4, 4)) extrude(-1) A."))
+    assert ok(m).volume == pytest.approx(16.0, rel=5e-3)
+    assert m.mesh.bounds[0][2] == near(-1.0) and m.mesh.bounds[1][2] == near(0.0)
+    # a window reveal the CGA way: a negative extrusion into the wall, its sides as surfaces
+    g = G("Lot --> footprint(rect(4, 4)) extrude(3) comp(f) { front: Win | volume: Mass. }\n"
+          "Win --> split(x) { 1: NIL | 2: extrude(-0.5) comp(f) { side: Reveal. } | ~1: NIL }")
+    m = derive(g)
+    reveal = [t for t in m.surface_tags.tolist() if m.tags[t].name == "Reveal"]
+    assert len(reveal) == 8  # four sides, two triangles each
+    assert m.surface_vertices[:, 1].max() == pytest.approx(0.5)  # 0.5 into the wall (+y)
+    # extrude(0): a volume without thickness, left out of the solid with a warning
+    m = derive(G("Lot --> footprint(rect(4, 4)) [ extrude(0) Flat. ] extrude(1) Box."))
+    assert any("no thickness" in w for w in m.warnings) and ok(m).volume == pytest.approx(16.0, rel=5e-3)
+    # ... and its footprint is in the surface layer (what CityEngine shows of a flat volume)
+    assert [m.tags[t].name for t in m.surface_tags.tolist()] == ["Flat", "Flat"]
+    assert m.surface_mesh.area == pytest.approx(16.0)
 
 
 def test_division_by_zero_has_span(G):
@@ -213,7 +236,7 @@ def test_polygon_footprint_split_and_comp(G):
     g = G("""
 Lot --> footprint(polygon(0, 0, 10, 0, 10, 4, 6, 4, 6, 8, 0, 8)) extrude(3) Mass
 Mass --> split(x) { ~1: P | ~1: P }
-P --> comp(f) { side: F. | top: T. | bottom: NIL }
+P --> comp(f) { side: F. | top: T. | bottom: NIL | volume: P. }
 """)
     m = derive(g)
     rep = ok(m)
@@ -251,7 +274,7 @@ def test_snippets_use_default_and_private_rules(G):
     g = G("""
 snippet tower : Mass {
   attr h = 5 @range(2, 9)
-  Start --> extrude(h) comp(f) { top: Roof | side: Wall | bottom: NIL }
+  Start --> extrude(h) comp(f) { top: Roof | side: Wall | bottom: NIL | volume: Body. }
   Wall --> color("#ff0000") Wall.
 }
 snippet flat : Roof {
@@ -269,7 +292,7 @@ variants Roof { flat: 50% | peaked: 50% }
     m = derive(g)
     ok(m)
     assert m.bindings == {"Mass": "tower", "Roof": "flat"}
-    assert {p.name for p in m.parts} == {"Wall", "Flat"}
+    assert {p.name for p in m.parts} == {"Wall", "Flat", "Body"}
     wall = next(p for p in m.parts if p.name == "Wall")
     assert wall.rule == "Wall" and wall.object_type == "Mass" and wall.color == "#ff0000"
     assert m.attrs == {"Mass.h": 5}
@@ -297,7 +320,7 @@ P --> extrude(2) P.
 
 def test_colors_reach_mesh_faces_and_tree(G):
     g = G("""
-Lot --> footprint(rect(10, 10)) extrude(6) color("#808080") comp(f) { front: Facade | top: roofGable(30) color("#aa0000") Roof. | all: NIL }
+Lot --> footprint(rect(10, 10)) extrude(6) color("#808080") comp(f) { front: Facade | top: roofGable(30) color("#aa0000") Roof. | all: NIL | volume: Body. }
 Facade --> color("#00aa00") split(x) { ~1: Wall. | 2: Window | ~1: Wall. }
 Window --> split(y) { 1: Wall. | 2: recess(0.3) color("#0000aa") Glass. | ~1: Wall. }
 """)
@@ -315,7 +338,7 @@ Window --> split(y) { 1: Wall. | 2: recess(0.3) color("#0000aa") Glass. | ~1: Wa
 
 def test_solids_inside_a_recess_survive_the_cut(G):
     g = G("""
-Lot --> footprint(rect(6, 6)) extrude(4) comp(f) { front: Win | all: NIL }
+Lot --> footprint(rect(6, 6)) extrude(4) comp(f) { front: Win | all: NIL | volume: Body. }
 Win --> offset(-1) { inside: recess(0.5) split(x) { ~1: Glass. | 0.2: extrude(0.3) Mullion. | ~1: Glass. } | border: Wall. }
 """)
     m = derive(g)
@@ -324,3 +347,129 @@ Win --> offset(-1) { inside: recess(0.5) split(x) { ~1: Glass. | 0.2: extrude(0.
     mullion = 0.2 * 2 * 0.3
     assert rep.volume == near(144 - hole + mullion)
     assert any(t.name == "Mullion" for t in m.tags)
+
+
+def test_a_start_rule_with_parameters_is_a_located_error(G):
+    from grammarkit.errors import GrammarError
+
+    with pytest.raises(GrammarError) as e:
+        derive(G("Lot(h) --> extrude(h) A.\nB --> Lot(2)"))
+    assert "start rule 'Lot' takes parameters (h)" in str(e.value)
+    assert e.value.span.line == 1 and e.value.diagnostics[0].code == "axiom-params"
+    assert derive(G("Lot(h) --> extrude(h) A.\nB --> Lot(2)"), start="B").mesh.is_watertight
+
+
+def test_set_changes_an_attr_for_the_shape_and_its_descendants(G):
+    m = derive(G("""
+attr h = 3
+attr w = 2
+Lot --> footprint(rect(10, 4)) split(x) { ~1: set(h, 6) A | ~1: A | ~1: set(h, h + 1) set(w, w * 2) A }
+A --> extrude(h) s(w, scope.sy, scope.sz) X.
+"""))
+    # siblings do not see each other's set(); later reads in the same shape see the new value
+    assert [p.size for p in m.parts] == [(2, 4, 6), (2, 4, 3), (4, 4, 4)]
+    # a split whose sizes read a set() attr is laid out per shape, not cached per derivation
+    m = derive(G("""
+attr f = 1
+Lot --> footprint(rect(4, 4)) split(y) { ~1: set(f, 2) R | ~1: R }
+R --> split(x) { f: extrude(1) A. | ~1: extrude(1) B. }
+"""))
+    assert sorted(p.size[0] for p in m.parts if p.name == "A") == [1, 2]
+
+
+def test_set_of_a_const_or_unknown_name_is_a_located_error(G):
+    from grammarkit.errors import GrammarError
+
+    for text, what in (("const c = 1\nLot --> set(c, 2) X.", "is a const"),
+                       ("Lot --> set(nope, 2) X.", "is not an attr")):
+        with pytest.raises(GrammarError) as e:
+            derive(G(text))
+        assert what in str(e.value) and e.value.span is not None
+
+
+def test_select_and_pick_evaluate_only_the_chosen_value(G):
+    # select(x == 0, 0, 1 / x) must not divide by zero (CGA's case expressions are lazy)
+    m = derive(G("const z = 0\nattr k = 2\n"
+                 "Lot --> footprint(rect(4, 4)) extrude(3 + select(z == 0, 0, 1 / z) + select(k > 1, 1, 1 / z)) A."))
+    assert m.mesh.bounds[1][2] == pytest.approx(4, abs=0.01)
+    # pick(u, p1, v1, ..., other): percentages accumulate; u at or past their sum gives other
+    for u, want in ((0, 1), (29.9, 1), (30, 2), (49.9, 2), (50, 3), (99, 3)):
+        m = derive(G(f"Lot --> footprint(rect(4, 4)) extrude(pick({u}, 30, 1, 20, 2, 3)) A."))
+        assert m.mesh.bounds[1][2] == pytest.approx(want, abs=0.01), u
+
+
+def test_scope_operations_turn_the_scope_not_the_geometry(G):
+    # alignScopeToGeometry(i): x along edge i of the outline; the footprint stays in place
+    m = derive(G("Lot --> footprint(rect(10, 4)) alignScopeToGeometry(1) extrude(2) A."))
+    a = m.parts[0]
+    assert a.axes[0] == pytest.approx((0, 1, 0)) and a.size == pytest.approx((4, 10, 2))
+    assert ok(m).volume == near(80.0) and m.mesh.bounds[1][:2] == pytest.approx((10, 4), abs=2e-3)
+    assert derive(G('Lot --> footprint(polygon(0, 0, 3, 0, 3, 8, 0, 8)) alignScopeToGeometry("longest") '
+                    "A.")).parts[0].axes[0] == pytest.approx((0, 1, 0))
+    # rotateScope turns the scope about z: a split then runs along the turned x axis
+    m = derive(G("Lot --> footprint(rect(10, 4)) rotateScope(0, 0, 90) split(x) { 1: extrude(1) A. | ~1: extrude(2) B. }"))
+    a = next(p for p in m.parts if p.name == "A")
+    assert a.size == pytest.approx((1, 10, 1))  # the first metre along world y
+    assert ok(m).volume == near(1 * 10 * 1 + 3 * 10 * 2)
+    # alignScopeToAxes brings x back to the world x axis
+    m = derive(G("Lot --> footprint(rect(10, 4)) rotateScope(0, 0, 30) alignScopeToAxes() A."))
+    assert m.parts[0].axes[0] == pytest.approx((1, 0, 0)) and m.parts[0].size[:2] == pytest.approx((10, 4))
+    # a general solid turns with its scope; the model is unchanged
+    m = derive(G("Lot --> footprint(rect(10, 4)) roofHip(30) rotateScope(0, 0, 90) A."))
+    assert m.parts[0].size[:2] == pytest.approx((4, 10)) and ok(m).watertight
+
+
+def test_rotate_scope_about_x_or_y_is_refused(G):
+    with pytest.raises(DerivationError) as e:
+        derive(G("Lot --> footprint(rect(10, 4)) rotateScope(90, 0, 0) A."))
+    assert "about its z axis only" in str(e.value) and e.value.span.line == 1
+
+
+def test_reports_are_collected_into_the_model_metadata(G, tmp_path):
+    m = derive(G('Lot --> footprint(rect(10, 4)) report("lot area", scope.sx * scope.sy) '
+                 "split(x) { ~1: F | ~1: F | ~1: H }\n"
+                 'F --> report("use", "shop") report("floors", 2) extrude(3) F.\n'
+                 'H --> report("use", "flat") report("floors", 5) extrude(3) H.\n'))
+    assert m.reports == {"lot area": {"n": 1, "sum": 40.0, "mean": 40.0, "min": 40.0, "max": 40.0},
+                         "use": {"n": 3, "values": {"flat": 1, "shop": 2}},
+                         "floors": {"n": 3, "sum": 9.0, "mean": 3.0, "min": 2.0, "max": 5.0}}
+    assert m.tree_dict()["reports"] == m.reports
+    import json
+    import struct
+
+    data = m.save(tmp_path / "r.glb").read_bytes()
+    doc = json.loads(data[20:20 + struct.unpack("<I", data[12:16])[0]])
+    assert any((n.get("extras") or {}).get("reports") == m.reports for n in doc["nodes"])
+    assert derive(G("Lot --> footprint(rect(4, 4)) extrude(1) A.")).reports == {}
+
+
+def test_geometry_queries(G):
+    m = derive(G('Lot --> footprint(lshape(10, 8, 4, 4)) report("a", geometry.area) '
+                 'report("n", geometry.nVertices) report("r", geometry.isRectangular) '
+                 '[ extrude(2) report("v", geometry.volume) report("A", geometry.area) '
+                 'report("nv", geometry.nVertices) X. ] '
+                 'split(x) { 4: report("r4", geometry.isRectangular) NIL | ~1: NIL }'))
+    got = {k: v["sum"] for k, v in m.reports.items()}
+    assert got == {"a": 56, "n": 6, "r": 0, "v": 112, "A": 2 * 56 + 36 * 2, "nv": 12, "r4": 1}
+    # a general solid: its mesh
+    m = derive(G('Lot --> footprint(rect(4, 4)) roofPyramid(45) report("v", geometry.volume) X.'))
+    assert m.reports["v"]["sum"] == pytest.approx(4 * 4 * 2 / 3, rel=0.02)
+
+
+def test_geometry_in_attr_values_reads_zero(G):
+    # attrs and consts are evaluated without a shape (as scope.sx is 0 there)
+    m = derive(G("const a = geometry.area\nLot --> footprint(rect(4, 4)) extrude(1 + a) X."))
+    assert m.mesh.bounds[1][2] == pytest.approx(1, abs=0.01)
+
+
+def test_reverse_normals_turns_a_face_around(G):
+    m = derive(G("Lot --> footprint(rect(4, 2)) reverseNormals() X."))
+    assert m.parts[0].axes[2] == pytest.approx((0, 0, -1))
+    assert (m.surface_mesh.face_normals[:, 2] < -0.99).all()  # the surface looks down now
+    # the outline stays in place: an L extruded after turning grows downwards
+    m = derive(G("Lot --> footprint(lshape(4, 4, 2, 2)) reverseNormals() extrude(1) X."))
+    assert ok(m).volume == pytest.approx(12.0, rel=5e-3) and m.mesh.bounds[0][2] == pytest.approx(-1.0, abs=2e-3)
+    assert m.mesh.bounds[1][:2] == pytest.approx((4, 4), abs=2e-3)
+    # a closed volume keeps its outside, with a warning
+    m = derive(G("Lot --> footprint(rect(4, 2)) extrude(1) reverseNormals() X."))
+    assert ok(m).watertight and any("keeps its outside" in w for w in m.warnings)
