@@ -151,13 +151,16 @@ class StageSpec:
 
     # -- the host grammar ---------------------------------------------------------------
     def host_text(self) -> str:
-        """Rules deriving the host and handing the anchor to `SketchAnchor` (axiom `SketchLot`)."""
+        """Rules deriving the host and handing the anchor to `SketchAnchor` (axiom `SketchLot`).
+
+        The host keeps its volume (`volume: SketchHost.`): comp(f) consumes the volume it
+        decomposes, and windows and ledges are recessed into / extruded from a solid host."""
         host = f'color("{HOST_COLOR}")'
         if self.anchor_kind == "ground":
             return "SketchLot --> SketchAnchor"
         if self.anchor_kind == "top":
             return (f"SketchLot --> {host} extrude({self.host_height:g}) comp(f) "
-                    "{ top: SketchAnchor | side: SketchHost. | bottom: NIL }")
+                    "{ top: SketchAnchor | side: SketchHost. | bottom: NIL | volume: SketchHost. }")
         w, h = self.anchor_size
         m = self.wall
         # the anchor is part `anchor_index` of a vertical split (floors below it are host);
@@ -165,7 +168,7 @@ class StageSpec:
         parts = [f"{h:g}: SketchHost."] * self.anchor_index + [f"{h:g}: SketchAnchor"]
         lines = [f"SketchLot --> {host} extrude({h * (self.anchor_index + 1) + 2 * m:g}) comp(f) "
                  "{ front: SketchFront | back: SketchHost. | side: SketchHost. | top: SketchHost. "
-                 "| bottom: NIL }"]
+                 "| bottom: NIL | volume: SketchHost. }"]
         if m > 0:
             lines += [f"SketchFront --> split(x) {{ {m:g}: SketchHost. | ~1: SketchMiddle | {m:g}: SketchHost. }}",
                       f"SketchMiddle --> split(y) {{ {m:g}: SketchHost. | ~1: SketchColumn | {m:g}: SketchHost. }}",
