@@ -161,7 +161,8 @@ def train_edge_model(dataset: Dataset, grammar: Any, config: EdgeTrainConfig = E
     vocab = Vocab(dataset.alphabet, max(1, int(dataset.meta.get("max_ring_label", 1))) + 4)
     rng = np.random.default_rng(config.seed)
     order = rng.permutation(with_frames)
-    n_val = max(1, int(round(config.val_fraction * len(order))))
+    # at most 100 validation graphs: evaluating (with joint voting) after every epoch costs time
+    n_val = min(max(1, int(round(config.val_fraction * len(order)))), 100)
     val_g, train_g = sorted(order[:n_val].tolist()), sorted(order[n_val:].tolist())
     if config.voting not in ("majority", "logprob", "joint"):
         raise GrammarkitError(f"unknown voting {config.voting!r}: majority, logprob or joint")
@@ -180,10 +181,9 @@ def train_edge_model(dataset: Dataset, grammar: Any, config: EdgeTrainConfig = E
     stopped = None
     for epoch in range(1, config.epochs + 1):
         model.train()
-        perm = rng.permutation(len(train_rows))
         tot = n = 0.0
-        for b in range(0, len(perm), config.batch_size):
-            rows = [train_rows[i][:4] for i in perm[b:b + config.batch_size]]
+        for batch in _length_batches(train_rows, config.batch_size, rng):
+            rows = [train_rows[i][:4] for i in batch]
             X, Y, A, F = _batch(rows, C)
             logits = model(X, A, F)
             # masked categories are -inf: pick finite entries only for the loss
@@ -212,6 +212,19 @@ def train_edge_model(dataset: Dataset, grammar: Any, config: EdgeTrainConfig = E
     return EdgeModel(model, vocab, cats, meta)
 
 
+def _length_batches(rows, size: int, rng) -> list:  # noqa: ANN001
+    """Batches of row indices in a random order, each of strings of similar length (rows are
+    shuffled, sorted by length within windows of 32 batches, cut into batches, and the batches
+    shuffled): far less padding for the LSTM to run over than random batches."""
+    perm = rng.permutation(len(rows))
+    window = 32 * size
+    batches = []
+    for w in range(0, len(perm), window):
+        chunk = sorted(perm[w:w + window].tolist(), key=lambda i: len(rows[i][0]))
+        batches += [chunk[b:b + size] for b in range(0, len(chunk), size)]
+    return [batches[i] for i in rng.permutation(len(batches))]
+
+
 def evaluate(model, rows, cats: EdgeCategories, C: int, graphs=None, configurations=None) -> dict:  # noqa: ANN001
     """Validation accuracy per character (no voting) and per edge, voting over each graph's
     strings (`rows` holds several strings per graph): `edge_accuracy_majority` (the paper's
@@ -225,6 +238,7 @@ def evaluate(model, rows, cats: EdgeCategories, C: int, graphs=None, configurati
     right = total = 0
     per_edge: dict[tuple[int, tuple[int, int]], list[np.ndarray]] = {}
     truth: dict[tuple[int, tuple[int, int]], int] = {}
+    rows = sorted(rows, key=lambda r: len(r[0]))  # less padding
     with torch.no_grad():
         for b in range(0, len(rows), 128):
             chunk = rows[b:b + 128]
