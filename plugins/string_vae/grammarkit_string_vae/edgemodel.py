@@ -104,8 +104,18 @@ class EdgeModel:
         return out
 
 
+def _labels(dataset: Dataset, g: int, cats: EdgeCategories, cache: dict | None = None) -> dict:
+    """Graph g's edge labels from its frames (computed once per graph with a `cache`)."""
+    if cache is not None and g in cache:
+        return cache[g]
+    out = edge_labels(dataset.graphs[g], dataset.frames[g], cats, dataset.variants[g] if dataset.variants else None)
+    if cache is not None:
+        cache[g] = out
+    return out
+
+
 def _examples(dataset: Dataset, idx, cats: EdgeCategories, vocab: Vocab, per_graph: int, seed: int,
-              types: tuple[str, ...] = ()):
+              types: tuple[str, ...] = (), cache: dict | None = None):
     """Rows (ids, targets, allowed, features, graph index, token edges): `per_graph` random
     strings of each graph in `idx`, labelled from its frames."""
     from .predictor import encode_targets
@@ -113,7 +123,7 @@ def _examples(dataset: Dataset, idx, cats: EdgeCategories, vocab: Vocab, per_gra
     rows = []
     for g in idx:
         graph = dataset.graphs[g]
-        labels = edge_labels(graph, dataset.frames[g], cats, dataset.variants[g] if dataset.variants else None)
+        labels = _labels(dataset, g, cats, cache)
         rng = np.random.default_rng([seed, g])
         for _ in range(per_graph):
             text, order = encode_with_order(graph, vocab.alphabet, rng=rng)
@@ -122,14 +132,15 @@ def _examples(dataset: Dataset, idx, cats: EdgeCategories, vocab: Vocab, per_gra
     return rows
 
 
-def part_configurations(dataset: Dataset, idx, cats: EdgeCategories) -> set:
-    """Every `node_configuration` of the labelled graphs `idx` (edges without a category left out)."""
+def part_configurations(dataset: Dataset, idx, cats: EdgeCategories, cache: dict | None = None) -> set:
+    """Every `node_configuration` of the labelled graphs `idx` (graphs with an edge of no
+    category are left out)."""
     from .predictor import node_configuration
 
     out = set()
     for g in idx:
         graph = dataset.graphs[g]
-        labels = edge_labels(graph, dataset.frames[g], cats, dataset.variants[g] if dataset.variants else None)
+        labels = _labels(dataset, g, cats, cache)
         if any(labels.get(e) is None for e in graph.edges):
             continue
         adj = graph.adjacency()
@@ -167,9 +178,10 @@ def train_edge_model(dataset: Dataset, grammar: Any, config: EdgeTrainConfig = E
     if config.voting not in ("majority", "logprob", "joint"):
         raise GrammarkitError(f"unknown voting {config.voting!r}: majority, logprob or joint")
     types = tuple(vocab.alphabet.types) if config.graph_features else ()
-    train_rows = _examples(dataset, train_g, cats, vocab, config.strings_per_graph, config.seed, types)
-    val_rows = _examples(dataset, val_g, cats, vocab, config.vote_strings, config.seed + 1, types)
-    configurations = part_configurations(dataset, train_g, cats)
+    cache: dict = {}
+    train_rows = _examples(dataset, train_g, cats, vocab, config.strings_per_graph, config.seed, types, cache)
+    val_rows = _examples(dataset, val_g, cats, vocab, config.vote_strings, config.seed + 1, types, cache)
+    configurations = part_configurations(dataset, train_g, cats, cache)
     C = len(cats)
     pcfg = PredictorConfig(vocab_size=len(vocab), n_categories=C, embed=config.embed, hidden=config.hidden,
                            layers=config.layers, bidirectional=config.bidirectional,
