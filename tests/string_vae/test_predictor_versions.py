@@ -77,7 +77,7 @@ def test_both_versions_train_save_and_load(small_dataset, paper):
     cfg = back.model.config
     assert cfg.bidirectional is (not paper) and back.model.lstm.bidirectional is (not paper)
     assert (cfg.features == 0) is paper and cfg.types == (() if paper else tuple(ds.alphabet.types))
-    assert back.voting == ("majority" if paper else "joint")
+    assert back.voting == ("majority" if paper else "logprob")
     assert back.configurations and back.configurations == em.configurations
     row = em.meta["training"]["history"][-1]
     for key in ("char_accuracy", "edge_accuracy_majority", "edge_accuracy_voted", "edge_accuracy_joint"):

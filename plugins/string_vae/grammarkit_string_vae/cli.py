@@ -402,9 +402,9 @@ def _dataset_grammar(ds, grammar_file: Path | None):  # noqa: ANN001, ANN202
 @click.option("--threads", default=1, show_default=True, type=click.IntRange(1, 256))
 @click.option("--time-limit", default=None, type=click.FloatRange(min=1))
 @click.option("--paper", is_flag=True, help="the paper's predictor: a left-to-right LSTM on the letters only, "
-              "majority voting (default: bidirectional, graph features, joint voting)")
+              "majority voting (default: bidirectional, graph features, summed log-probability votes)")
 @click.option("--voting", type=click.Choice(["majority", "logprob", "joint"]), default=None,
-              help="how the strings' predictions are combined (default: joint; with --paper: majority)")
+              help="how the strings' predictions are combined (default: logprob; with --paper: majority)")
 def train_edge_categories(dataset_dir: Path, out: Path, grammar_file: Path | None, epochs: int, strings_per_graph: int,
                           votes: int, bandwidth: float, seed: int, threads: int, time_limit: float | None,
                           paper: bool, voting: str | None) -> None:
@@ -427,7 +427,7 @@ def train_edge_categories(dataset_dir: Path, out: Path, grammar_file: Path | Non
     cfg = EdgeTrainConfig(epochs=epochs, strings_per_graph=strings_per_graph, vote_strings=votes,
                           bandwidth=bandwidth, seed=seed, threads=threads, time_limit=time_limit,
                           bidirectional=not paper, graph_features=not paper,
-                          voting=voting or ("majority" if paper else "joint"))
+                          voting=voting or ("majority" if paper else "logprob"))
     console = Console(stderr=True)
     progress = Progress(TextColumn("[bold]training"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
                         TextColumn("{task.fields[info]}"), console=console, disable=not console.is_terminal)

@@ -18,8 +18,8 @@ Two versions are kept measurable side by side (`PredictorConfig`):
   both end parts, the number of neighbours of each part type at distance 1 and 2 in the decoded
   graph. The string determines these, but an LSTM has to carry them over up to a hundred
   characters (a ring closure's partner); giving them directly is what the grammar's masks do
-  for the VAE. Votes sum log-probabilities over strings (`voting="logprob"`), and `"joint"`
-  then decides each part's edges together (`assign_jointly`): a part cannot take two
+  for the VAE. Votes sum log-probabilities over strings (`voting="logprob"`); `"joint"`
+  (on request) then decides each part's edges together (`assign_jointly`): a part cannot take two
   neighbours at one docking place, and only the neighbour configurations seen in the
   training data (per part type, the multiset of (neighbour type, category)) are allowed.
 """
