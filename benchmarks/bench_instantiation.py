@@ -6,8 +6,9 @@ end-to-end yield against the graph sampler.
 
 1. Edge categories and three LSTM predictors, trained on the example's dataset (the one
    bench_string_vae.py builds in --work, else a new one of --graphs graphs) for the same time
-   limit: the paper's (a left-to-right LSTM on the letters), a bidirectional one on the letters,
-   and this project's default (bidirectional, with graph features per character); accuracy on held-out graphs per character (no voting) and per
+   limit: the paper's (a left-to-right LSTM on the letters), this project's default (a
+   bidirectional one on the letters) and a bidirectional one with graph features per
+   character; accuracy on held-out graphs per character (no voting) and per
    edge with each voting over 8 strings of each graph: majority (the paper's), summed
    log-probabilities, joint per part (the paper reports 90% validation accuracy; the target is
    >= 97% with voting).
@@ -85,7 +86,7 @@ def main() -> int:
     ap.add_argument("--threads", type=int, default=1)
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--reuse", action="store_true", help="reuse the predictors saved in --work by an earlier run "
-                    "(EXAMPLE.edges, EXAMPLE_paper.edges)")
+                    "(EXAMPLE_paper.edges, EXAMPLE_bidir.edges, EXAMPLE_features.edges)")
     ap.add_argument("--strings-per-graph", type=int, default=4)
     ap.add_argument("--fast-tries", type=int, default=8, help="this project's end-to-end row: tries per graph")
     ap.add_argument("--fast-budget", type=int, default=400, help="this project's end-to-end row: insertions per try")
@@ -123,8 +124,8 @@ def main() -> int:
     train_ds = pick(train_idx)
     models = {}
     for name, kw, suffix in (("paper", dict(bidirectional=False, graph_features=False, voting="majority"), "_paper"),
-                             ("bidirectional", dict(graph_features=False), "_bidir"),
-                             ("this project", {}, "")):
+                             ("bidirectional", {}, "_bidir"),
+                             ("bidirectional + graph features", dict(graph_features=True), "_features")):
         model_path = args.work / f"{args.example}{suffix}.edges"
         if args.reuse and model_path.exists():
             from grammarkit_string_vae.edgemodel import load_edge_model
@@ -144,7 +145,7 @@ def main() -> int:
             train_s = time.perf_counter() - t0
             save_edge_model(em, model_path)
         models[name] = (em, model_path, train_s)
-    em = models["this project"][0]
+    em = models["bidirectional"][0]
     cats = em.categories
     print(f"\ncategories: {len(cats)} ("
           + ", ".join(f"{a}-{b} {len(v)}" for (a, b), v in sorted(cats.by_pair.items()))

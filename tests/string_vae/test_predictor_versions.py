@@ -68,7 +68,7 @@ def test_both_versions_train_save_and_load(small_dataset, paper):
     from grammarkit_string_vae.edgemodel import EdgeTrainConfig, load_edge_model, save_edge_model, train_edge_model
 
     g, ds, folder = small_dataset
-    kw = dict(bidirectional=False, graph_features=False, voting="majority") if paper else {}
+    kw = dict(bidirectional=False, voting="majority") if paper else dict(graph_features=True)
     em = train_edge_model(ds, g, EdgeTrainConfig(epochs=1, hidden=12, embed=6, strings_per_graph=2, vote_strings=2,
                                                  val_fraction=0.3, **kw))
     path = folder.parent / f"{'paper' if paper else 'ours'}.edges"

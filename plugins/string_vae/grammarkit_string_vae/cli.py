@@ -402,12 +402,14 @@ def _dataset_grammar(ds, grammar_file: Path | None):  # noqa: ANN001, ANN202
 @click.option("--threads", default=1, show_default=True, type=click.IntRange(1, 256))
 @click.option("--time-limit", default=None, type=click.FloatRange(min=1))
 @click.option("--paper", is_flag=True, help="the paper's predictor: a left-to-right LSTM on the letters only, "
-              "majority voting (default: bidirectional, graph features, summed log-probability votes)")
+              "majority voting (default: bidirectional, summed log-probability votes)")
+@click.option("--graph-features", is_flag=True, help="give the LSTM each character's graph features (neighbour "
+              "types at distance 1 and 2 of the edge's parts) besides its letter")
 @click.option("--voting", type=click.Choice(["majority", "logprob", "joint"]), default=None,
               help="how the strings' predictions are combined (default: logprob; with --paper: majority)")
 def train_edge_categories(dataset_dir: Path, out: Path, grammar_file: Path | None, epochs: int, strings_per_graph: int,
                           votes: int, bandwidth: float, seed: int, threads: int, time_limit: float | None,
-                          paper: bool, voting: str | None) -> None:
+                          paper: bool, graph_features: bool, voting: str | None) -> None:
     """Learn edge categories (Mean Shift) from DATASET_DIR and train the LSTM that predicts them.
 
     \b
@@ -426,7 +428,7 @@ def train_edge_categories(dataset_dir: Path, out: Path, grammar_file: Path | Non
     grammar = _dataset_grammar(ds, grammar_file)
     cfg = EdgeTrainConfig(epochs=epochs, strings_per_graph=strings_per_graph, vote_strings=votes,
                           bandwidth=bandwidth, seed=seed, threads=threads, time_limit=time_limit,
-                          bidirectional=not paper, graph_features=not paper,
+                          bidirectional=not paper, graph_features=graph_features and not paper,
                           voting=voting or ("majority" if paper else "logprob"))
     console = Console(stderr=True)
     progress = Progress(TextColumn("[bold]training"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),

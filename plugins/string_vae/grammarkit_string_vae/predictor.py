@@ -13,13 +13,12 @@ Two versions are kept measurable side by side (`PredictorConfig`):
 - **the paper's**: a unidirectional LSTM reading the string left to right (`bidirectional=False,
   features=0`), votes by majority of the per-string argmax (`voting="majority"`);
 - **this one** (the default): a bidirectional LSTM (a part's category also depends on what comes
-  after its letter: its ring-closure digits, its later branches) whose input per character is
-  the letter's embedding plus *graph features* of the character's edge (`features > 0`): for
-  both end parts, the number of neighbours of each part type at distance 1 and 2 in the decoded
-  graph. The string determines these, but an LSTM has to carry them over up to a hundred
-  characters (a ring closure's partner); giving them directly is what the grammar's masks do
-  for the VAE. Votes sum log-probabilities over strings (`voting="logprob"`); `"joint"`
-  (on request) then decides each part's edges together (`assign_jointly`): a part cannot take two
+  after its letter: its ring-closure digits, its later branches); votes sum log-probabilities
+  over strings (`voting="logprob"`). On request, the input per character is the letter's
+  embedding plus *graph features* of the character's edge (`features > 0`): for both end parts,
+  the number of neighbours of each part type at distance 1 and 2 in the decoded graph (the
+  string determines these, but an LSTM has to carry them over up to a hundred characters), and
+  `"joint"` voting decides each part's edges together (`assign_jointly`): a part cannot take two
   neighbours at one docking place, and only the neighbour configurations seen in the
   training data (per part type, the multiset of (neighbour type, category)) are allowed.
 """
