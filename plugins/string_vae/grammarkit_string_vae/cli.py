@@ -401,8 +401,15 @@ def _dataset_grammar(ds, grammar_file: Path | None):  # noqa: ANN001, ANN202
 @click.option("--seed", default=0, show_default=True, type=int)
 @click.option("--threads", default=1, show_default=True, type=click.IntRange(1, 256))
 @click.option("--time-limit", default=None, type=click.FloatRange(min=1))
+@click.option("--paper", is_flag=True, help="the paper's predictor: a left-to-right LSTM on the letters only, "
+              "majority voting (default: bidirectional, summed log-probability votes)")
+@click.option("--graph-features", is_flag=True, help="give the LSTM each character's graph features (neighbour "
+              "types at distance 1 and 2 of the edge's parts) besides its letter")
+@click.option("--voting", type=click.Choice(["majority", "logprob", "joint"]), default=None,
+              help="how the strings' predictions are combined (default: logprob; with --paper: majority)")
 def train_edge_categories(dataset_dir: Path, out: Path, grammar_file: Path | None, epochs: int, strings_per_graph: int,
-                          votes: int, bandwidth: float, seed: int, threads: int, time_limit: float | None) -> None:
+                          votes: int, bandwidth: float, seed: int, threads: int, time_limit: float | None,
+                          paper: bool, graph_features: bool, voting: str | None) -> None:
     """Learn edge categories (Mean Shift) from DATASET_DIR and train the LSTM that predicts them.
 
     \b
@@ -420,7 +427,9 @@ def train_edge_categories(dataset_dir: Path, out: Path, grammar_file: Path | Non
     ds = load_dataset(dataset_dir)
     grammar = _dataset_grammar(ds, grammar_file)
     cfg = EdgeTrainConfig(epochs=epochs, strings_per_graph=strings_per_graph, vote_strings=votes,
-                          bandwidth=bandwidth, seed=seed, threads=threads, time_limit=time_limit)
+                          bandwidth=bandwidth, seed=seed, threads=threads, time_limit=time_limit,
+                          bidirectional=not paper, graph_features=graph_features and not paper,
+                          voting=voting or ("majority" if paper else "logprob"))
     console = Console(stderr=True)
     progress = Progress(TextColumn("[bold]training"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
                         TextColumn("{task.fields[info]}"), console=console, disable=not console.is_terminal)
@@ -459,9 +468,11 @@ def _edge_model(path: Path, grammar):  # noqa: ANN001, ANN202
 @click.option("--format", "fmt", type=click.Choice(["smiles", "string2shape"]), default="smiles", show_default=True)
 @click.option("--tries", default=8, show_default=True, type=click.IntRange(1, 10_000), help="start edges tried")
 @click.option("--votes", default=8, show_default=True, type=click.IntRange(1, 1000))
+@click.option("--voting", type=click.Choice(["majority", "logprob", "joint"]), default=None,
+              help="how the strings' predictions are combined (default: the model's)")
 @click.option("--seed", default=0, show_default=True, type=int)
 def instantiate_command(text: str, grammar_file: Path, model_file: Path, out: Path, fmt: str, tries: int, votes: int,
-                        seed: int) -> None:
+                        voting: str | None, seed: int) -> None:
     """Turn one shape STRING into a 3D shape, or say why it could not.
 
     \b
@@ -483,7 +494,7 @@ def instantiate_command(text: str, grammar_file: Path, model_file: Path, out: Pa
     from .strings import decode
 
     graph = decode(text, em.alphabet).graph
-    predicted = em.rankings(graph, strings=votes, seed=seed)
+    predicted = em.rankings(graph, strings=votes, seed=seed, voting=voting)
     result = Instantiator(grammar, em.categories).instantiate(graph, predicted, seed=seed, max_tries=tries)
     if not result.ok:
         raise GrammarkitError(f"could not instantiate the string in {result.tries} tries: {result.reason}")

@@ -44,12 +44,12 @@ def generate(request: Request) -> Iterator[Result]:
         from .instantiate import Instantiator
 
         em = load_edge_model(opts.categories, request.grammar)
-        inst = Instantiator(request.grammar, em.categories)
+        inst = Instantiator(request.grammar, em.categories, budget=opts.budget)
     failures: dict[str, int] = {}
     inst_stats = {"instantiated": 0, "failed": 0, "tries": 0, "monte_carlo": 0, "seconds": 0.0}
     advance = request.progress("string-vae", request.n)
     index = 0
-    skipped = {"invalid": 0, "training": 0, "duplicate": 0}
+    skipped = {"invalid": 0, "training": 0, "duplicate": 0, "too large": 0}
     while index < request.n and sampler.decoded_points < limit:
         request.check_deadline()
         for s in sampler.run(opts.mode, 1):
@@ -65,11 +65,14 @@ def generate(request: Request) -> Iterator[Result]:
             if not seen.add(g):
                 skipped["duplicate"] += 1
                 continue
+            if opts.max_parts is not None and len(g) > opts.max_parts:
+                skipped["too large"] += 1
+                continue
             model = None
             extra_inst: dict = {}
             if inst is not None:
                 gseed = int(request.seed) * 1_000_003 + sampler.decoded_points
-                predicted = em.rankings(g, strings=opts.votes, seed=gseed)
+                predicted = em.rankings(g, strings=opts.votes, seed=gseed, voting=opts.voting)
                 res = inst.instantiate(g, predicted, seed=gseed, max_tries=opts.tries, deadline=request.deadline)
                 inst_stats["tries"] += res.tries
                 inst_stats["seconds"] += res.seconds

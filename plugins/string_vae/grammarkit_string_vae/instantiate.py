@@ -81,17 +81,29 @@ class Instantiator:
     def part(self, type_name: str, frame: np.ndarray, pid: str, variant: str | None = None):  # noqa: ANN201
         return self.library.part(type_name, frame, pid, variant)
 
-    def _touching(self, new, placed: list) -> set[int]:  # noqa: ANN001
-        """Indices into `placed` (Parts) that the new part touches."""
+    def _box(self, part) -> np.ndarray:  # noqa: ANN001
+        """(2, 3) bounding box of a part, grown by the contact tolerance."""
+        V = np.asarray(part.mesh.vertices)
+        return np.stack([V.min(axis=0) - self.tolerance, V.max(axis=0) + self.tolerance])
+
+    def _near(self, box: np.ndarray, boxes: list[np.ndarray]) -> list[int]:
+        """Indices of `boxes` that overlap `box` (both grown by the tolerance: parts whose boxes
+        do not overlap cannot be in contact)."""
+        if not boxes:
+            return []
+        B = np.asarray(boxes)
+        ok = np.all(B[:, 0] <= box[1], axis=1) & np.all(B[:, 1] >= box[0], axis=1)
+        return np.flatnonzero(ok).tolist()
+
+    def _touching(self, new, placed: list, near: list[int] | None = None) -> set[int]:  # noqa: ANN001
+        """Indices into `placed` (Parts) that the new part touches (`near`: the candidates
+        whose bounding boxes overlap the new part's, if already known)."""
         from grammarkit.tiling import contacts
 
         if not placed:
             return set()
-        lo = np.asarray(new.mesh.vertices).min(axis=0) - self.tolerance
-        hi = np.asarray(new.mesh.vertices).max(axis=0) + self.tolerance
-        near = [i for i, p in enumerate(placed)
-                if np.all(np.asarray(p.mesh.vertices).min(axis=0) <= hi)
-                and np.all(np.asarray(p.mesh.vertices).max(axis=0) >= lo)]
+        if near is None:
+            near = self._near(self._box(new), [self._box(p) for p in placed])
         if not near:
             return set()
         parts = [new] + [placed[i] for i in near]
@@ -171,6 +183,8 @@ class Instantiator:
         # shape rigidly about it
         frames[start] = self.start_frame.get(T[start], np.eye(4))
         parts[start] = self.part(T[start], frames[start], f"{T[start]}.{start}", variant[start])
+        boxes: list = [None] * n
+        boxes[start] = self._box(parts[start])
         used: dict[tuple[int, int], int] = {}
         parent = {y: x for y, x in order}
         pos = {y: j for j, (y, _x) in enumerate(order)}
@@ -230,7 +244,16 @@ class Instantiator:
                     conflicts[i] |= path(x, w)
                     continue
                 new = self.part(T[y], Fy, f"{T[y]}.{y}", vy)
-                touched = {placed[j] for j in self._touching(new, [parts[p] for p in placed])}
+                box = self._box(new)
+                near = self._near(box, [boxes[p] for p in placed])
+                out_of_reach = set(placed_nbrs) - {placed[j] for j in near}
+                if out_of_reach:
+                    # a graph neighbour whose box the new part's does not even overlap: the
+                    # contact is missing, no exact contact test needed (fail fast); the missing
+                    # contacts alone explain the failure for backjumping
+                    touched = set(placed_nbrs) - out_of_reach
+                else:
+                    touched = {placed[j] for j in self._touching(new, [parts[p] for p in placed], near)}
                 if touched != set(placed_nbrs):
                     extra = sorted(touched - set(placed_nbrs))
                     missing = sorted(set(placed_nbrs) - touched)
@@ -241,7 +264,7 @@ class Instantiator:
                               else f"does not reach {', '.join(f'{j} ({T[j]})' for j in missing)}: the cycle "
                                    "through these parts does not close"))
                     continue
-                frames[y], parts[y], variant[y] = Fy, new, vy
+                frames[y], parts[y], variant[y], boxes[y] = Fy, new, vy, box
                 placed.append(y)
                 used[key] = k if x < y else self.cats.reverse.get(k, k)
                 ok = True

@@ -37,3 +37,11 @@ class StringVAEOptions(BaseModel):
                                       "edge-categories`): instantiate every graph in 3D and write it as a shape")
     tries: int = Field(8, ge=1, description="instantiation: start edges tried per graph")
     votes: int = Field(8, ge=1, description="instantiation: strings per graph that vote on each edge's category")
+    voting: Optional[Literal["majority", "logprob", "joint"]] = Field(
+        None, description="instantiation: how the strings' predictions are combined: majority (the paper's), "
+        "logprob (summed log-probabilities) or joint (per part, configurations seen in training); default: "
+        "the category model's own")
+    budget: int = Field(400, ge=1, description="instantiation: part insertions per try (backtracking included); "
+                        "smaller fails faster on graphs that cannot be built")
+    max_parts: Optional[int] = Field(None, ge=1, description="skip sampled graphs with more parts than this "
+                                     "before instantiating them (default: no limit)")
