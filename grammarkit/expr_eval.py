@@ -82,7 +82,8 @@ class SimpleEnv:
 
 
 # -- values and their names in messages -------------------------------------------------------
-def _kind(v: Any) -> str:
+def value_kind(v: Any) -> str:
+    """How a value is named in messages: 'a number', 'a string', ..."""
     if isinstance(v, bool):
         return "a boolean"
     if isinstance(v, (int, float)):
@@ -99,7 +100,7 @@ def _fail(message: str, span: Span | None, code: str) -> DerivationError:
 
 
 def _operands(op: str, x: Any, y: Any, span: Span | None) -> DerivationError:
-    return _fail(f"'{op}' cannot be applied to {_kind(x)} and {_kind(y)}", span, "bad-operands")
+    return _fail(f"'{op}' cannot be applied to {value_kind(x)} and {value_kind(y)}", span, "bad-operands")
 
 
 def _too_large(span: Span | None, what: str = "") -> DerivationError:
@@ -218,7 +219,7 @@ def _pow(x: Any, y: Any, span: Span | None) -> Any:
 
 def _negate(x: Any, span: Span | None) -> Any:
     if not _is_number(x):
-        raise _fail(f"'-' cannot be applied to {_kind(x)}", span, "bad-operands")
+        raise _fail(f"'-' cannot be applied to {value_kind(x)}", span, "bad-operands")
     return -x
 
 

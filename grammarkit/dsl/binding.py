@@ -18,6 +18,7 @@ from dataclasses import dataclass, field
 from typing import Any, Callable
 
 from ..errors import Diagnostic
+from ..expr_eval import value_kind
 from ..ir import Binary, Bool, Branch, Num, OpCall, Pattern, Ref, Repeat, Seq, Str, Unary, Vector
 from ..registry import OperationSpec, Param
 from .suggest import known_hint
@@ -58,16 +59,6 @@ def literal_kind(v: Any) -> str | None:
     if isinstance(v, Unary) and v.op == "!":
         return "a boolean"
     return None
-
-
-def _value_kind(v: Any) -> str:
-    if isinstance(v, bool):
-        return "a boolean"
-    if isinstance(v, (int, float)):
-        return "a number"
-    if isinstance(v, str):
-        return "a string"
-    return "a tuple" if isinstance(v, tuple) else f"a {type(v).__name__}"
 
 
 def signature(spec: OperationSpec) -> str:
@@ -183,7 +174,7 @@ def _argument_problem(label: str, p: Param, v: Any, where: Any, fold: Fold | Non
     kind = literal_kind(v)
     value = fold(v) if fold is not None and kind is None else None
     if value is not None:
-        kind = _value_kind(value)
+        kind = value_kind(value)
     if isinstance(v, Str):
         value = v.value
     elif kind is None or value is not None:
