@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
-from typing import Any
+from typing import Any, Callable
 
 import click
 
@@ -244,9 +244,6 @@ def train_string_vae(dataset_dir: Path, out: Path, epochs: int, batch_size: int,
     require_learning("grammarkit train string-vae")
     from dataclasses import replace
 
-    from rich.console import Console
-    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
-
     from .dataset import load_dataset
     from .train import TrainConfig
     from .vaefile import train_and_save
@@ -261,18 +258,9 @@ def train_string_vae(dataset_dir: Path, out: Path, epochs: int, batch_size: int,
         cfg = replace(cfg, beta=beta)
     if word_dropout is not None:
         cfg = replace(cfg, word_dropout=word_dropout)
-    console = Console(stderr=True)
-    progress = Progress(TextColumn("[bold]training"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
-                        TextColumn("{task.fields[info]}"), console=console, disable=not console.is_terminal)
-    task = progress.add_task("train", total=epochs, info="")
-
-    def report(row: dict) -> None:
-        info = (f"loss {row['loss']:.2f} KL {row['kl']:.2f} (beta {row['beta']:.2f}) "
-                f"recon {row['val_recon']:.2f} validity {row['validity']:.2f}")
-        progress.update(task, advance=1, info=info)
-        if not console.is_terminal:
-            click.echo(f"epoch {row['epoch']}/{epochs}: {info}", err=True)
-
+    progress, report = _epoch_progress(epochs, lambda row: (
+        f"loss {row['loss']:.2f} KL {row['kl']:.2f} (beta {row['beta']:.2f}) "
+        f"recon {row['val_recon']:.2f} validity {row['validity']:.2f}"))
     with progress:
         summary = train_and_save(ds, cfg, out, progress=report)
     click.echo(f"wrote {out}: {summary['train_graphs']} training graphs ({summary['train_strings']} strings), "
@@ -418,9 +406,6 @@ def train_edge_categories(dataset_dir: Path, out: Path, grammar_file: Path | Non
     from .requires import require_learning
 
     require_learning("grammarkit train edge-categories")
-    from rich.console import Console
-    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
-
     from .dataset import load_dataset
     from .edgemodel import EdgeTrainConfig, save_edge_model, train_edge_model
 
@@ -430,18 +415,9 @@ def train_edge_categories(dataset_dir: Path, out: Path, grammar_file: Path | Non
                           bandwidth=bandwidth, seed=seed, threads=threads, time_limit=time_limit,
                           bidirectional=not paper, graph_features=graph_features and not paper,
                           voting=voting or ("majority" if paper else "logprob"))
-    console = Console(stderr=True)
-    progress = Progress(TextColumn("[bold]training"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
-                        TextColumn("{task.fields[info]}"), console=console, disable=not console.is_terminal)
-    task = progress.add_task("train", total=epochs, info="")
-
-    def report(row: dict) -> None:
-        info = (f"loss {row['loss']:.3f} accuracy {row['char_accuracy']:.3f} "
-                f"voted {row['edge_accuracy_voted']:.3f}")
-        progress.update(task, advance=1, info=info)
-        if not console.is_terminal:
-            click.echo(f"epoch {row['epoch']}/{epochs}: {info}", err=True)
-
+    progress, report = _epoch_progress(epochs, lambda row: (
+        f"loss {row['loss']:.3f} accuracy {row['char_accuracy']:.3f} "
+        f"voted {row['edge_accuracy_voted']:.3f}"))
     with progress:
         em = train_edge_model(ds, grammar, cfg, progress=report)
     save_edge_model(em, out)
@@ -574,3 +550,23 @@ def decompress_command(record_file: Path, grammar_file: Path, model_file: Path, 
     asm.name = out.stem
     write_assembly(asm, out)
     click.echo(f"wrote {out}: {len(asm)} parts")
+
+
+def _epoch_progress(epochs: int, describe: Callable[[dict], str]) -> tuple[Any, Callable[[dict], None]]:
+    """A progress bar over training epochs, and the callback that advances it with a line of
+    metrics (also printed per epoch when stderr is not a terminal, e.g. in logs)."""
+    from rich.console import Console
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+
+    console = Console(stderr=True)
+    progress = Progress(TextColumn("[bold]training"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
+                        TextColumn("{task.fields[info]}"), console=console, disable=not console.is_terminal)
+    task = progress.add_task("train", total=epochs, info="")
+
+    def report(row: dict) -> None:
+        info = describe(row)
+        progress.update(task, advance=1, info=info)
+        if not console.is_terminal:
+            click.echo(f"epoch {row['epoch']}/{epochs}: {info}", err=True)
+
+    return progress, report
