@@ -68,6 +68,17 @@ class PartLibrary:
         from grammarkit.tiling import load_examples, local_frame, part_prototype, symmetry_offsets
 
         examples = load_examples(grammar)
+        ups = [u.axis for u in grammar.ups]
+        up_axis = ups[-1] if ups else "+z"
+        up = None if up_axis == "none" else np.array(
+            {"+x": (1, 0, 0), "-x": (-1, 0, 0), "+y": (0, 1, 0), "-y": (0, -1, 0),
+             "+z": (0, 0, 1), "-z": (0, 0, -1)}[up_axis], dtype=np.float64)
+        self.up = up
+        # the examples' ground (their lowest point along up): a built shape stands on it, as
+        # `grounded` requires (None: no up axis or no examples)
+        self.ground = (min(float((np.asarray(p.mesh.vertices, dtype=np.float64) @ up).min())
+                           for asm in examples for p in asm.parts)
+                       if up is not None and any(len(a.parts) for a in examples) else None)
         self.variants: dict[tuple[str, str], tuple[np.ndarray, np.ndarray]] = {}
         self.symmetries: dict[tuple[str, str], np.ndarray] = {}
         self.default: dict[str, str] = {}
@@ -88,7 +99,14 @@ class PartLibrary:
             Fc = np.asarray(mesh.faces)
             F = local_frame(V, Fc)
             self.variants[(t, key)] = ((V - F[:3, 3]) @ F[:3, :3], Fc)
-            self.symmetries[(t, key)] = np.array([S[:3, :3] for S in symmetry_offsets(V, Fc)])
+            syms = [S[:3, :3] for S in symmetry_offsets(V, Fc)]
+            if up is not None:
+                # gravity is not a symmetry: keep only the turns that leave the part's up
+                # direction (the world's up in the prototype's frame) where it is, so that a
+                # category's placement is never a flipped copy of what the examples show
+                u = F[:3, :3].T @ up
+                syms = [S for S in syms if float(np.dot(S @ u, u)) > 1.0 - 1e-6] or [np.eye(3)]
+            self.symmetries[(t, key)] = np.array(syms)
             self.default.setdefault(t, key)
             self.sizes[t] = max(self.sizes.get(t, 0.0), float(np.linalg.norm(V.max(axis=0) - V.min(axis=0))))
 

@@ -337,14 +337,27 @@ class Instantiator:
     def _assembly(self, graph: TypedGraph, frames, variants=None):  # noqa: ANN001, ANN202
         from grammarkit.tiling import Assembly
 
-        counts: dict[str, int] = {}
-        parts = []
-        for i, t in enumerate(graph.types):
-            k = counts.get(t, 0)
-            counts[t] = k + 1
-            p = self.part(t, frames[i], f"{t}.{k}", variants[i] if variants else None)
-            p.meta["node"] = i
-            parts.append(p)
+        def build(frames):  # noqa: ANN001, ANN202
+            counts: dict[str, int] = {}
+            parts = []
+            for i, t in enumerate(graph.types):
+                k = counts.get(t, 0)
+                counts[t] = k + 1
+                p = self.part(t, frames[i], f"{t}.{k}", variants[i] if variants else None)
+                p.meta["node"] = i
+                parts.append(p)
+            return parts
+
+        parts = build(frames)
+        up, ground = self.library.up, self.library.ground
+        if up is not None and ground is not None:
+            # placements are relative, so the built shape may float or sink as a whole: stand
+            # it on the examples' ground (a translation along up changes no contact)
+            low = min(float((np.asarray(p.mesh.vertices, dtype=np.float64) @ up).min()) for p in parts)
+            if abs(ground - low) > 1e-9:
+                T = np.eye(4)
+                T[:3, 3] = (ground - low) * up
+                parts = build([T @ F for F in frames])
         return Assembly(parts, name="instantiated")
 
     def _final_check(self, graph: TypedGraph, asm) -> str | None:  # noqa: ANN001
