@@ -15,6 +15,7 @@ Public API (signatures are stable; the graph sampler builds on them):
     dock(a_points, b_points) -> (4x4 rigid transform, rms residual)  # Kabsch, det +1
     local_frame(part) -> 4x4                                        # Kalojanov's diagonal frame
     symmetry_offsets(vertices, faces) -> [4x4]      # rotations S: F @ S is the same part's frame too
+    up_vector(axis) -> (3,) or None                 # "+z" ... "-x" as a unit vector; None for `up none`
     contacts(assembly_or_parts, tolerance=None, *, geom=None, pairs=None) -> list[Contact]
     prepare(parts) -> PartGeometry       # per-part bounds/centroids, reusable across contacts()
     surface_centroid(vertices, faces) -> (3,) area-weighted centroid
@@ -44,6 +45,7 @@ _EXPORTS = {
     "surface_centroid": "frames",
     "dock": "dock",
     "local_frame": "frames", "relative_placement": "frames", "symmetry_offsets": "frames",
+    "up_vector": "orientation",
     "shape_graph": "graph",
     "Cut": "graphops", "adjacency_from_edges": "graphops", "cut_layers": "graphops",
     "distance_matrix": "graphops", "histogram_key": "graphops", "induced_edges": "graphops",
@@ -109,6 +111,7 @@ if TYPE_CHECKING:  # pragma: no cover - for type checkers and IDEs
     )
     from .io import ShapeWarning, load_examples, part_prototype, read_assembly, type_from_name, write_assembly
     from .learn import ANGLE_SCALE_DEG, learn, mean_shift
+    from .orientation import up_vector
     from .rules import DockPlacement, Rules, rules_from_grammar
     from .validate import Report, Violation, validate
 
@@ -117,7 +120,7 @@ __all__ = [
     "ANGLE_SCALE_DEG", "DEFAULT_RELATIVE_TOLERANCE", "Assembly", "DockPlacement", "Part", "Report", "Rules", "ShapeWarning",
     "Violation", "default_tolerance", "dock", "learn", "load_examples", "local_frame", "mean_shift", "part_prototype",
     "read_assembly", "relative_placement", "rules_from_grammar", "shape_graph", "symmetry_offsets", "type_from_name",
-    "validate", "write_assembly",
+    "up_vector", "validate", "write_assembly",
     # shape-graph machinery for back ends (graphops, incremental)
     "Cut", "adjacency_from_edges", "cut_layers", "distance_matrix", "histogram_key", "induced_edges",
     "kept_region", "match_boundary", "random_connected_subgraph", "replace_subgraph",

@@ -65,20 +65,21 @@ class PartLibrary:
     statement): vertices in the part's own frame, faces, symmetries; size; start frame."""
 
     def __init__(self, grammar: Any):
-        from grammarkit.tiling import load_examples, local_frame, part_prototype, symmetry_offsets
+        from grammarkit.tiling import (load_examples, local_frame, part_prototype, rules_from_grammar,
+                                       symmetry_offsets, up_vector)
 
         examples = load_examples(grammar)
-        ups = [u.axis for u in grammar.ups]
-        up_axis = ups[-1] if ups else "+z"
-        up = None if up_axis == "none" else np.array(
-            {"+x": (1, 0, 0), "-x": (-1, 0, 0), "+y": (0, 1, 0), "-y": (0, -1, 0),
-             "+z": (0, 0, 1), "-z": (0, 0, -1)}[up_axis], dtype=np.float64)
+        # the up axis and the ground exactly as `validate` uses them, so that what is built here
+        # passes its orientation and `grounded` checks
+        rules = rules_from_grammar(grammar, resolve_constraints=False)
+        up = up_vector(rules.up)
         self.up = up
-        # the examples' ground (their lowest point along up): a built shape stands on it, as
-        # `grounded` requires (None: no up axis or no examples)
-        self.ground = (min(float((np.asarray(p.mesh.vertices, dtype=np.float64) @ up).min())
-                           for asm in examples for p in asm.parts)
-                       if up is not None and any(len(a.parts) for a in examples) else None)
+        ground = None
+        for name, args, _where in rules.constraints:
+            if name == "grounded":
+                ground = args.get("ground") if args.get("ground") is not None else rules.ground
+        # the ground as a coordinate along `up` (rules give it along the axis, e.g. z for -z too)
+        self.ground = None if up is None or ground is None else float(ground) * float(up.sum())
         self.variants: dict[tuple[str, str], tuple[np.ndarray, np.ndarray]] = {}
         self.symmetries: dict[tuple[str, str], np.ndarray] = {}
         self.default: dict[str, str] = {}
