@@ -9,12 +9,14 @@ these seed 1000+), in the training style ("sketchy": new pens) and in styles nev
 1. accuracy: per object type, classification accuracy (a snippet counts as recognised when
    the predicted class holds it: snippets that draw identically are one class; the exact-name
    accuracy is shown too) and the parameter RMSE in normalised units with the true snippet's
-   regressor: CNN only, then after `--steps` refinement steps of greedy coordinate search
-   (Nishida's code) and of Metropolis-Hastings (the paper), on `--refine-n` sketches per
-   snippet. "equiv." RMSE measures the distance to the set of values that derive the same
-   geometry (a floor height only shows through the number of floors). Times: median per
-   recognition (cnn = image to network input, classify, regress; score = drawing the result
-   and scoring it; greedy / MH = the whole recognition with refinement).
+   regressor: CNN only, then after `--steps` refinement steps on `--refine-n` sketches per
+   snippet with three set-ups (REFINERS): greedy coordinate search with the paper's score on
+   the stage camera (Nishida's code), Metropolis-Hastings with the paper's score (the paper),
+   and the default (line scans + compass search, chamfer score, view searched +/-3 deg).
+   "equiv." RMSE measures the distance to the set of values that derive the same geometry (a
+   floor height only shows through the number of floors). Times: median per recognition
+   (cnn = image to network input, classify, regress; the others the whole recognition with
+   refinement).
 2. robustness: accuracy and CNN-only RMSE per drawing style never trained on; drop vs sketchy.
 3. baseline: the paper's Figure 15 comparison on a few sketches per snippet: MCMC alone (100
    Metropolis-Hastings steps from the middle of the ranges, the de-facto inverse procedural
@@ -122,16 +124,26 @@ def equiv_errors(rec, stage, info, u_true, r):
     return np.array(out)
 
 
+#: refinement set-ups compared in section 1: (label, method, score, view range in degrees)
+REFINERS = (("greedy", "greedy", "paper", 0.0),  # Nishida's public code
+            ("MH", "metropolis", "paper", 0.0),  # the paper
+            ("pattern", "pattern", "chamfer", 3.0))  # this implementation's default
+
+
 def section_accuracy(rec, args, out):
     import torch
 
     lib = rec.library
     print("\n1. Held-out sketches (training style, new pens and parameters): "
           f"{args.n} per snippet; refinement on {args.refine_n} per snippet, {args.steps} steps")
-    print("RMSE in normalised units with the true snippet's regressor: raw, and 'equiv.' (to the values "
-          "deriving the same geometry); refinement columns on the refined subset (cnn = before)")
+    print("RMSE in normalised units with the true snippet's regressor over all regressed parameters: "
+          "raw, and 'equiv.' (to the values deriving the same geometry); refinement columns on the "
+          "refined subset (cnn = before): greedy = Nishida's code (paper score, stage camera), "
+          "MH = the paper (Metropolis-Hastings, paper score, stage camera), pattern = the default "
+          "(line scans + compass search, chamfer score, view searched +/-3 deg)")
     hdr = (f"{'type':<8}{'n':>5}{'acc':>7}{'acc(name)':>10}{'RMSE cnn':>10}{'equiv.':>8}"
-           f"{'| subset: cnn':>14}{'greedy':>8}{'MH':>7}{'| cnn ms':>9}{'score ms':>9}{'greedy ms':>10}{'MH ms':>8}")
+           f"{'| subset: cnn':>14}{'greedy':>8}{'MH':>7}{'pattern':>8}{'equiv.':>8}"
+           f"{'| cnn ms':>9}{'greedy ms':>10}{'MH ms':>8}{'pattern ms':>11}")
     print(hdr)
     print("-" * len(hdr))
     rows = {}
@@ -142,8 +154,11 @@ def section_accuracy(rec, args, out):
         stage = tm.stage
         data = test_set(lib, stage, args.n, "sketchy")
         correct = exact = 0
-        err_cnn, err_g, err_m, eq_cnn, eq_g, eq_m, eq_all = [], [], [], [], [], [], []
-        t_cnn, t_score, t_g, t_m = [], [], [], []
+        err_cnn, eq_all, sub_cnn = [], [], []
+        err_r = {k[0]: [] for k in REFINERS}
+        eq_r = {k[0]: [] for k in REFINERS}
+        t_r = {k[0]: [] for k in REFINERS}
+        t_cnn = []
         per_snippet = {}
         for i, (name, u_true, ink) in enumerate(data.items):
             info = lib.snippets[name]
@@ -157,40 +172,41 @@ def section_accuracy(rec, args, out):
                 eq_all.append(equiv_errors(rec, stage, info, u_true, rs))
             k = per_snippet.get(name, 0)
             per_snippet[name] = k + 1
-            times, scores = [], []
+            times = []
             for _ in range(args.runs if i < 3 else 1):
                 tm_ = rec.recognize_ink(ink, t).timings
                 times.append(tm_["load"] + tm_["classify"] + tm_["regress"])
-                scores.append(tm_["score"])
             t_cnn.append(statistics.median(times) / 1e3)
-            t_score.append(statistics.median(scores) / 1e3)
             if k < args.refine_n and rs.estimated:
-                eq_cnn.append(equiv_errors(rec, stage, info, u_true, rs))
-                t0 = time.perf_counter()
-                rg = rec.recognize_ink(ink, t, snippet=name, refine_steps=args.steps, method="greedy")
-                t_g.append(time.perf_counter() - t0)
-                t0 = time.perf_counter()
-                rm = rec.recognize_ink(ink, t, snippet=name, refine_steps=args.steps, method="metropolis",
-                                       seed=i)
-                t_m.append(time.perf_counter() - t0)
-                err_g.append(errors_of(rg, info, u_true))
-                err_m.append(errors_of(rm, info, u_true))
-                eq_g.append(equiv_errors(rec, stage, info, u_true, rg))
-                eq_m.append(equiv_errors(rec, stage, info, u_true, rm))
+                sub_cnn.append(errors_of(rs, info, u_true))
+                for label, method, score, view in REFINERS:
+                    t0 = time.perf_counter()
+                    rr = rec.recognize_ink(ink, t, snippet=name, refine_steps=args.steps, method=method,
+                                           score=score, view_range=view, seed=i)
+                    t_r[label].append(time.perf_counter() - t0)
+                    err_r[label].append(errors_of(rr, info, u_true))
+                    eq_r[label].append(equiv_errors(rec, stage, info, u_true, rr))
         n = len(data)
+        med = lambda v: 1e3 * statistics.median(v) if v else float("nan")  # noqa: E731
         row = dict(n=n, acc=correct / n, acc_name=exact / n, rmse_cnn=rmse(err_cnn), eq_all=rmse(eq_all),
-                   eq_cnn=rmse(eq_cnn), rmse_greedy=rmse(err_g), eq_greedy=rmse(eq_g), rmse_mh=rmse(err_m),
-                   eq_mh=rmse(eq_m),
-                   ms_cnn=1e3 * statistics.median(t_cnn), ms_score=1e3 * statistics.median(t_score), ms_greedy=1e3 * statistics.median(t_g) if t_g else float("nan"),
-                   ms_mh=1e3 * statistics.median(t_m) if t_m else float("nan"))
+                   sub_cnn=rmse(sub_cnn), ms_cnn=med(t_cnn))
+        for label, *_ in REFINERS:
+            row[f"rmse_{label}"] = rmse(err_r[label])
+            row[f"eq_{label}"] = rmse(eq_r[label])
+            row[f"ms_{label}"] = med(t_r[label])
         rows[t] = row
         print(f"{t:<8}{n:>5}{row['acc']:>7.3f}{row['acc_name']:>10.3f}{row['rmse_cnn']:>10.3f}{row['eq_all']:>8.3f}"
-              f"{row['eq_cnn']:>14.3f}{row['eq_greedy']:>8.3f}{row['eq_mh']:>7.3f}"
-              f"{row['ms_cnn']:>9.1f}{row['ms_score']:>9.1f}{row['ms_greedy']:>10.0f}{row['ms_mh']:>8.0f}", flush=True)
+              f"{row['sub_cnn']:>14.3f}{row['rmse_greedy']:>8.3f}{row['rmse_MH']:>7.3f}{row['rmse_pattern']:>8.3f}"
+              f"{row['eq_pattern']:>8.3f}"
+              f"{row['ms_cnn']:>9.1f}{row['ms_greedy']:>10.0f}{row['ms_MH']:>8.0f}{row['ms_pattern']:>11.0f}",
+              flush=True)
     print("paper (Table 2, GPU): accuracy 0.99 mass, 0.98 roof, 0.98 window, 0.95 ledge; RMSE after "
           "MCMC 0.03 / 0.06 / 0.09 / 0.08; 25 ms classification, ~305-329 ms with refinement")
-    allrow = {k: float(np.mean([r[k] for r in rows.values()])) for k in ("acc", "rmse_cnn", "eq_all")}
-    print(f"{'mean':<8}{'':>5}{allrow['acc']:>7.3f}{'':>10}{allrow['rmse_cnn']:>10.3f}{allrow['eq_all']:>8.3f}")
+    keys = ("acc", "rmse_cnn", "eq_all", "sub_cnn", "rmse_greedy", "rmse_MH", "rmse_pattern", "eq_pattern")
+    m = {k: float(np.mean([r[k] for r in rows.values()])) for k in keys}
+    print(f"{'mean':<8}{'':>5}{m['acc']:>7.3f}{'':>10}{m['rmse_cnn']:>10.3f}{m['eq_all']:>8.3f}"
+          f"{m['sub_cnn']:>14.3f}{m['rmse_greedy']:>8.3f}{m['rmse_MH']:>7.3f}{m['rmse_pattern']:>8.3f}"
+          f"{m['eq_pattern']:>8.3f}")
     print(f"torch threads: {torch.get_num_threads()}")
     out["accuracy"] = rows
 
@@ -236,8 +252,7 @@ def section_robustness(rec, args, out):
 
 
 def section_baseline(rec, args, out):
-    from grammarkit_sketch.dataset import score_image
-    from grammarkit_sketch.image import distance_map
+    from grammarkit_sketch.dataset import line_mask
     from grammarkit_sketch.refine import Scorer, metropolis
 
     lib = rec.library
@@ -247,7 +262,8 @@ def section_baseline(rec, args, out):
     print(f"{'style':<13}{'method':<22}{'RMSE':>8}{'x MCMC':>9}{'median s':>10}{'x MCMC':>9}")
     results = {}
     for style in ("sketchy", "perspective"):
-        rows = {"mcmc100": ([], []), "cnn": ([], []), "cnn+greedy": ([], []), "cnn+mh": ([], [])}
+        rows = {"mcmc100": ([], []), "cnn": ([], []), "cnn+greedy": ([], []), "cnn+mh": ([], []),
+                "cnn+pattern": ([], [])}
         for t in lib.types:
             tm = rec.models.types.get(t)
             if tm is None:
@@ -262,20 +278,24 @@ def section_baseline(rec, args, out):
                 if style == "sketchy":  # MCMC alone: from the middle of the ranges
                     t0 = time.perf_counter()
                     scorer = Scorer(rec.deriver(tm.stage), info, reg.params, info.defaults(),
-                                    distance_map(score_image(ink, tm.stage)))
+                                    line_mask(ink, tm.stage), "paper")
                     u, _ = metropolis(scorer, np.full(len(cols), 0.5), 100, seed=i)
                     rows["mcmc100"][1].append(time.perf_counter() - t0)
                     rows["mcmc100"][0].append(u - u_true[cols])
-                for key, steps, method in (("cnn", 0, "greedy"), ("cnn+greedy", args.steps, "greedy"),
-                                           ("cnn+mh", args.steps, "metropolis")):
+                for key, steps, method, score, view in (
+                        ("cnn", 0, "greedy", "paper", 0.0), ("cnn+greedy", args.steps, "greedy", "paper", 0.0),
+                        ("cnn+mh", args.steps, "metropolis", "paper", 0.0),
+                        ("cnn+pattern", args.steps, "pattern", "chamfer", 3.0)):
                     t0 = time.perf_counter()
-                    r = rec.recognize_ink(ink, t, snippet=name, refine_steps=steps, method=method, seed=i)
+                    r = rec.recognize_ink(ink, t, snippet=name, refine_steps=steps, method=method, seed=i,
+                                          score=score, view_range=view)
                     rows[key][1].append(time.perf_counter() - t0)
                     rows[key][0].append(errors_of(r, info, u_true))
         if style == "sketchy":
             base_e, base_t = rmse(rows["mcmc100"][0]), statistics.median(rows["mcmc100"][1])
         for key, label in (("mcmc100", "MCMC alone, 100 steps"), ("cnn", "CNN only"),
-                           ("cnn+greedy", f"CNN + {args.steps} greedy"), ("cnn+mh", f"CNN + {args.steps} MH")):
+                           ("cnn+greedy", f"CNN + {args.steps} greedy"), ("cnn+mh", f"CNN + {args.steps} MH"),
+                           ("cnn+pattern", f"CNN + {args.steps} pattern")):
             if not rows[key][0]:
                 continue
             e, tm_ = rmse(rows[key][0]), statistics.median(rows[key][1])
@@ -320,9 +340,9 @@ def section_table3(rec, args, out):
 def section_roundtrip(rec, args, out):
     from PIL import Image
 
-    from grammarkit_sketch.dataset import score_image, stage_view
+    from grammarkit_sketch.dataset import line_mask, stage_view
     from grammarkit_sketch.drawing import draw, test_style
-    from grammarkit_sketch.image import distance_map, load_ink
+    from grammarkit_sketch.image import load_ink
     from grammarkit_sketch.refine import Scorer
 
     lib = rec.library
@@ -330,7 +350,7 @@ def section_roundtrip(rec, args, out):
     snippets = [s for s in lib.snippets.values() if s.object_type in rec.models.types]
     n = args.roundtrip
     print(f"\n5. Round trip: {n} random snippet instances -> sketch (full canvas, sketchy pen) -> "
-          f"recognise (+{args.steps} greedy steps) -> derive -> draw -> score against the sketch")
+          f"recognise (+{args.steps} pattern steps, chamfer score) -> derive -> draw -> score against the sketch")
     scores, truth, same, refined_ms = [], [], 0, []
     for k in range(n):
         info = snippets[int(rng.integers(len(snippets)))]
@@ -347,10 +367,12 @@ def section_roundtrip(rec, args, out):
         refined_ms.append(1e3 * (time.perf_counter() - t0))
         same += r.snippet == info.name or info.name in r.top[0].same_drawing
         scores.append(r.score)
-        target = score_image(load_ink(img), stage)
+        target = line_mask(load_ink(img), stage)
         reg = tm.regressors.get(info.name)
         names = reg.params if reg else []
-        true_scorer = Scorer(rec.deriver(stage), info, names, dict(values), distance_map(target))
+        # the true model seen the way the sketch was drawn (its pen's view offset)
+        true_scorer = Scorer(rec.deriver(stage), info, names, dict(values), target,
+                             view_offset=(style.pitch_offset, style.yaw_offset))
         truth.append(true_scorer(np.array([info.params[info.param_names.index(p)].normalise(values[p])
                                            for p in names])))
     s, tr = np.array(scores), np.array(truth)

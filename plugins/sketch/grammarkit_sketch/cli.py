@@ -11,7 +11,8 @@ from typing import Any
 
 import click
 
-METHODS = ("greedy", "metropolis")
+METHODS = ("pattern", "greedy", "metropolis")  # refine.METHODS (refine.py is not light)
+SCORES = ("chamfer", "paper")  # refine.SCORES
 
 
 def _echo_json(data: Any) -> None:
@@ -68,9 +69,16 @@ def print_recognition(r: Any, library: Any, source: str) -> None:
 @click.option("--models", type=click.Path(dir_okay=False, path_type=Path), default=None,
               help="Models file from `grammarkit train sketch` (default: the shipped weights).")
 @click.option("--refine", "refine_steps", type=click.IntRange(0, 10_000), default=0, show_default=True,
-              help="Refinement steps against the sketch's distance transform.")
-@click.option("--method", type=click.Choice(METHODS), default="greedy", show_default=True,
-              help="Refinement search: greedy coordinate search or Metropolis-Hastings.")
+              help="Refinement steps (sweeps) against the sketch's distance transform.")
+@click.option("--method", type=click.Choice(METHODS), default="pattern", show_default=True,
+              help="Refinement search: line scans + compass search (pattern), the public code's "
+                   "greedy coordinate search, or the paper's Metropolis-Hastings.")
+@click.option("--score", type=click.Choice(SCORES), default="chamfer", show_default=True,
+              help="Refinement score: truncated symmetric chamfer distance, or the paper's "
+                   "exp(-RMS(D(render) - D(sketch))).")
+@click.option("--view-range", type=click.FloatRange(0, 10), default=3.0, show_default=True,
+              help="Degrees the refinement may turn the view (pitch and yaw) to match a sketch "
+                   "drawn in slightly wrong perspective; 0: the stage camera only.")
 @click.option("--snippet", default=None, help="Skip the classifier: estimate this snippet's parameters.")
 @click.option("--preview", type=click.Path(dir_okay=False, path_type=Path), default=None,
               help="Write the sketch with the recognised model drawn over it (PNG).")
@@ -79,7 +87,8 @@ def print_recognition(r: Any, library: Any, source: str) -> None:
 @click.option("--seed", type=int, default=0, show_default=True, help="Seed of the Metropolis-Hastings search.")
 @click.option("--json", "as_json", is_flag=True, help="Print the result as JSON.")
 def recognize_command(sketch: Path | None, object_type: str, library: Path | None, models: Path | None,
-                      refine_steps: int, method: str, snippet: str | None, preview: Path | None,
+                      refine_steps: int, method: str, score: str, view_range: float,
+                      snippet: str | None, preview: Path | None,
                       canvas: Path | None, seed: int, as_json: bool) -> None:
     """Recognise the snippet and its parameters in a sketch of one object type.
 
@@ -99,7 +108,8 @@ def recognize_command(sketch: Path | None, object_type: str, library: Path | Non
             return
     if sketch is None:
         raise click.UsageError("give a SKETCH image (or --canvas OUT.png)")
-    r = rec.recognize(sketch, t, refine_steps=refine_steps, method=method, snippet=snippet, seed=seed)
+    r = rec.recognize(sketch, t, refine_steps=refine_steps, method=method, snippet=snippet, seed=seed,
+                      score=score, view_range=view_range)
     if preview is not None:
         rec.preview(sketch, r, preview)
     if as_json:

@@ -22,13 +22,13 @@ import numpy as np
 
 from grammarkit.errors import GrammarkitError
 
-from .dataset import quick_size, render_input, score_image, stage_view
+from .dataset import line_mask, quick_size, render_input, stage_view
 from .drawing import draw
-from .image import check_aspect, distance_map, fit_transform, level, load_ink, resize, to_input
+from .image import check_aspect, fit_transform, level, load_ink, resize, to_input
 from .library import SnippetLibrary, load_library
 from .models import ModelFileError, SketchModels, TypeModel, load_models
 from .nets import require_torch
-from .refine import EXACT_STYLE, METHODS, Scorer, refine
+from .refine import EXACT_STYLE, METHODS, SCORE_SHORT, SCORES, VIEW_RANGE, Scorer, refine
 from .stages import StageDeriver, StageSpec
 
 TOP = 3
@@ -60,7 +60,7 @@ class Recognition:
     score: float  # s = exp(-RMS(D(render) - D(sketch))), 1 = perfect
     network_score: float  # the same before refinement
     refine_steps: int = 0
-    method: str = "greedy"
+    method: str = "pattern"
     evaluations: int = 0
     timings: dict[str, float] = field(default_factory=dict)  # milliseconds
     stage: StageSpec | None = None
@@ -133,14 +133,23 @@ class Recognizer:
         return u.astype(float), list(reg.params), list(reg.hidden)
 
     def recognize_input(self, x: np.ndarray, object_type: str, *, stage: StageSpec | None = None,
-                        refine_steps: int = 0, method: str = "greedy", snippet: str | None = None,
-                        seed: int = 0, t_load: float = 0.0, target: np.ndarray | None = None) -> Recognition:
+                        refine_steps: int = 0, method: str = "pattern", snippet: str | None = None,
+                        seed: int = 0, t_load: float = 0.0, target: np.ndarray | None = None,
+                        score: str = "chamfer", score_short: int = SCORE_SHORT,
+                        view_range: float = VIEW_RANGE) -> Recognition:
         """Recognise a network input (RES x RES ink); see `recognize`. `target` is the sketch's
-        score image (dataset.score_image); without it the input stands in (resized to the score
-        canvas, which loses the long side's detail of an elongated canvas)."""
+        line mask at the score canvas (dataset.line_mask with `score_short`); without it the
+        input stands in (resized to the score canvas, which loses the long side's detail of an
+        elongated canvas)."""
         if method not in METHODS:
             raise GrammarkitError(f"unknown refinement method {method!r}; expected one of "
                                   f"{', '.join(METHODS)}", None, code="sketch-bad-method")
+        if score not in SCORES:
+            raise GrammarkitError(f"unknown refinement score {score!r}; expected one of "
+                                  f"{', '.join(SCORES)}", None, code="sketch-bad-score")
+        if not isinstance(view_range, (int, float)) or isinstance(view_range, bool) or not 0 <= view_range <= 10:
+            raise GrammarkitError(f"view range must be a number of degrees in [0, 10], got {view_range!r}",
+                                  None, code="sketch-bad-view-range")
         if isinstance(refine_steps, bool) or not isinstance(refine_steps, int) or refine_steps < 0:
             raise GrammarkitError(f"refine steps must be a whole number >= 0, got {refine_steps!r}", None,
                                   code="sketch-bad-refine")
@@ -164,9 +173,11 @@ class Recognizer:
         info = self.library.snippets[chosen]
         values = info.defaults()
         if target is None:
-            target = x if stage.framing == "fit" else level(resize(x, quick_size(stage)))
-        scorer = Scorer(self.deriver(stage), info, names, dict(values), distance_map(target))
-        net_score = scorer(u)
+            target = (resize(x, (score_short, score_short)) if stage.framing == "fit"
+                      else level(resize(x, quick_size(stage, score_short)))) > 0.5
+        scorer = Scorer(self.deriver(stage), info, names, dict(values), target, score, score_short,
+                        view_range=view_range if refine_steps > 0 else 0.0)
+        net_score = scorer(scorer.start(u))
         t3 = time.perf_counter()
         u_ref, score = u, net_score
         if refine_steps > 0 and len(u):
@@ -199,7 +210,7 @@ class Recognizer:
         if stage.framing == "anchor":
             check_aspect(ink, stage.canvas_size(), what)
         x = to_input(ink, stage.framing)
-        target = score_image(ink, stage)
+        target = line_mask(ink, stage, kw.get("score_short", SCORE_SHORT))
         return self.recognize_input(x, object_type, stage=stage, t_load=time.perf_counter() - t0,
                                     target=target, **kw)
 
@@ -336,8 +347,8 @@ def get_recognizer(models: Any = None, library: Any = None) -> Recognizer:
 
 
 def recognize(image: Any, object_type: str, *, models: Any = None, library: Any = None,
-              refine: int = 0, method: str = "greedy", snippet: str | None = None,
-              seed: int = 0) -> Recognition:
+              refine: int = 0, method: str = "pattern", snippet: str | None = None,
+              seed: int = 0, score: str = "chamfer", view_range: float = VIEW_RANGE) -> Recognition:
     """Recognise a sketch of one object type.
 
     image:   a path, a PIL image or an array (dark lines on light paper). An object type with
@@ -345,11 +356,16 @@ def recognize(image: Any, object_type: str, *, models: Any = None, library: Any 
     models:  a models file (default: the weights shipped for grammars/library.grammar).
     library: the snippet library (default: the copy embedded in the models file). A library
              that differs from the one trained on is refused ("retrain").
-    refine:  refinement steps; `method` "greedy" (Nishida's code) or "metropolis" (the paper).
+    refine:  refinement steps; `method` "pattern" (line scans + compass search, the default),
+             "greedy" (Nishida's code) or "metropolis" (the paper).
+    score:   "chamfer" (truncated symmetric chamfer distance, the default) or "paper"
+             (exp(-RMS(D(render) - D(sketch))), the paper's equation 1).
+    view_range: degrees the refinement may turn the view to fit the sketch's perspective.
     snippet: skip the classifier and estimate this snippet's parameters.
     """
     rec = get_recognizer(models, library)
-    return rec.recognize(image, object_type, refine_steps=refine, method=method, snippet=snippet, seed=seed)
+    return rec.recognize(image, object_type, refine_steps=refine, method=method, snippet=snippet, seed=seed,
+                         score=score, view_range=view_range)
 
 
 __all__ = ["Candidate", "ModelFileError", "Recognition", "Recognizer", "get_recognizer", "recognize",

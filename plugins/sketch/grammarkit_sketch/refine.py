@@ -22,19 +22,24 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Callable, Sequence
 
 import numpy as np
 
-from .dataset import quick_size, score_image, stage_view
+from .dataset import line_mask, quick_size, stage_view
 from .drawing import draw
 from .drawing import DrawStyle
 from .image import distance_map
 from .library import SnippetInfo
 from .stages import StageDeriver
 
-METHODS = ("greedy", "metropolis")
+METHODS = ("pattern", "greedy", "metropolis")
+PATTERN_STEP = 0.08
+PATTERN_WARMUP = 3
+SCAN_POINTS = 11
+VIEW_RANGE = 3.0  # degrees: the training pens draw up to 2 off the stage camera
+PATTERN_MIN_STEP = 0.005
 EXACT_STYLE = DrawStyle(sketchy=False, width=2.0)
 GREEDY_STEP = 0.02
 GREEDY_SHRINK = 0.8
@@ -47,19 +52,53 @@ def score_from_distance(d_prop: np.ndarray, d_sketch: np.ndarray) -> float:
     return math.exp(-float(np.sqrt((diff * diff).mean())))
 
 
+SCORES = ("chamfer", "paper")
+SCORE_SHORT = 128  # default score canvas, shorter side (pixels); distances are in these pixels
+CHAMFER_CAP = 8.0  # distances beyond this (128 px canvas) count as this: a stroke far off
+
+
+def chamfer_score(prop: np.ndarray, d_prop: np.ndarray, sketch: np.ndarray, d_sketch: np.ndarray,
+                  cap: float = CHAMFER_CAP) -> float:
+    """exp(-mean truncated symmetric chamfer distance): how far, on average, each drawn line
+    pixel of either image is from the other image's lines, capped at `cap`."""
+    if not prop.any() or not sketch.any():
+        return math.exp(-cap)
+    a = float(np.minimum(d_sketch[prop], cap).mean())
+    b = float(np.minimum(d_prop[sketch], cap).mean())
+    return math.exp(-0.5 * (a + b))
+
+
 @dataclass
 class Scorer:
-    """Scores parameter vectors of one snippet against one sketch (results cached)."""
+    """Scores parameter vectors of one snippet against one sketch (results cached).
+
+    `sketch` is the sketch's line mask at the score canvas (dataset.line_mask with the same
+    `short`). `score`: "paper" is equation (1) of the paper on the distance transforms;
+    "chamfer" (the default) the truncated symmetric chamfer distance (see `chamfer_score`).
+    """
 
     deriver: StageDeriver
     info: SnippetInfo
     names: Sequence[str]  # the parameters searched, in u order
     fixed: dict  # values of the other parameters
-    sketch_distance: np.ndarray
+    sketch: np.ndarray  # bool line mask at the score canvas
+    score: str = "chamfer"
+    short: int = SCORE_SHORT
+    view_offset: tuple[float, float] = (0.0, 0.0)  # (pitch, yaw) degrees off the stage camera
+    # > 0: u carries two more entries, the view's pitch and yaw offsets, u = 0 .. 1 mapping to
+    # -view_range .. +view_range degrees (0.5: the stage camera), searched with the parameters
+    view_range: float = 0.0
     evaluations: int = 0
 
     def __post_init__(self) -> None:
+        if self.score not in SCORES:
+            raise ValueError(f"unknown score {self.score!r}; expected one of {', '.join(SCORES)}")
         self._cache: dict[tuple, float] = {}
+        self.sketch = np.asarray(self.sketch, dtype=bool)
+        self.sketch_distance = distance_map(self.sketch)
+        # distances in pixels of a 128 px canvas whatever the score canvas, so the score's scale
+        # (and Metropolis-Hastings' acceptance) does not depend on the resolution
+        self._unit = SCORE_SHORT / float(self.short)
 
     def values(self, u: np.ndarray) -> dict:
         params = {p.name: p for p in self.info.params}
@@ -67,8 +106,26 @@ class Scorer:
         out.update({n: params[n].value(x) for n, x in zip(self.names, u)})
         return out
 
+    @property
+    def size(self) -> int:
+        """Length of the searched vector: the parameters, then the view offsets if searched."""
+        return len(self.names) + (2 if self.view_range > 0 else 0)
+
+    def start(self, u: np.ndarray) -> np.ndarray:
+        """The search's starting vector for parameter estimate `u` (the stage camera's view)."""
+        u = np.asarray(u, dtype=float)
+        return np.concatenate([u, [0.5, 0.5]]) if self.view_range > 0 else u
+
+    def offsets(self, u: np.ndarray) -> tuple[float, float]:
+        """(pitch, yaw) offset of the view of search vector `u`, degrees."""
+        if self.view_range <= 0:
+            return self.view_offset
+        k = len(self.names)
+        return (self.view_offset[0] + (float(u[k]) - 0.5) * 2 * self.view_range,
+                self.view_offset[1] + (float(u[k + 1]) - 0.5) * 2 * self.view_range)
+
     def render(self, u: np.ndarray) -> np.ndarray | None:
-        """The proposal's score image (None if the values cannot be derived)."""
+        """The proposal's line mask at the score canvas (None if the values cannot be derived)."""
         from grammarkit.errors import GrammarkitError
 
         try:
@@ -76,9 +133,19 @@ class Scorer:
         except GrammarkitError:
             return None
         stage = self.deriver.stage
-        size = quick_size(stage)
-        ink = draw(model, stage_view(stage, model, size), EXACT_STYLE, stage.host_box(), supersample=1)
-        return score_image(ink, stage)
+        size = quick_size(stage, self.short)
+        style = EXACT_STYLE
+        pitch, yaw = self.offsets(u)
+        if (pitch, yaw) != (0.0, 0.0):
+            style = replace(EXACT_STYLE, pitch_offset=pitch, yaw_offset=yaw)
+        ink = draw(model, stage_view(stage, model, size, style), style, stage.host_box(), supersample=1)
+        return line_mask(ink, stage, self.short)
+
+    def compare(self, prop: np.ndarray) -> float:
+        d_prop = distance_map(prop)
+        if self.score == "paper":
+            return score_from_distance(d_prop * self._unit, self.sketch_distance * self._unit)
+        return chamfer_score(prop, d_prop * self._unit, self.sketch, self.sketch_distance * self._unit)
 
     def __call__(self, u: np.ndarray) -> float:
         key = tuple(np.round(np.clip(u, 0.0, 1.0), 6))
@@ -87,7 +154,7 @@ class Scorer:
             return hit
         self.evaluations += 1
         x = self.render(np.asarray(key))
-        s = 0.0 if x is None else score_from_distance(distance_map(x), self.sketch_distance)
+        s = 0.0 if x is None else self.compare(x)
         self._cache[key] = s
         return s
 
@@ -114,6 +181,57 @@ def greedy(score: Callable[[np.ndarray], float], u0: np.ndarray, steps: int,
     return u, best
 
 
+def scan(score: Callable[[np.ndarray], float], u0: np.ndarray, points: int,
+         dims: int | None = None) -> tuple[np.ndarray, float]:
+    """One sweep of line searches: each of the first `dims` coordinates in turn is set to the
+    best of `points` evenly spaced values in [0, 1] (the others held), when that beats the
+    current score. Gets a parameter out of a wrong basin that a local step cannot leave."""
+    u = np.clip(np.asarray(u0, dtype=float), 0.0, 1.0)
+    best = score(u)
+    for j in range(len(u) if dims is None else dims):
+        for x in np.linspace(0.0, 1.0, points):
+            v = u.copy()
+            v[j] = x
+            s = score(v)
+            if s > best:
+                u, best = v, s
+    return u, best
+
+
+def pattern(score: Callable[[np.ndarray], float], u0: np.ndarray, steps: int,
+            step: float = PATTERN_STEP, min_step: float = PATTERN_MIN_STEP) -> tuple[np.ndarray, float]:
+    """Compass (pattern) search: each step visits every parameter in turn and moves it by +/- its
+    own step when that improves the score (first improvement); a parameter whose two moves both
+    fail halves its step. Ends after `steps` sweeps or when every step is below `min_step`.
+
+    Unlike `greedy`'s fixed 0.02 (the public code's delta), the steps start large, so a
+    regressor error of 0.2 is reached in a few sweeps, and shrink only where the score says the
+    optimum is near; a parameter that moves no pixel stops costing renders once its step is small.
+    """
+    u = np.clip(np.asarray(u0, dtype=float), 0.0, 1.0)
+    best = score(u)
+    h = np.full(len(u), float(step))
+    for _ in range(steps):
+        if (h < min_step).all():
+            break
+        for j in range(len(u)):
+            if h[j] < min_step:
+                continue
+            moved = False
+            for sign in (1.0, -1.0):
+                v = u.copy()
+                v[j] = min(1.0, max(0.0, v[j] + sign * h[j]))
+                if v[j] == u[j]:
+                    continue
+                s = score(v)
+                if s > best:
+                    u, best, moved = v, s, True
+                    break
+            if not moved:
+                h[j] *= 0.5
+    return u, best
+
+
 def metropolis(score: Callable[[np.ndarray], float], u0: np.ndarray, steps: int, seed: int = 0,
                sigma: float = MH_SIGMA) -> tuple[np.ndarray, float]:
     rng = np.random.default_rng([seed, 31])
@@ -130,16 +248,28 @@ def metropolis(score: Callable[[np.ndarray], float], u0: np.ndarray, steps: int,
     return best_u, best
 
 
-def refine(scorer: Scorer, u0: np.ndarray, steps: int, method: str = "greedy",
+def refine(scorer: Scorer, u0: np.ndarray, steps: int, method: str = "pattern",
            seed: int = 0) -> tuple[np.ndarray, float, float]:
-    """(refined u, its score, seconds)."""
+    """(refined parameters u, its score, seconds). With a view search (scorer.view_range > 0)
+    the view offsets are searched too; `scorer.offsets(...)` of the result is not returned, the
+    parameters are what a recognition reports.
+
+    `pattern`: a few compass-search sweeps (the view settles first), one line-search sweep over
+    the parameters (`scan`, SCAN_POINTS values each), then compass search for `steps` sweeps.
+    """
     if method not in METHODS:
         raise ValueError(f"unknown refinement method {method!r}; expected one of {', '.join(METHODS)}")
     t0 = time.perf_counter()
-    if steps <= 0 or len(u0) == 0:
-        return np.asarray(u0, float), scorer(np.asarray(u0, float)), time.perf_counter() - t0
-    if method == "greedy":
-        u, s = greedy(scorer, u0, steps)
+    k = len(u0)
+    start = scorer.start(np.asarray(u0, float))
+    if steps <= 0 or k == 0:
+        return np.asarray(u0, float), scorer(start), time.perf_counter() - t0
+    if method == "pattern":
+        u, _ = pattern(scorer, start, min(steps, PATTERN_WARMUP))
+        u, _ = scan(scorer, u, SCAN_POINTS, k)
+        u, s = pattern(scorer, u, steps)
+    elif method == "greedy":
+        u, s = greedy(scorer, start, steps)
     else:
-        u, s = metropolis(scorer, u0, steps, seed)
-    return u, s, time.perf_counter() - t0
+        u, s = metropolis(scorer, start, steps, seed)
+    return u[:k], s, time.perf_counter() - t0

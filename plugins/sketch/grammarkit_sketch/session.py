@@ -17,7 +17,7 @@ session.json (see docs/sketch.md)::
      "lot": [16, 12],                            # optional lot width, depth (m)
      "line_width": 4,                            # optional pen width for the strokes (px;
                                                  #   default 2 per 256 px of the canvas)
-     "refine": 10, "method": "greedy",           # optional refinement of every stage
+     "refine": 10, "method": "pattern",           # optional refinement of every stage
      "stages": [
         {"type": "Mass", "canvas": [512, 512], "strokes": [[[x, y], [x, y], ...], ...]},
         {"type": "Roof", "canvas": [512, 456], "strokes": [...], "snippet": "roof_hip"},
@@ -209,7 +209,7 @@ class Session:
         return StageCanvas(t, (w, h), stage, view, anchor)
 
     def add_strokes(self, object_type: str, strokes: Sequence[Sequence[Sequence[float]]],
-                    canvas: Sequence[int] | None = None, *, refine: int = 0, method: str = "greedy",
+                    canvas: Sequence[int] | None = None, *, refine: int = 0, method: str = "pattern",
                     snippet: str | None = None, line_width: float | None = None, seed: int = 0) -> Recognition:
         """Recognise the strokes of one stage (replacing an earlier sketch of the same type).
 
@@ -302,7 +302,7 @@ class Session:
         stages.sort(key=lambda s: s[0])
         for _, t, st, where in stages:
             steps = st.get("refine", data.get("refine", 0)) if refine is None else refine
-            how = st.get("method", data.get("method", "greedy")) if method is None else method
+            how = st.get("method", data.get("method", "pattern")) if method is None else method
             try:
                 session.add_strokes(t, st["strokes"], st.get("canvas"), refine=int(steps), method=how,
                                     snippet=st.get("snippet"), line_width=st.get("line_width"))
