@@ -28,7 +28,7 @@ from .image import check_aspect, fit_transform, level, load_ink, resize, to_inpu
 from .library import SnippetLibrary, load_library
 from .models import ModelFileError, SketchModels, TypeModel, load_models
 from .nets import require_torch
-from .refine import EXACT_STYLE, METHODS, SCORE_SHORT, SCORES, VIEW_RANGE, Scorer, refine
+from .refine import EXACT_STYLE, METHODS, SCORE_SHORT, SCORES, VIEW_RANGE, Scorer, centre_on_plateaus, refine
 from .stages import StageDeriver, StageSpec
 
 TOP = 3
@@ -179,18 +179,20 @@ class Recognizer:
                         view_range=view_range if refine_steps > 0 else 0.0)
         net_score = scorer(scorer.start(u))
         t3 = time.perf_counter()
-        u_ref, score = u, net_score
-        if refine_steps > 0 and len(u):
-            u_ref, score, _ = refine(scorer, u, refine_steps, method, seed)
-        t4 = time.perf_counter()
+        u_ref, match = u, net_score
         params = {p.name: p for p in info.params}
+        if refine_steps > 0 and len(u):
+            u_ref, match, _ = refine(scorer, u, refine_steps, method, seed)
         for n, val in zip(names, u_ref):
             values[n] = params[n].value(val)
+        if refine_steps > 0 and names:
+            values = centre_on_plateaus(scorer.deriver, info, values, names)
+        t4 = time.perf_counter()
         normalized = {n: params[n].normalise(v) for n, v in values.items()}
         timings = {"load": t_load * 1e3, "classify": (t1 - t0) * 1e3, "regress": (t2 - t1) * 1e3,
                    "score": (t3 - t2) * 1e3, "refine": (t4 - t3) * 1e3,
                    "total": t_load * 1e3 + (t4 - t0) * 1e3}
-        return Recognition(t, chosen, prob, top[:TOP], values, normalized, names, hidden, score,
+        return Recognition(t, chosen, prob, top[:TOP], values, normalized, names, hidden, match,
                            net_score, refine_steps if len(u) else 0, method, scorer.evaluations,
                            timings, stage)
 

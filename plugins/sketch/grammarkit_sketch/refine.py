@@ -273,3 +273,41 @@ def refine(scorer: Scorer, u0: np.ndarray, steps: int, method: str = "pattern",
     else:
         u, s = metropolis(scorer, start, steps, seed)
     return u[:k], s, time.perf_counter() - t0
+
+
+PLATEAU_PROBE = 0.02  # normalised: a value this far away deriving the same geometry is a plateau
+
+
+def centre_on_plateaus(deriver: StageDeriver, info: SnippetInfo, values: dict,
+                       names: Sequence[str]) -> dict:
+    """Values with each parameter of `names` that sits on a plateau (a range of values deriving
+    the same geometry: a facade's floor height only shows through the number of floors) moved
+    to the middle of it. The drawing, hence the score, is unchanged; of the values the sketch
+    cannot tell apart, the middle one has the smallest expected error."""
+    from grammarkit.errors import GrammarkitError
+
+    from .dataset import equivalence_interval
+
+    def key(vals: dict) -> bytes | None:
+        try:
+            m = deriver.derive(info.name, vals)
+        except GrammarkitError:
+            return None
+        verts = np.round(np.asarray(m.vertices), 4)
+        return verts[np.lexsort(verts.T[::-1])].tobytes()
+
+    out = dict(values)
+    params = {p.name: p for p in info.params}
+    for n in names:
+        p = params[n]
+        k0 = key(out)
+        if k0 is None:
+            return out
+        d = PLATEAU_PROBE * (p.hi - p.lo)
+        v = float(out[n])
+        if not any(key({**out, n: x}) == k0 for x in (min(p.hi, v + d), max(p.lo, v - d)) if x != v):
+            continue
+        lo, hi = equivalence_interval(deriver, info.name, out, n, p.lo, p.hi)
+        out[n] = (lo + hi) / 2
+    return out
+
