@@ -100,3 +100,63 @@ def test_metropolis_keeps_the_best_state_and_is_seeded():
     u2, s2 = metropolis(f, start, 60, seed=3)
     assert np.array_equal(u1, u2) and s1 == s2
     assert s1 >= f(start) and s1 == pytest.approx(f(u1))
+
+
+def test_line_mask_keeps_a_fine_pen_whole():
+    """A 1 px line on a 184 px wide canvas is 0.7 px at the 128 px score canvas: resizing and
+    thresholding the grey image broke it into dashes (a sketch then scored ~0 against its own
+    model); the mask is found at the drawing's resolution and pooled."""
+    from grammarkit_sketch.dataset import line_mask, quick_size
+    from grammarkit_sketch.stages import StageSpec
+
+    stage = StageSpec("Window", "face", (1.4, 2.2), 0.0, 0.0)
+    w, h = stage.canvas_size()
+    ink = np.zeros((h, w), np.float32)
+    ink[h // 3, 10:w - 10] = 0.8  # a fine, slightly grey pen
+    ink[20:h - 20, w // 2] = 0.8
+    m = line_mask(ink, stage)
+    W, H = quick_size(stage)
+    assert m.shape == (H, W)
+    row = m[int(round(h // 3 * H / h)) - 1:int(round(h // 3 * H / h)) + 2].any(axis=0)
+    col = m[:, int(round(w // 2 * W / w)) - 1:int(round(w // 2 * W / w)) + 2].any(axis=1)
+    assert row[8:W - 8].all() and col[16:H - 16].all()  # unbroken
+
+
+def test_chamfer_score_is_one_for_a_match_falls_with_distance_and_is_capped():
+    from grammarkit_sketch.refine import CHAMFER_CAP, chamfer_score
+
+    x = np.zeros((128, 128), bool)
+    x[40, 20:100] = True
+    d = distance_map(x)
+    assert chamfer_score(x, d, x, d) == 1.0
+    s = [chamfer_score(y, distance_map(y), x, d) for y in (np.roll(x, k, axis=0) for k in (1, 3, 20, 60))]
+    assert 1.0 > s[0] > s[1] > s[2]
+    assert s[2] == s[3] == pytest.approx(np.exp(-CHAMFER_CAP))  # a stroke far off: the cap
+    assert chamfer_score(np.zeros_like(x), d, x, d) == pytest.approx(np.exp(-CHAMFER_CAP))
+
+
+def test_pattern_search_shrinks_its_steps_to_the_optimum():
+    from grammarkit_sketch.refine import PATTERN_MIN_STEP, PATTERN_STEP, pattern
+
+    target = np.array([0.31, 0.77])
+    u, s = pattern(_bowl(target), np.array([0.5, 0.5]), 40)
+    assert np.abs(u - target).max() <= PATTERN_MIN_STEP
+    calls = []
+
+    def counting(u):
+        calls.append(np.asarray(u).copy())
+        return _bowl(target)(u)
+    pattern(counting, np.array([0.5, 0.5]), 1)
+    assert abs(calls[1][0] - 0.5) == pytest.approx(PATTERN_STEP)  # the first move: a large step
+
+
+def test_scan_leaves_a_wrong_basin_that_local_steps_cannot():
+    from grammarkit_sketch.refine import pattern, scan
+
+    def two_basins(u):  # a small bump at 0.2, the optimum at 0.8
+        x = float(u[0])
+        return max(0.5 * np.exp(-((x - 0.2) / 0.05) ** 2), np.exp(-((x - 0.8) / 0.05) ** 2))
+    u, _ = pattern(two_basins, np.array([0.2]), 20)
+    assert abs(u[0] - 0.2) < 0.05  # stuck in the bump
+    u, s = scan(two_basins, np.array([0.2]), 11)
+    assert abs(u[0] - 0.8) < 0.06 and s > 0.9

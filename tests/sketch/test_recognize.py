@@ -53,13 +53,74 @@ def test_recognises_snippets_and_their_parameters(rec, library, snippet, u):
     assert 0.0 < r.score <= 1.0
 
 
-def test_refinement_never_lowers_the_score(rec, library):
+@pytest.mark.parametrize("score", ["chamfer", "paper"])
+def test_refinement_never_lowers_the_score(rec, library, score):
     img, _ = sketch_of(library, rec.models.types["Roof"].stage, "roof_gable", [0.3, 0.7], seed=5)
-    plain = rec.recognize(img, "Roof")
-    for method in ("greedy", "metropolis"):
-        r = rec.recognize(img, "Roof", refine_steps=4, method=method, seed=2)
+    plain = rec.recognize(img, "Roof", score=score)
+    for method in ("pattern", "greedy", "metropolis"):
+        r = rec.recognize(img, "Roof", refine_steps=4, method=method, seed=2, score=score)
         assert r.score >= plain.network_score == plain.score
         assert r.refine_steps == 4 and r.evaluations > 1 and r.method == method
+
+
+def test_refinement_finds_the_view_of_a_sketch_drawn_off_the_stage_camera(rec, library):
+    """A roof drawn 2.5 deg off in pitch and yaw, exact lines: the view search recovers the
+    offsets, and the search with it ends nearer the true parameters than without."""
+    from grammarkit_sketch.dataset import line_mask, stage_view
+    from grammarkit_sketch.drawing import DrawStyle, draw
+    from grammarkit_sketch.refine import Scorer, refine
+
+    stage = rec.models.types["Roof"].stage
+    info = library.snippets["roof_hip"]
+    u_true = np.array([0.4, 0.6])
+    values = {p.name: p.value(x) for p, x in zip(info.params, u_true)}
+    model = rec.deriver(stage).derive("roof_hip", values)
+    style = DrawStyle(sketchy=False, width=2.0, pitch_offset=2.5, yaw_offset=-2.5)
+    ink = draw(model, stage_view(stage, model, stage.canvas_size(), style), style, stage.host_box())
+    start = np.array([0.55, 0.45])
+    errs = {}
+    for view in (0.0, 3.0):
+        sc = Scorer(rec.deriver(stage), info, ["roof_deg", "roof_over"], values, line_mask(ink, stage),
+                    view_range=view)
+        u, s, _ = refine(sc, start, 10)
+        errs[view] = np.abs(u - u_true).max()
+    sc = Scorer(rec.deriver(stage), info, ["roof_deg", "roof_over"], values, line_mask(ink, stage),
+                view_range=3.0)
+    assert sc(sc.start(u_true)) < sc(np.r_[u_true, 0.5 + 2.5 / 6, 0.5 - 2.5 / 6])
+    assert errs[3.0] < errs[0.0] and errs[3.0] <= 0.03
+
+
+def test_a_parameter_on_a_plateau_is_set_to_its_middle(rec, library):
+    """facade_grid's floor height shows only through the number of floors: after refinement it
+    is the middle of the values giving that number, and the geometry is the same."""
+    from grammarkit_sketch.dataset import equivalence_interval
+    from grammarkit_sketch.refine import centre_on_plateaus
+
+    stage = rec.models.types["Facade"].stage
+    info = library.snippets["facade_grid"]
+    d = rec.deriver(stage)
+    p = info.params[info.param_names.index("floor_h")]
+    values = {**info.defaults(), "floor_h": p.lo + 0.05 * (p.hi - p.lo)}
+    lo, hi = equivalence_interval(d, "facade_grid", values, "floor_h", p.lo, p.hi)
+    assert hi - lo > 0.1 * (p.hi - p.lo)
+    out = centre_on_plateaus(d, info, values, ["floor_h"])
+    assert out["floor_h"] == pytest.approx((lo + hi) / 2)
+    a, b = d.derive("facade_grid", values), d.derive("facade_grid", out)
+    assert np.allclose(np.sort(np.round(a.vertices, 4), axis=0), np.sort(np.round(b.vertices, 4), axis=0))
+    # a parameter that changes the drawing continuously is left where it is
+    roof = library.snippets["roof_hip"]
+    v = {**roof.defaults()}
+    assert centre_on_plateaus(rec.deriver(rec.models.types["Roof"].stage), roof, v, ["roof_deg"]) == v
+
+
+def test_bad_refinement_options_are_clear_errors(rec, library):
+    from grammarkit.errors import GrammarkitError
+
+    img, _ = sketch_of(library, rec.models.types["Roof"].stage, "roof_gable", [0.3, 0.7], seed=5)
+    with pytest.raises(GrammarkitError, match="unknown refinement score 'l2'; expected one of chamfer, paper"):
+        rec.recognize(img, "Roof", refine_steps=2, score="l2")
+    with pytest.raises(GrammarkitError, match=r"view range must be a number of degrees in \[0, 10\], got -1"):
+        rec.recognize(img, "Roof", refine_steps=2, view_range=-1)
 
 
 def test_python_api_defaults_to_the_shipped_models_and_their_library(library):

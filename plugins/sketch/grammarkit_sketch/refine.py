@@ -38,6 +38,7 @@ METHODS = ("pattern", "greedy", "metropolis")
 PATTERN_STEP = 0.08
 PATTERN_WARMUP = 3
 SCAN_POINTS = 11
+SCAN_MIN_GAIN = 0.01  # relative score gain a line search must make to move a parameter
 VIEW_RANGE = 3.0  # degrees: the training pens draw up to 2 off the stage camera
 PATTERN_MIN_STEP = 0.005
 EXACT_STYLE = DrawStyle(sketchy=False, width=2.0)
@@ -182,19 +183,25 @@ def greedy(score: Callable[[np.ndarray], float], u0: np.ndarray, steps: int,
 
 
 def scan(score: Callable[[np.ndarray], float], u0: np.ndarray, points: int,
-         dims: int | None = None) -> tuple[np.ndarray, float]:
+         dims: int | None = None, min_gain: float = 0.0) -> tuple[np.ndarray, float]:
     """One sweep of line searches: each of the first `dims` coordinates in turn is set to the
-    best of `points` evenly spaced values in [0, 1] (the others held), when that beats the
-    current score. Gets a parameter out of a wrong basin that a local step cannot leave."""
+    best of `points` evenly spaced values in [0, 1] (the others held) when that beats the
+    current score by more than the factor 1 + `min_gain`. Gets a parameter out of a wrong basin
+    that a local step cannot leave; `min_gain` keeps a parameter the drawing barely shows (a
+    score flat to within noise over part of its range) where it was instead of at the end of
+    that range."""
     u = np.clip(np.asarray(u0, dtype=float), 0.0, 1.0)
     best = score(u)
     for j in range(len(u) if dims is None else dims):
+        cand_u, cand_s = None, best * (1.0 + min_gain)
         for x in np.linspace(0.0, 1.0, points):
             v = u.copy()
             v[j] = x
             s = score(v)
-            if s > best:
-                u, best = v, s
+            if s > cand_s:
+                cand_u, cand_s = v, s
+        if cand_u is not None:
+            u, best = cand_u, cand_s
     return u, best
 
 
@@ -266,7 +273,7 @@ def refine(scorer: Scorer, u0: np.ndarray, steps: int, method: str = "pattern",
         return np.asarray(u0, float), scorer(start), time.perf_counter() - t0
     if method == "pattern":
         u, _ = pattern(scorer, start, min(steps, PATTERN_WARMUP))
-        u, _ = scan(scorer, u, SCAN_POINTS, k)
+        u, _ = scan(scorer, u, SCAN_POINTS, k, SCAN_MIN_GAIN)
         u, s = pattern(scorer, u, steps)
     elif method == "greedy":
         u, s = greedy(scorer, start, steps)
