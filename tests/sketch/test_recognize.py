@@ -230,3 +230,31 @@ def test_a_file_that_is_not_a_models_file(tmp_path):
     assert res.exit_code == 1 and "not a sketch models file" in res.output
     res = CliRunner().invoke(main, ["recognize", str(bad), "--type", "Roof", "--models", str(tmp_path / "no")])
     assert res.exit_code == 1 and "models file not found" in res.output
+
+
+def test_parameter_reach_tells_a_roof_pitch_from_a_dormer_width(rec, library):
+    """The roof pitch moves the ridge by tens of pixels over its range; the dormer width moves
+    the dormers' sides by a few: weakly visible."""
+    from grammarkit_sketch.visibility import parameter_reach
+
+    stage = rec.models.types["Roof"].stage
+    hip = parameter_reach(rec.deriver(stage), library.snippets["roof_hip"], ["roof_deg"], bases=2)
+    mansard = parameter_reach(rec.deriver(stage), library.snippets["roof_mansard"], ["dormer_w"], bases=2)
+    assert hip[0].hausdorff > 15 and not hip[0].weak
+    assert 0 < mansard[0].hausdorff < 6 and mansard[0].weak
+    assert hip[0].chamfer > mansard[0].chamfer > 0
+
+
+def test_cli_runs_the_papers_refinement_beside_the_default(roof_png):
+    p, _ = roof_png
+    outs = {}
+    for extra in ([], ["--method", "metropolis", "--score", "paper", "--view-range", "0"]):
+        res = CliRunner().invoke(main, ["recognize", str(p), "--type", "Roof", "--refine", "3", "--json", *extra])
+        assert res.exit_code == 0, res.output
+        outs[bool(extra)] = json.loads(res.output)
+    assert (outs[False]["method"], outs[False]["score_kind"]) == ("pattern", "chamfer")
+    assert (outs[True]["method"], outs[True]["score_kind"]) == ("metropolis", "paper")
+    for d in outs.values():
+        assert d["refine_steps"] == 3 and d["evaluations"] > 1 and d["score"] >= d["network_score"]
+    res = CliRunner().invoke(main, ["recognize", str(p), "--type", "Roof", "--score", "l1"])
+    assert res.exit_code == 2 and "'l1' is not one of 'chamfer', 'paper'" in res.output

@@ -51,7 +51,7 @@ def print_recognition(r: Any, library: Any, source: str) -> None:
             click.echo(f"  {p.name:<{width}} = {float(r.values[p.name]):<8.4g} in {_range(info, p.name)}{note}")
     ref = (f"; {r.refine_steps} {r.method} refinement step(s), {r.evaluations} renders"
            if r.refine_steps else "; no refinement (--refine N to refine)")
-    click.echo(f"match score: {r.score:.3f} (network estimate {r.network_score:.3f}{ref})")
+    click.echo(f"match score: {r.score:.3f} ({r.score_kind}; network estimate {r.network_score:.3f}{ref})")
     tm = r.timings
     click.echo(f"time: {tm['total']:.0f} ms (read {tm['load']:.0f}, classify {tm['classify']:.1f}, "
                f"regress {tm['regress']:.1f}, score {tm['score']:.1f}, refine {tm['refine']:.0f})")

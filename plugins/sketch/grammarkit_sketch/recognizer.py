@@ -64,6 +64,7 @@ class Recognition:
     evaluations: int = 0
     timings: dict[str, float] = field(default_factory=dict)  # milliseconds
     stage: StageSpec | None = None
+    score_kind: str = "chamfer"  # which score `score` is: "chamfer" or "paper" (refine.SCORES)
 
     def use_line(self, anchor: str | None = None) -> str:
         return f"use {self.snippet} as {anchor or self.object_type}"
@@ -81,6 +82,7 @@ class Recognition:
             "normalized": {k: round(v, 4) for k, v in self.normalized.items()},
             "estimated": list(self.estimated), "hidden": list(self.hidden),
             "score": round(self.score, 4), "network_score": round(self.network_score, 4),
+            "score_kind": self.score_kind,
             "refine_steps": self.refine_steps, "method": self.method, "evaluations": self.evaluations,
             "use": self.use_line(), "set": self.set_options(),
             "timings_ms": {k: round(v, 2) for k, v in self.timings.items()},
@@ -194,7 +196,7 @@ class Recognizer:
                    "total": t_load * 1e3 + (t4 - t0) * 1e3}
         return Recognition(t, chosen, prob, top[:TOP], values, normalized, names, hidden, match,
                            net_score, refine_steps if len(u) else 0, method, scorer.evaluations,
-                           timings, stage)
+                           timings, stage, score)
 
     def recognize(self, image: Any, object_type: str, *, stage: StageSpec | None = None, **kw: Any) -> Recognition:
         """Recognise a sketch image (path, PIL image or array) of one object type."""

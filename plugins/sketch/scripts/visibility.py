@@ -7,13 +7,12 @@ For every parameter the shipped regressors estimate: the drawing (exact lines, t
 camera, the score canvas with its shorter side `--short` pixels) at the bottom and at the top of
 the parameter's range, the others at `--bases` points (the middle of the ranges, then random);
 printed are the mean over those points of the Hausdorff distance (the largest displacement of a
-line, pixels) and of the symmetric mean chamfer distance (the average one) between the two.
+line) and of the symmetric mean chamfer distance (the average one) between the two, in pixels of
+the 128 px canvas (grammarkit_sketch.visibility).
 """
 from __future__ import annotations
 
 import argparse
-
-import numpy as np
 
 
 def main() -> int:
@@ -25,9 +24,8 @@ def main() -> int:
     args = ap.parse_args()
 
     from grammarkit_sketch.dataset import quick_size
-    from grammarkit_sketch.image import distance_map
     from grammarkit_sketch.recognizer import get_recognizer
-    from grammarkit_sketch.refine import Scorer
+    from grammarkit_sketch.visibility import WEAK_REACH, parameter_reach
 
     rec = get_recognizer(args.models)
     lib = rec.library
@@ -41,26 +39,10 @@ def main() -> int:
             reg = tm.regressors.get(info.name)
             if reg is None or not reg.params:
                 continue
-            names = list(reg.params)
-            blank = np.zeros(quick_size(stage, args.short)[::-1], bool)
-            sc = Scorer(rec.deriver(stage), info, names, dict(info.defaults()), blank, short=args.short)
-            rng = np.random.default_rng(0)
-            bases = [np.full(len(names), 0.5)] + [rng.random(len(names)) for _ in range(args.bases - 1)]
-            for j, n in enumerate(names):
-                far, mean = [], []
-                for base in bases:
-                    lo, hi = base.copy(), base.copy()
-                    lo[j], hi[j] = 0.0, 1.0
-                    a, b = sc.render(lo), sc.render(hi)
-                    if a is None or b is None or not a.any() or not b.any():
-                        continue
-                    da, db = distance_map(a), distance_map(b)
-                    far.append(max(float(db[a].max()), float(da[b].max())))
-                    mean.append(0.5 * (float(db[a].mean()) + float(da[b].mean())))
-                if far:
-                    print(f"  {info.name + '.' + n:<32}{np.mean(far):>13.1f}{np.mean(mean):>11.2f}")
-                else:
-                    print(f"  {info.name + '.' + n:<32}{'(no drawable pair)':>24}")
+            for r in parameter_reach(rec.deriver(stage), info, reg.params, args.bases, args.short):
+                note = "  weak" if r.weak else ""
+                print(f"  {info.name + '.' + r.parameter:<32}{r.hausdorff:>13.1f}{r.chamfer:>11.2f}{note}")
+    print(f"weak: moves its lines less than {WEAK_REACH:g} px (of the 128 px canvas) over its whole range")
     return 0
 
 
