@@ -34,10 +34,23 @@ class Reach:
         return self.hausdorff < WEAK_REACH
 
 
+def _drawable_end(sc: Scorer, base: np.ndarray, j: int, end: float) -> np.ndarray | None:
+    """The drawing with coordinate j at `end`, or as near it (towards the base value) as the
+    snippet can be derived (a cornice cannot project further than its guard allows)."""
+    for t in np.linspace(0.0, 1.0, 11)[:-1]:
+        u = base.copy()
+        u[j] = end + t * (base[j] - end)
+        x = sc.render(u)
+        if x is not None:
+            return x
+    return None
+
+
 def parameter_reach(deriver: StageDeriver, info: SnippetInfo, names: Sequence[str], bases: int = 4,
                     short: int = SCORE_SHORT, seed: int = 0) -> list[Reach]:
     """For each parameter of `names`: the drawings (exact lines, stage camera, score canvas) at
-    the bottom and the top of its range, the others at `bases` points (the middle of the
+    the bottom and the top of its range (or the nearest derivable values), the others at
+    `bases` points (the middle of the
     ranges, then random); the mean over those points of the Hausdorff and chamfer distances."""
     blank = np.zeros(quick_size(deriver.stage, short)[::-1], bool)
     sc = Scorer(deriver, info, list(names), dict(info.defaults()), blank, short=short)
@@ -47,9 +60,7 @@ def parameter_reach(deriver: StageDeriver, info: SnippetInfo, names: Sequence[st
     for j, n in enumerate(names):
         far, mean = [], []
         for base in points:
-            lo, hi = base.copy(), base.copy()
-            lo[j], hi[j] = 0.0, 1.0
-            a, b = sc.render(lo), sc.render(hi)
+            a, b = _drawable_end(sc, base, j, 0.0), _drawable_end(sc, base, j, 1.0)
             if a is None or b is None or not a.any() or not b.any():
                 continue
             da, db = distance_map(a), distance_map(b)

@@ -55,9 +55,9 @@ def main() -> None:
     from PIL import Image
 
     from grammarkit.geometry.render import Camera, render, save_image
-    from grammarkit_sketch.dataset import stage_view
+    from grammarkit_sketch.dataset import line_mask, stage_view
     from grammarkit_sketch.drawing import draw, test_style, training_style
-    from grammarkit_sketch.image import distance_map, load_ink, to_input
+    from grammarkit_sketch.image import distance_map, load_ink
     from grammarkit_sketch.recognizer import get_recognizer
     from grammarkit_sketch.stages import StageDeriver
 
@@ -73,7 +73,7 @@ def main() -> None:
     sketch = grey(ink)
     save_image(sketch, out / "sketch_roof.png")  # the sketch the docs' examples recognise
     r = rec.recognize(sketch, "Roof", refine_steps=10)
-    d = distance_map(to_input(load_ink(sketch), stage.framing))
+    d = distance_map(line_mask(load_ink(sketch), stage))  # what the refinement scores compare
     dt = Image.fromarray((255 * (1 - np.clip(d / 24.0, 0, 1))).astype(np.uint8), "L").resize(sketch.size)
     overlay = rec.preview(sketch, r, size=max(sketch.size))
     text = (f"grammar g\nimport \"{ROOT / 'grammars' / 'library.grammar'}\"\n"
