@@ -2,6 +2,7 @@
 
     python benchmarks/bench_sketch.py [--models FILE] [--n 30] [--refine-n 6] [--steps 10]
         [--runs 3] [--plain-models FILE] [--quick] [--only accuracy,robustness,baseline,table3,roundtrip]
+        [--types Roof,Window]
 
 Held-out sketches are rendered with seeds never used in training (the training sets use seed 0,
 these seed 1000+), in the training style ("sketchy": new pens) and in styles never trained on.
@@ -130,6 +131,10 @@ REFINERS = (("greedy", "greedy", "paper", 0.0),  # Nishida's public code
             ("pattern", "pattern", "chamfer", 3.0))  # this implementation's default
 
 
+def selected_types(lib, args):
+    return [t for t in lib.types if not args.types or t in args.types.split(",")]
+
+
 _REACH: dict = {}
 
 
@@ -162,7 +167,7 @@ def section_accuracy(rec, args, out):
     print(hdr)
     print("-" * len(hdr))
     rows = {}
-    for t in lib.types:
+    for t in selected_types(lib, args):
         tm = rec.models.types.get(t)
         if tm is None:
             continue
@@ -241,7 +246,7 @@ def section_robustness(rec, args, out):
     print(f"{'':<8}" + "".join(f"{'acc / RMSE':>22}" for _ in styles))
     print("-" * len(hdr))
     table = {}
-    for t in lib.types:
+    for t in selected_types(lib, args):
         tm = rec.models.types.get(t)
         if tm is None:
             continue
@@ -284,7 +289,7 @@ def section_baseline(rec, args, out):
     for style in ("sketchy", "perspective"):
         rows = {"mcmc100": ([], []), "cnn": ([], []), "cnn+greedy": ([], []), "cnn+mh": ([], []),
                 "cnn+pattern": ([], [])}
-        for t in lib.types:
+        for t in selected_types(lib, args):
             tm = rec.models.types.get(t)
             if tm is None:
                 continue
@@ -338,7 +343,7 @@ def section_table3(rec, args, out):
     print("\n4. Training style (paper Table 3): accuracy on sketchy test drawings, and on exact drawings")
     print(f"{'type':<8}{'sketchy-trained':>17}{'plain-trained':>15}{'| exact drawings: sketchy':>26}{'plain':>8}")
     rows = {}
-    for t in lib.types:
+    for t in selected_types(lib, args):
         if t not in rec.models.types or t not in plain.models.types:
             continue
         res = []
@@ -418,6 +423,7 @@ def main() -> int:
     ap.add_argument("--threads", type=int, default=1)
     ap.add_argument("--quick", action="store_true", help="small sizes, for a smoke run")
     ap.add_argument("--only", default="accuracy,robustness,baseline,table3,roundtrip")
+    ap.add_argument("--types", default=None, help="object types measured in sections 1-4 (default: all)")
     args = ap.parse_args()
     if args.quick:
         args.n, args.refine_n, args.roundtrip, args.runs = 4, 1, 6, 1

@@ -1,22 +1,30 @@
 """Refinement of the estimated parameters against the sketch (Nishida et al. 2016, s. 6.1).
 
 A candidate (normalised parameter vector u) is derived on the stage, drawn in the exact line
-style through the stage camera, and scored against the sketch with the paper's equation (1),
+style through the stage camera and compared with the sketch at the score canvas
+(dataset.quick_size: the stage canvas with its shorter side 128 pixels; for the fit-framed
+mass, both drawings framed on their own extent at 128 x 128). Both are reduced to line masks
+found at the drawing's own resolution (dataset.line_mask); D is the Euclidean distance
+transform to the nearest line pixel, in pixels of the 128 px canvas. Two scores:
 
-    s = exp(-||D(I_prop) - D(I_sketch)||_F / sqrt(H W)),
+- `paper`: equation (1), s = exp(-||D(I_prop) - D(I_sketch)||_F / sqrt(H W)), the RMS
+  difference of the two transforms (1 for a perfect match, 0.37 for 1 px RMS).
+- `chamfer` (the default): s = exp(-mean symmetric chamfer distance), each line pixel's
+  distance to the other drawing's lines capped at CHAMFER_CAP: only the lines count, not the
+  empty paper, where the paper's score also adds up the difference of the transforms.
 
-D the Euclidean distance transform to the nearest line pixel. Both images are at the score
-canvas size (dataset.quick_size: the stage canvas with its shorter side 128 pixels; for the
-fit-framed mass, the 128x128 network input). Dividing the Frobenius norm by sqrt(HW) makes it
-the RMS difference in pixels, so the score does not depend on the resolution (1 for a perfect
-match, 0.37 for 1 px RMS).
+The search may also turn the view (`view_range` degrees of pitch and yaw, two more search
+coordinates): the pens draw up to 2 degrees off the stage camera, which moves lines by more
+pixels than many parameters do.
 
-Two searches, both measured in benchmarks/bench_sketch.py:
+Three searches, all measured in benchmarks/bench_sketch.py:
 - `metropolis`: the paper's Metropolis-Hastings: a Gaussian proposal around the current state,
   accepted with probability min(1, s_prop / s_cur); the best state visited is returned.
 - `greedy`: the coordinate search of Nishida's public code: each step tries +/- delta on every
-  parameter and keeps the best improvement; delta starts at 0.02 and shrinks by 0.8 every 10
+  coordinate and keeps the best improvement; delta starts at 0.02 and shrinks by 0.8 every 10
   steps.
+- `pattern` (the default): compass search with per-coordinate steps (start 0.08, halved on
+  failure) and one sweep of line searches over the parameters (`scan`); see `refine`.
 """
 from __future__ import annotations
 
