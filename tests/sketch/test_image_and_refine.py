@@ -160,3 +160,20 @@ def test_scan_leaves_a_wrong_basin_that_local_steps_cannot():
     assert abs(u[0] - 0.2) < 0.05  # stuck in the bump
     u, s = scan(two_basins, np.array([0.2]), 11)
     assert abs(u[0] - 0.8) < 0.06 and s > 0.9
+
+
+def test_a_flat_score_gives_the_parameter_back_to_the_network():
+    from grammarkit_sketch.refine import keep_network_values
+
+    def score(u):  # flat in u[0] below 0.4 (the drawing cannot tell), a bowl in u[1]
+        return float(np.exp(-max(0.0, u[0] - 0.4) * 5 - abs(u[1] - 0.7) * 5))
+    u_net = np.array([0.3, 0.5])
+    u, s = keep_network_values(score, np.array([0.0, 0.7]), score([0.0, 0.7]), u_net, 0.003)
+    assert u[0] == 0.3  # the flat part: the network's value
+    assert u[1] == pytest.approx(0.7, abs=0.01)  # the score decides: stays (within tolerance)
+    assert s == score(u) >= score([0.0, 0.7]) * 0.997
+    # moves back only as far as the score allows, never below `at_least`
+    u, s = keep_network_values(score, np.array([0.0, 0.7]), score([0.0, 0.7]), np.array([0.9, 0.7]), 0.1)
+    assert 0.39 < u[0] <= 0.421 and s >= score([0.0, 0.7]) * 0.9  # bisection: within 0.9 / 32
+    u, s = keep_network_values(score, np.array([0.0, 0.7]), 1.0, np.array([0.9, 0.7]), 0.1, at_least=1.0)
+    assert u[0] <= 0.4 and s == 1.0

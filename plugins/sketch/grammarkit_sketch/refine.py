@@ -24,7 +24,8 @@ Three searches, all measured in benchmarks/bench_sketch.py:
   coordinate and keeps the best improvement; delta starts at 0.02 and shrinks by 0.8 every 10
   steps.
 - `pattern` (the default): compass search with per-coordinate steps (start 0.08, halved on
-  failure) and one sweep of line searches over the parameters (`scan`); see `refine`.
+  failure), one sweep of line searches over the parameters (`scan`), and a move back towards
+  the network's estimate where the score is flat (`keep_network_values`); see `refine`.
 """
 from __future__ import annotations
 
@@ -47,6 +48,7 @@ PATTERN_STEP = 0.08
 PATTERN_WARMUP = 3
 SCAN_POINTS = 11
 SCAN_MIN_GAIN = 0.01  # relative score gain a line search must make to move a parameter
+NETWORK_TOLERANCE = 0.003  # relative score loss accepted to move back towards a network value
 VIEW_RANGE = 3.0  # degrees: the training pens draw up to 2 off the stage camera
 PATTERN_MIN_STEP = 0.005
 EXACT_STYLE = DrawStyle(sketchy=False, width=2.0)
@@ -213,6 +215,38 @@ def scan(score: Callable[[np.ndarray], float], u0: np.ndarray, points: int,
     return u, best
 
 
+def keep_network_values(score: Callable[[np.ndarray], float], u: np.ndarray, best: float,
+                        u_net: np.ndarray, tolerance: float, halvings: int = 5,
+                        at_least: float = 0.0) -> tuple[np.ndarray, float]:
+    """Each parameter in turn moves back towards the network's estimate as far as the score
+    stays within the factor 1 - `tolerance` of the refined one (bisection, `halvings` steps).
+    Where the drawing cannot tell values apart (a low mansard top pitch hidden in the outline)
+    the search drifts on a flat score, often to the end of the range; the network's estimate,
+    which has learnt what such drawings usually show, is the better guess there. The score
+    never falls below `at_least` (the network estimate's: refinement never makes it worse)."""
+    u = np.asarray(u, dtype=float).copy()
+    floor = max(best * (1.0 - tolerance), at_least)
+    for j in range(len(u_net)):
+        if u[j] == u_net[j]:
+            continue
+        v = u.copy()
+        v[j] = u_net[j]
+        s = score(v)
+        if s >= floor:
+            u = v
+            continue
+        near, far = u[j], u_net[j]  # acceptable at near, not at far
+        for _ in range(halvings):
+            mid = 0.5 * (near + far)
+            v[j] = mid
+            if score(v) >= floor:
+                near = mid
+            else:
+                far = mid
+        u[j] = near
+    return u, score(u)
+
+
 def pattern(score: Callable[[np.ndarray], float], u0: np.ndarray, steps: int,
             step: float = PATTERN_STEP, min_step: float = PATTERN_MIN_STEP) -> tuple[np.ndarray, float]:
     """Compass (pattern) search: each step visits every parameter in turn and moves it by +/- its
@@ -270,7 +304,9 @@ def refine(scorer: Scorer, u0: np.ndarray, steps: int, method: str = "pattern",
     parameters are what a recognition reports.
 
     `pattern`: a few compass-search sweeps (the view settles first), one line-search sweep over
-    the parameters (`scan`, SCAN_POINTS values each), then compass search for `steps` sweeps.
+    the parameters (`scan`, SCAN_POINTS values each), compass search for `steps` sweeps, then
+    each parameter back towards the network's estimate as far as the score stays within
+    NETWORK_TOLERANCE (`keep_network_values`).
     """
     if method not in METHODS:
         raise ValueError(f"unknown refinement method {method!r}; expected one of {', '.join(METHODS)}")
@@ -283,6 +319,8 @@ def refine(scorer: Scorer, u0: np.ndarray, steps: int, method: str = "pattern",
         u, _ = pattern(scorer, start, min(steps, PATTERN_WARMUP))
         u, _ = scan(scorer, u, SCAN_POINTS, k, SCAN_MIN_GAIN)
         u, s = pattern(scorer, u, steps)
+        u, s = keep_network_values(scorer, u, s, np.asarray(u0, float), NETWORK_TOLERANCE,
+                                   at_least=scorer(start))
     elif method == "greedy":
         u, s = greedy(scorer, start, steps)
     else:
