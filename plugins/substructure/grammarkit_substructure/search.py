@@ -37,6 +37,7 @@ pairs, networkx VF2) the tests and the benchmark compare with.
 from __future__ import annotations
 
 import itertools
+import operator
 from dataclasses import dataclass, field
 from typing import Callable, Iterable, Sequence
 
@@ -240,8 +241,9 @@ def _sigma_choices(D: OrderedGraph, H: OrderedGraph, u: int, u2: int, rot: int, 
 
 
 def _grow0(D: OrderedGraph, H: OrderedGraph, cd: list, ch: list, a: int, b: int, rot: int,
-           walked: set, nh: int, kk: int) -> Symmetry | None:
-    """The closed symmetry grown from the seed (a -> b, rotation rot), or None (q = 0).
+           walked: set, nh: int, kk: int) -> tuple[dict, dict, dict] | None:
+    """The closed symmetry grown from the seed (a -> b, rotation rot) as (f, f^-1, rotation of
+    each donor node), or None (q = 0).
 
     Depth-first over half-edge pairs of the dual graph: around a matched node pair the walk
     follows `next` (position i -> i + 1 on both sides); across an edge it follows `twin` into
@@ -281,9 +283,7 @@ def _grow0(D: OrderedGraph, H: OrderedGraph, cd: list, ch: list, a: int, b: int,
         walked.add((x * nh + x2) * kk + rots[x])
     if not ok:
         return None
-    pairs = tuple(sorted(fmap.items()))
-    sig = tuple(tuple((i + rots[x]) % len(dn[x]) for i in range(len(dn[x]))) for x, _ in pairs)
-    return Symmetry(pairs, sig, 0)
+    return fmap, inv, rots
 
 
 def _inverse(sym: Symmetry) -> Symmetry:
@@ -356,21 +356,15 @@ def _grow(D: OrderedGraph, H: OrderedGraph, a: int, b: int, rot: int, q: int) ->
     return out
 
 
-def find_symmetries(D: OrderedGraph, H: OrderedGraph | None = None, *, q: int = 0,
-                    progress: Callable[[int], None] | None = None) -> list[Symmetry]:
-    """All closed partial symmetries from the donor D into the host H (default: D itself),
-    the identity excluded. Deterministic order (by seed)."""
-    return _symmetries(D, H, q, progress, {})
+def _walk_q0(D: OrderedGraph, H: OrderedGraph, same: bool, progress: Callable[[int], None] | None):
+    """The closed symmetries (q = 0), each once, in seed order: yields (a, b, rot, grown) where
+    grown is None for the one-pair symmetry {a -> b} (rotation rot) and (f, f^-1, rotations)
+    otherwise. When D and H are one graph, the inverse of each symmetry is closed too; its
+    states go into the hash without a walk and it is not yielded (the caller derives it).
 
-
-def _symmetries(D: OrderedGraph, H: OrderedGraph | None, q: int,
-                progress: Callable[[int], None] | None, inverses: dict) -> list[Symmetry]:
-    """`find_symmetries`; fills `inverses` (key of a symmetry found by its walk -> key of its
-    inverse, recorded without a walk) when D and H are one graph."""
-    same = H is None or H is D
-    H = D if H is None else H
-    walked: set = set()
-    found: dict = {}
+    Most seeds give one-pair symmetries (no neighbour pair across the seed is compatible);
+    they are recognised by comparing the neighbours' classes around a and b under the
+    rotation (tuples precomputed per node and rotation), without a walk."""
     classes: dict = {}
     cd = [classes.setdefault((D.types[v], len(D.nbrs[v])), len(classes)) for v in range(len(D))]
     ch = [classes.setdefault((H.types[v], len(H.nbrs[v])), len(classes)) for v in range(len(H))]
@@ -379,6 +373,86 @@ def _symmetries(D: OrderedGraph, H: OrderedGraph | None, q: int,
         by_class.setdefault(ch[b], []).append(b)
     nh = len(H)
     kk = max([len(r) for r in D.nbrs] + [len(r) for r in H.nbrs] + [1])
+    # classes of the neighbours of each donor node by position; of each host node by position
+    # under each rotation r (host position (i + r) mod d at donor position i)
+    ncd = [tuple(cd[w] for w in row) for row in D.nbrs]
+    nch = []
+    for row in H.nbrs:
+        c = tuple(ch[w] for w in row)
+        nch.append([c[r:] + c[:r] for r in range(max(len(c), 1))])
+    walked: set = set()
+    eq = operator.eq
+    for a in range(len(D)):
+        if progress is not None:
+            progress(1)
+        d = len(D.nbrs[a])
+        na = ncd[a]
+        for b in by_class.get(cd[a], ()):
+            nb_rot = nch[b]
+            for rot in range(max(d, 1)):
+                if same and a == b and rot == 0:
+                    continue  # the identity
+                state = (a * nh + b) * kk + rot
+                if state in walked:
+                    continue
+                if not any(map(eq, na, nb_rot[rot])):
+                    # no compatible pair across the seed: the symmetry is {a -> b}
+                    if same:
+                        walked.add((b * nh + a) * kk + (-rot) % d if d else (b * nh + a) * kk)
+                    yield a, b, rot, None
+                    continue
+                grown = _grow0(D, H, cd, ch, a, b, rot, walked, nh, kk)
+                if grown is None:
+                    continue
+                if same:  # its inverse is closed too: no need to walk it again
+                    fmap, _, rots = grown
+                    for x, x2 in fmap.items():
+                        dx = len(D.nbrs[x])
+                        walked.add((x2 * nh + x) * kk + ((-rots[x]) % dx if dx else 0))
+                yield a, b, rot, grown
+
+
+def _symmetry_q0(D: OrderedGraph, a: int, b: int, rot: int, grown) -> Symmetry:  # noqa: ANN001
+    if grown is None:
+        d = len(D.nbrs[a])
+        return Symmetry(((a, b),), (tuple((i + rot) % d for i in range(d)),), 0)
+    fmap, _, rots = grown
+    pairs = tuple(sorted(fmap.items()))
+    dn = D.nbrs
+    return Symmetry(pairs, tuple(tuple((i + rots[x]) % len(dn[x]) for i in range(len(dn[x])))
+                                 for x, _ in pairs), 0)
+
+
+def find_symmetries(D: OrderedGraph, H: OrderedGraph | None = None, *, q: int = 0,
+                    progress: Callable[[int], None] | None = None) -> list[Symmetry]:
+    """All closed partial symmetries from the donor D into the host H (default: D itself),
+    the identity excluded. Deterministic order (by seed; with D = H each symmetry is followed
+    by its inverse)."""
+    same = H is None or H is D
+    H = D if H is None else H
+    found: dict = {}
+    if q == 0:
+        for a, b, rot, grown in _walk_q0(D, H, same, progress):
+            sym = _symmetry_q0(D, a, b, rot, grown)
+            found.setdefault(sym.key, sym)
+            if same:
+                inv = _inverse(sym)
+                found.setdefault(inv.key, inv)
+        return list(found.values())
+    return _symmetries_q(D, H, same, q, progress)
+
+
+def _symmetries_q(D: OrderedGraph, H: OrderedGraph, same: bool, q: int,
+                  progress: Callable[[int], None] | None) -> list[Symmetry]:
+    """The closed symmetries with up to q > 0 violations: every seed is grown (`_grow`
+    branches, so the hash of walked states does not apply), duplicates dropped by key."""
+    found: dict = {}
+    classes: dict = {}
+    cd = [classes.setdefault((D.types[v], len(D.nbrs[v])), len(classes)) for v in range(len(D))]
+    ch = [classes.setdefault((H.types[v], len(H.nbrs[v])), len(classes)) for v in range(len(H))]
+    by_class: dict = {}
+    for b in range(len(H)):
+        by_class.setdefault(ch[b], []).append(b)
     for a in range(len(D)):
         if progress is not None:
             progress(1)
@@ -387,21 +461,6 @@ def _symmetries(D: OrderedGraph, H: OrderedGraph | None, q: int,
             for rot in range(max(d, 1)):
                 if same and a == b and rot == 0:
                     continue  # the identity
-                if q == 0:
-                    if (a * nh + b) * kk + rot in walked:
-                        continue
-                    sym = _grow0(D, H, cd, ch, a, b, rot, walked, nh, kk)
-                    if sym is None:
-                        continue
-                    found.setdefault(sym.key, sym)
-                    if same:  # its inverse is closed too: no need to walk it again
-                        inv = _inverse(sym)
-                        for (x, x2), sg in zip(inv.pairs, inv.sigma):
-                            walked.add((x * nh + x2) * kk + (sg[0] if sg else 0))
-                        if inv.key not in found:
-                            found[inv.key] = inv
-                            inverses[sym.key] = inv.key
-                    continue
                 for sym in _grow(D, H, a, b, rot, q):
                     if same and all(x == y for x, y in sym.pairs) and all(
                             s == tuple(range(len(s))) for s in sym.sigma):
@@ -477,102 +536,191 @@ def operations_from_symmetry(D: OrderedGraph, H: OrderedGraph, sym: Symmetry,
                              same: bool) -> list[Operation]:
     """The operations a closed symmetry defines: one per linked group of unmatched components
     (found by `_flood_groups`, so a huge remainder is never listed)."""
-    A = {x for x, _ in sym.pairs}
-    B = {y for _, y in sym.pairs}
-    bpairs = []
-    for (a, b), s in zip(sym.pairs, sym.sigma):
-        nb_b = H.nbrs[b]
-        for i, w in enumerate(D.nbrs[a]):
-            if w in A:
-                continue
-            bpairs.append((a, w, b, nb_b[s[i]]))
-    if not bpairs:
-        return []
-    if len(A) == 1 and next(iter(A)) not in D.cut_nodes() and next(iter(B)) not in H.cut_nodes():
-        # one node that is no articulation point on either side: everything else is one
-        # component on each side, so there is exactly one operation (no flood needed)
-        gd, comps_d = {p[1]: -1 for p in bpairs}, {-1: None}
-        gh, comps_h = {p[3]: -1 for p in bpairs}, {-1: None}
-    else:
-        gd, comps_d = _flood_groups(D.nbrs, A, [p[1] for p in bpairs])
-        gh, comps_h = _flood_groups(H.nbrs, B, [p[3] for p in bpairs])
-    parent: dict = {}
+    pieces = _Pieces(D, H, same)
+    rows = [[H.nbrs[b][j] for j in s] for (_, b), s in zip(sym.pairs, sym.sigma)]
+    return [Operation(pairs, removed, copied, rec, len(sym.pairs), sym.violations)
+            for pairs, removed, copied, rec in pieces.operations(sym.pairs, rows)]
 
-    def find(x):  # noqa: ANN001, ANN202
-        while parent.setdefault(x, x) != x:
-            parent[x] = parent[parent[x]]
-            x = parent[x]
-        return x
 
-    for a, w, b, w2 in bpairs:
-        ra, rb = find(("d", gd[w])), find(("h", gh[w2]))
-        if ra != rb:
-            parent[ra] = rb
-    groups: dict = {}
-    for p in bpairs:
-        groups.setdefault(find(("d", gd[p[1]])), []).append(p)
+class _Pieces:
+    """Extracts the operations of symmetries of D into H (`operations`), with the caches that
+    make it output-sensitive: the floods of one (matched node set, starts) are computed once
+    (many symmetries share their donor or host node set), and the pieces of one-node
+    symmetries of nodes that are no articulation point are "everything else", one `Side`
+    per node."""
 
-    def side(comps: dict, chosen: set, excluded_base: set, n: int, other: tuple) -> Side:
-        if any(comps[c] is None for c in chosen):  # the unlisted remainder is in this piece
-            out = set(excluded_base)
-            out.update(other)  # other connected components of the graph are not part of it
-            for c, nodes in comps.items():
-                if c not in chosen and nodes is not None:
-                    out.update(nodes)
-            return Side(tuple(sorted(out)), n, True)
-        return Side(tuple(sorted(v for c in chosen for v in comps[c])), n)
+    def __init__(self, D: OrderedGraph, H: OrderedGraph, same: bool) -> None:
+        self.D, self.H, self.same = D, H, same
+        self.cut_d, self.cut_h = D.cut_nodes(), H.cut_nodes()
+        self.floods_d: dict = {}
+        self.floods_h: dict = self.floods_d if same else {}
+        self.rest_d: dict = {}
+        self.rest_h: dict = self.rest_d if same else {}
 
-    other_d = D.outside_component(sym.pairs[0][0])
-    other_h = H.outside_component(sym.pairs[0][1])
-    ops = []
-    for _, gp in sorted(groups.items(), key=lambda kv: min(kv[1])):
-        chosen_d = {gd[p[1]] for p in gp}
-        chosen_h = {gh[p[3]] for p in gp}
-        copied = side(comps_d, chosen_d, A, len(D), other_d)
-        removed = side(comps_h, chosen_h, B, len(H), other_h)
-        pairs = tuple(sorted(gp))
-        if same and copied == removed and all(w == w2 for _, w, _, w2 in pairs):
-            continue  # replaces a piece by itself, attached where it was: no change
+    @staticmethod
+    def _rest(G: OrderedGraph, v: int, cache: dict) -> Side:
+        """Everything but v (and other connected components): the piece beside a one-node
+        symmetry whose node is no articulation point."""
+        side = cache.get(v)
+        if side is None:
+            other = G.outside_component(v)
+            nodes = (v,) if not other else tuple(sorted({v, *other}))
+            side = cache[v] = Side(nodes, len(G), True)
+        return side
+
+    @staticmethod
+    def _flood(G: OrderedGraph, inside: set, starts: list, cache: dict):  # noqa: ANN205
+        key = (frozenset(inside), tuple(starts))
+        out = cache.get(key)
+        if out is None:
+            out = cache[key] = _flood_groups(G.nbrs, inside, starts)
+        return out
+
+    def operations(self, pairs: Sequence[tuple[int, int]], rows: Sequence[Sequence[int]]) -> list[tuple]:
+        """(cut pairs, removed Side, copied Side, recursive) of every operation of the closed
+        symmetry with the (a, f(a)) `pairs` (sorted by a); rows[k]: the host neighbours of
+        f(a) at a's edge positions (the correspondence sigma applied)."""
+        D, H, same = self.D, self.H, self.same
+        dn = D.nbrs
+        if len(pairs) == 1:
+            a, b = pairs[0]
+            bpairs = [(a, w, b, w2) for w, w2 in zip(dn[a], rows[0])]
+            if not bpairs:
+                return []
+            if a not in self.cut_d and b not in self.cut_h:
+                # one node that is no articulation point on either side: everything else is
+                # one component on each side, so there is exactly one operation (no flood)
+                bpairs.sort()
+                return self._finish(tuple(bpairs), self._rest(H, b, self.rest_h), self._rest(D, a, self.rest_d))
+            A, B = {a}, {b}
+        else:
+            A = {x for x, _ in pairs}
+            B = {y for _, y in pairs}
+            bpairs = [(a, w, b, w2) for (a, b), row in zip(pairs, rows)
+                      for w, w2 in zip(dn[a], row) if w not in A]
+            if not bpairs:
+                return []
+        gd, comps_d = self._flood(D, A, [p[1] for p in bpairs], self.floods_d)
+        gh, comps_h = self._flood(H, B, [p[3] for p in bpairs], self.floods_h)
+        other_d = D.outside_component(pairs[0][0])
+        other_h = H.outside_component(pairs[0][1])
+        if len(comps_d) == 1 and len(comps_h) == 1:  # one group: one operation
+            bpairs.sort()
+            return self._finish(tuple(bpairs), _side(comps_h, comps_h.keys(), B, len(H), other_h),
+                                _side(comps_d, comps_d.keys(), A, len(D), other_d))
+        # union-find over the components of both sides (donor: group id, host: id + offset)
+        off = len(D) + 1
+        parent: dict = {}
+
+        def find(x):  # noqa: ANN001, ANN202
+            while parent.setdefault(x, x) != x:
+                parent[x] = parent[parent[x]]
+                x = parent[x]
+            return x
+
+        for _, w, _, w2 in bpairs:
+            ra, rb = find(gd[w]), find(gh[w2] + off)
+            if ra != rb:
+                parent[ra] = rb
+        groups: dict = {}
+        for p in bpairs:
+            groups.setdefault(find(gd[p[1]]), []).append(p)
+        out = []
+        for _, gp in sorted(groups.items(), key=lambda kv: min(kv[1])):
+            copied = _side(comps_d, {gd[p[1]] for p in gp}, A, len(D), other_d)
+            removed = _side(comps_h, {gh[p[3]] for p in gp}, B, len(H), other_h)
+            gp.sort()
+            out.extend(self._finish(tuple(gp), removed, copied))
+        return out
+
+    def _finish(self, pairs: tuple, removed: Side, copied: Side) -> list[tuple]:
         rec = ""
-        if same:
-            if removed.size() < copied.size() and removed.subset_of(copied):
+        if self.same:
+            if copied == removed and all(w == w2 for _, w, _, w2 in pairs):
+                return []  # replaces a piece by itself, attached where it was: no change
+            rs, cs = removed.size(), copied.size()
+            if rs < cs and removed.subset_of(copied):
                 rec = "grow"
-            elif copied.size() < removed.size() and copied.subset_of(removed):
+            elif cs < rs and copied.subset_of(removed):
                 rec = "shrink"
-        ops.append(Operation(pairs, removed, copied, rec, len(sym.pairs), sym.violations))
-    return ops
+        return [(pairs, removed, copied, rec)]
+
+
+def _side(comps: dict, chosen, excluded_base: set, n: int, other: tuple) -> Side:  # noqa: ANN001
+    """The piece made of the `chosen` components (`_flood_groups`' result): listed, or, when it
+    holds the unlisted remainder, as the complement of everything else."""
+    if any(comps[c] is None for c in chosen):  # the unlisted remainder is in this piece
+        out = set(excluded_base)
+        out.update(other)  # other connected components of the graph are not part of it
+        for c, nodes in comps.items():
+            if c not in chosen and nodes is not None:
+                out.update(nodes)
+        return Side(tuple(sorted(out)), n, True)
+    if len(chosen) == 1:
+        return Side(comps[next(iter(chosen))], n)
+    return Side(tuple(sorted(v for c in chosen for v in comps[c])), n)
+
+
+_REVERSED = {"grow": "shrink", "shrink": "grow", "": ""}
 
 
 def find_operations(D: OrderedGraph, H: OrderedGraph | None = None, *, q: int = 0,
                     progress: Callable[[int], None] | None = None) -> list[Operation]:
-    """Every normalised operation that copies a piece of D into a hole cut in H (default D)."""
+    """Every normalised operation that copies a piece of D into a hole cut in H (default D).
+    Sorted by the sizes of both pieces, then by the cut pairs."""
     same = H is None or H is D
     H = D if H is None else H
     ops: dict = {}
-    done: set = set()
+    pieces = _Pieces(D, H, same)
 
-    def keep(op: Operation) -> None:
-        old = ops.get(op.key)
-        if old is None or (op.violations, -op.symmetry_size) < (old.violations, -old.symmetry_size):
-            ops[op.key] = op
+    def keep(pairs: tuple, removed: Side, copied: Side, rec: str, size: int, violations: int) -> None:
+        old = ops.get(pairs)
+        if old is None or (violations, -size) < (old.violations, -old.symmetry_size):
+            ops[pairs] = Operation(pairs, removed, copied, rec, size, violations)
 
-    inverses: dict = {}
-    for sym in _symmetries(D, H, q, progress, inverses):
-        if sym.key in done:
-            continue
-        found = operations_from_symmetry(D, H, sym, same)
-        for op in found:
-            keep(op)
+    def add(found: list, size: int, violations: int) -> None:
+        for pairs, removed, copied, rec in found:
+            keep(pairs, removed, copied, rec, size, violations)
         if same:
             # the inverse symmetry's operations are these with the two sides exchanged
-            inv_key = inverses.get(sym.key)
-            done.add(inv_key if inv_key is not None else _inverse(sym).key)
-            rec = {"grow": "shrink", "shrink": "grow", "": ""}
-            for op in found:
-                keep(Operation(tuple(sorted((b, w2, a, w) for a, w, b, w2 in op.pairs)),
-                               op.copied_side, op.removed_side, rec[op.recursive],
-                               op.symmetry_size, op.violations))
-    return sorted(ops.values(), key=lambda o: (o.removed_side.size() + o.copied_side.size(), o.key))
+            for pairs, removed, copied, rec in found:
+                keep(tuple(sorted([(b, w2, a, w) for a, w, b, w2 in pairs])), copied, removed,
+                     _REVERSED[rec], size, violations)
+
+    if q == 0:
+        hn = H.nbrs
+        # host neighbours of b at the donor's positions under rotation r, per (b, r)
+        rotated: dict = {}
+        for a, b, rot, grown in _walk_q0(D, H, same, progress):
+            if grown is None:
+                row = rotated.get((b, rot))
+                if row is None:
+                    nb = hn[b]
+                    row = rotated[(b, rot)] = nb[rot:] + nb[:rot]
+                add(pieces.operations(((a, b),), (row,)), 1, 0)
+                continue
+            fmap, _, rots = grown
+            pairs = sorted(fmap.items())
+            rows = []
+            for x, x2 in pairs:
+                r = rots[x]
+                row = rotated.get((x2, r))
+                if row is None:
+                    nb = hn[x2]
+                    row = rotated[(x2, r)] = nb[r:] + nb[:r]
+                rows.append(row)
+            add(pieces.operations(pairs, rows), len(pairs), 0)
+    else:
+        done: set = set()
+        for sym in _symmetries_q(D, H, same, q, progress):
+            if sym.key in done:
+                continue
+            rows = [[H.nbrs[b][j] for j in s] for (_, b), s in zip(sym.pairs, sym.sigma)]
+            add(pieces.operations(sym.pairs, rows), len(sym.pairs), sym.violations)
+            if same:
+                done.add(_inverse(sym).key)
+    order = sorted(ops.items(), key=lambda kv: (kv[1].removed_side.size() + kv[1].copied_side.size(), kv[0]))
+    return [op for _, op in order]
 
 
 # -- brute force (reference) -----------------------------------------------------------------
