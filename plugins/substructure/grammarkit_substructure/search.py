@@ -36,8 +36,11 @@ pairs, networkx VF2) the tests and the benchmark compare with.
 """
 from __future__ import annotations
 
+import bisect
+import gc
 import itertools
 import operator
+from itertools import repeat
 from dataclasses import dataclass, field
 from typing import Callable, Iterable, Sequence
 
@@ -387,7 +390,11 @@ def _walk_q0(D: OrderedGraph, H: OrderedGraph, same: bool, progress: Callable[[i
             progress(1)
         d = len(D.nbrs[a])
         na = ncd[a]
-        for b in by_class.get(cd[a], ()):
+        members = by_class.get(cd[a], ())
+        # With D = H, a seed (a, b, rot) with b < a is never new: at b's turn the seed
+        # (b, a, -rot) was walked or skipped, and either way (a, b, rot) went into the hash as
+        # a state of its inverse (or its walk failed, and so would this one).
+        for b in members[bisect.bisect_left(members, a):] if same else members:
             nb_rot = nch[b]
             for rot in range(max(d, 1)):
                 if same and a == b and rot == 0:
@@ -539,7 +546,11 @@ def operations_from_symmetry(D: OrderedGraph, H: OrderedGraph, sym: Symmetry,
     pieces = _Pieces(D, H, same)
     rows = [[H.nbrs[b][j] for j in s] for (_, b), s in zip(sym.pairs, sym.sigma)]
     return [Operation(pairs, removed, copied, rec, len(sym.pairs), sym.violations)
-            for pairs, removed, copied, rec in pieces.operations(sym.pairs, rows)]
+            for pairs, removed, copied, rec, _ in pieces.operations(sym.pairs, rows)]
+
+
+def _size(side: Side) -> int:
+    return side.n - len(side.nodes) if side.complement else len(side.nodes)
 
 
 class _Pieces:
@@ -558,7 +569,7 @@ class _Pieces:
         self.rest_h: dict = self.rest_d if same else {}
 
     @staticmethod
-    def _rest(G: OrderedGraph, v: int, cache: dict) -> Side:
+    def rest(G: OrderedGraph, v: int, cache: dict) -> Side:
         """Everything but v (and other connected components): the piece beside a one-node
         symmetry whose node is no articulation point."""
         side = cache.get(v)
@@ -577,10 +588,10 @@ class _Pieces:
         return out
 
     def operations(self, pairs: Sequence[tuple[int, int]], rows: Sequence[Sequence[int]]) -> list[tuple]:
-        """(cut pairs, removed Side, copied Side, recursive) of every operation of the closed
-        symmetry with the (a, f(a)) `pairs` (sorted by a); rows[k]: the host neighbours of
-        f(a) at a's edge positions (the correspondence sigma applied)."""
-        D, H, same = self.D, self.H, self.same
+        """(cut pairs, removed Side, copied Side, recursive, size of both pieces) of every
+        operation of the closed symmetry with the (a, f(a)) `pairs` (sorted by a); rows[k]: the
+        host neighbours of f(a) at a's edge positions (the correspondence sigma applied)."""
+        D, H = self.D, self.H
         dn = D.nbrs
         if len(pairs) == 1:
             a, b = pairs[0]
@@ -591,7 +602,7 @@ class _Pieces:
                 # one node that is no articulation point on either side: everything else is
                 # one component on each side, so there is exactly one operation (no flood)
                 bpairs.sort()
-                return self._finish(tuple(bpairs), self._rest(H, b, self.rest_h), self._rest(D, a, self.rest_d))
+                return self.finish(tuple(bpairs), self.rest(H, b, self.rest_h), self.rest(D, a, self.rest_d))
             A, B = {a}, {b}
         else:
             A = {x for x, _ in pairs}
@@ -606,8 +617,8 @@ class _Pieces:
         other_h = H.outside_component(pairs[0][1])
         if len(comps_d) == 1 and len(comps_h) == 1:  # one group: one operation
             bpairs.sort()
-            return self._finish(tuple(bpairs), _side(comps_h, comps_h.keys(), B, len(H), other_h),
-                                _side(comps_d, comps_d.keys(), A, len(D), other_d))
+            return self.finish(tuple(bpairs), _side(comps_h, comps_h.keys(), B, len(H), other_h),
+                               _side(comps_d, comps_d.keys(), A, len(D), other_d))
         # union-find over the components of both sides (donor: group id, host: id + offset)
         off = len(D) + 1
         parent: dict = {}
@@ -630,20 +641,20 @@ class _Pieces:
             copied = _side(comps_d, {gd[p[1]] for p in gp}, A, len(D), other_d)
             removed = _side(comps_h, {gh[p[3]] for p in gp}, B, len(H), other_h)
             gp.sort()
-            out.extend(self._finish(tuple(gp), removed, copied))
+            out.extend(self.finish(tuple(gp), removed, copied))
         return out
 
-    def _finish(self, pairs: tuple, removed: Side, copied: Side) -> list[tuple]:
+    def finish(self, pairs: tuple, removed: Side, copied: Side) -> list[tuple]:
         rec = ""
+        rs, cs = _size(removed), _size(copied)
         if self.same:
             if copied == removed and all(w == w2 for _, w, _, w2 in pairs):
                 return []  # replaces a piece by itself, attached where it was: no change
-            rs, cs = removed.size(), copied.size()
             if rs < cs and removed.subset_of(copied):
                 rec = "grow"
             elif cs < rs and copied.subset_of(removed):
                 rec = "shrink"
-        return [(pairs, removed, copied, rec)]
+        return [(pairs, removed, copied, rec, rs + cs)]
 
 
 def _side(comps: dict, chosen, excluded_base: set, n: int, other: tuple) -> Side:  # noqa: ANN001
@@ -664,63 +675,106 @@ def _side(comps: dict, chosen, excluded_base: set, n: int, other: tuple) -> Side
 _REVERSED = {"grow": "shrink", "shrink": "grow", "": ""}
 
 
+class _Kept:
+    """The operations found so far, one per key (cut pairs): the one of the largest symmetry
+    with the fewest violations, the first found among equals. With D = H, every symmetry's
+    inverse has the same operations with the sides exchanged (`add`)."""
+
+    def __init__(self, same: bool) -> None:
+        self.same = same
+        self.ops: dict = {}  # cut pairs -> (size of both pieces, Operation)
+
+    def keep(self, pairs: tuple, removed: Side, copied: Side, rec: str, total: int, size: int,
+             violations: int) -> None:
+        old = self.ops.get(pairs)
+        if old is None or (violations, -size) < (old[1].violations, -old[1].symmetry_size):
+            self.ops[pairs] = (total, Operation(pairs, removed, copied, rec, size, violations))
+
+    def add(self, found: list, size: int, violations: int) -> None:
+        keep = self.keep
+        for pairs, removed, copied, rec, total in found:
+            keep(pairs, removed, copied, rec, total, size, violations)
+        if self.same:
+            for pairs, removed, copied, rec, total in found:
+                keep(tuple(sorted([(b, w2, a, w) for a, w, b, w2 in pairs])), copied, removed,
+                     _REVERSED[rec], total, size, violations)
+
+    def sorted(self) -> list[Operation]:
+        """Smallest first: by the sizes of both pieces, then by the cut pairs. (The first cut
+        pair is spelled out in the key: most keys tie on the size, and comparing its ints
+        directly is about three times faster than comparing the nested tuples.)"""
+        order = sorted(self.ops.items(), key=lambda kv: (kv[1][0], *kv[0][0], kv[0]))
+        return [op for _, (_, op) in order]
+
+
 def find_operations(D: OrderedGraph, H: OrderedGraph | None = None, *, q: int = 0,
                     progress: Callable[[int], None] | None = None) -> list[Operation]:
     """Every normalised operation that copies a piece of D into a hole cut in H (default D).
     Sorted by the sizes of both pieces, then by the cut pairs."""
     same = H is None or H is D
     H = D if H is None else H
-    ops: dict = {}
-    pieces = _Pieces(D, H, same)
+    # The enumeration allocates millions of small tuples (hash states, cut pairs) and no
+    # reference cycles; the cyclic garbage collector would traverse the growing heap again and
+    # again (about 40% of the time at 1,000 parts), so it is paused meanwhile.
+    collecting = gc.isenabled()
+    gc.disable()
+    try:
+        kept = _Kept(same)
+        pieces = _Pieces(D, H, same)
+        if q == 0:
+            _operations_q0(D, H, same, progress, pieces, kept)
+        else:
+            done: set = set()
+            for sym in _symmetries_q(D, H, same, q, progress):
+                if sym.key in done:
+                    continue
+                rows = [[H.nbrs[b][j] for j in s] for (_, b), s in zip(sym.pairs, sym.sigma)]
+                kept.add(pieces.operations(sym.pairs, rows), len(sym.pairs), sym.violations)
+                if same:
+                    done.add(_inverse(sym).key)
+        return kept.sorted()
+    finally:
+        if collecting:
+            gc.enable()
 
-    def keep(pairs: tuple, removed: Side, copied: Side, rec: str, size: int, violations: int) -> None:
-        old = ops.get(pairs)
-        if old is None or (violations, -size) < (old.violations, -old.symmetry_size):
-            ops[pairs] = Operation(pairs, removed, copied, rec, size, violations)
 
-    def add(found: list, size: int, violations: int) -> None:
-        for pairs, removed, copied, rec in found:
-            keep(pairs, removed, copied, rec, size, violations)
-        if same:
-            # the inverse symmetry's operations are these with the two sides exchanged
-            for pairs, removed, copied, rec in found:
-                keep(tuple(sorted([(b, w2, a, w) for a, w, b, w2 in pairs])), copied, removed,
-                     _REVERSED[rec], size, violations)
+def _operations_q0(D: OrderedGraph, H: OrderedGraph, same: bool, progress: Callable[[int], None] | None,
+                   pieces: _Pieces, kept: _Kept) -> None:
+    """The operations of every closed symmetry (q = 0) into `kept`, each symmetry as it is
+    found. One-pair symmetries of nodes that are no articulation point (most of them) take a
+    short path: their one operation cuts all edges of b and copies everything but a."""
+    hn, dn = H.nbrs, D.nbrs
+    cut_d, cut_h = pieces.cut_d, pieces.cut_h
+    rest, rest_d, rest_h = pieces.rest, pieces.rest_d, pieces.rest_h
+    finish, keep, add = pieces.finish, kept.keep, kept.add
+    rotated: dict = {}  # (b, r): host neighbours of b at the donor's positions under rotation r
 
-    if q == 0:
-        hn = H.nbrs
-        # host neighbours of b at the donor's positions under rotation r, per (b, r)
-        rotated: dict = {}
-        for a, b, rot, grown in _walk_q0(D, H, same, progress):
-            if grown is None:
-                row = rotated.get((b, rot))
-                if row is None:
-                    nb = hn[b]
-                    row = rotated[(b, rot)] = nb[rot:] + nb[:rot]
+    def row_of(b: int, r: int) -> list:
+        row = rotated.get((b, r))
+        if row is None:
+            nb = hn[b]
+            row = rotated[(b, r)] = nb[r:] + nb[:r]
+        return row
+
+    for a, b, rot, grown in _walk_q0(D, H, same, progress):
+        if grown is None:
+            row = row_of(b, rot)
+            if a in cut_d or b in cut_h or not row:
                 add(pieces.operations(((a, b),), (row,)), 1, 0)
                 continue
-            fmap, _, rots = grown
-            pairs = sorted(fmap.items())
-            rows = []
-            for x, x2 in pairs:
-                r = rots[x]
-                row = rotated.get((x2, r))
-                if row is None:
-                    nb = hn[x2]
-                    row = rotated[(x2, r)] = nb[r:] + nb[:r]
-                rows.append(row)
-            add(pieces.operations(pairs, rows), len(pairs), 0)
-    else:
-        done: set = set()
-        for sym in _symmetries_q(D, H, same, q, progress):
-            if sym.key in done:
-                continue
-            rows = [[H.nbrs[b][j] for j in s] for (_, b), s in zip(sym.pairs, sym.sigma)]
-            add(pieces.operations(sym.pairs, rows), len(sym.pairs), sym.violations)
-            if same:
-                done.add(_inverse(sym).key)
-    order = sorted(ops.items(), key=lambda kv: (kv[1].removed_side.size() + kv[1].copied_side.size(), kv[0]))
-    return [op for _, op in order]
+            nb_a = dn[a]
+            found = finish(tuple(sorted(zip(repeat(a), nb_a, repeat(b), row))),
+                           rest(H, b, rest_h), rest(D, a, rest_d))
+            if found:
+                pairs, removed, copied, rec, total = found[0]
+                keep(pairs, removed, copied, rec, total, 1, 0)
+                if same:
+                    keep(tuple(sorted(zip(repeat(b), row, repeat(a), nb_a))), copied, removed,
+                         _REVERSED[rec], total, 1, 0)
+            continue
+        fmap, _, rots = grown
+        pairs = sorted(fmap.items())
+        add(pieces.operations(pairs, [row_of(x2, rots[x]) for x, x2 in pairs]), len(pairs), 0)
 
 
 # -- brute force (reference) -----------------------------------------------------------------
