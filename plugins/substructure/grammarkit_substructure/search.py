@@ -484,8 +484,25 @@ def _flood_groups(nbrs: Sequence[Sequence[int]], inside: set[int], starts: Seque
     floods that meet merge. A flood whose queue empties has found its whole component (listed).
     Once at most one flood is still running, its component is everything else (not listed):
     so the cost is about the size of the small components, not of the graph.
-    Returns (group of each start, {group: nodes or None for the unlisted remainder})."""
-    parent: dict[int, int] = {}
+    Returns (group of each start, {group: nodes or None for the unlisted remainder}); groups
+    are numbered by flood (the first start's flood is 0).
+
+    Floods are indices into lists, and one list `owner` (flood per node, -1 free, -2 inside)
+    serves the membership tests: this loop runs for every distinct cut, so it is kept tight."""
+    first: dict[int, int] = {}
+    for s0 in starts:
+        if s0 not in first:
+            first[s0] = len(first)
+    k = len(first)
+    owner = [-1] * len(nbrs)
+    for x in inside:
+        owner[x] = -2
+    parent = list(range(k))
+    queues = [[s0] for s0 in first]
+    members = [[s0] for s0 in first]
+    heads = [0] * k
+    for s0, g in first.items():
+        owner[s0] = g
 
     def find(x: int) -> int:
         while parent[x] != x:
@@ -493,33 +510,23 @@ def _flood_groups(nbrs: Sequence[Sequence[int]], inside: set[int], starts: Seque
             x = parent[x]
         return x
 
-    owner: dict[int, int] = {}
-    queues: dict[int, list] = {}
-    members: dict[int, list] = {}
-    for s0 in starts:
-        if s0 in owner:
-            continue
-        owner[s0] = s0
-        parent[s0] = s0
-        queues[s0] = [s0]
-        members[s0] = [s0]
-    active = [g for g in queues]
-    heads = {g: 0 for g in queues}
+    active = list(range(k))
     while len(active) > 1:
         nxt = []
+        merged = False
         for g in active:
-            if find(g) != g:
-                continue
+            if parent[g] != g:
+                continue  # merged into another flood this round
             q = queues[g]
-            if heads[g] >= len(q):
+            h = heads[g]
+            if h >= len(q):
                 continue  # finished: its component is complete
-            v = q[heads[g]]
-            heads[g] += 1
-            for w in nbrs[v]:
-                if w in inside:
+            heads[g] = h + 1
+            for w in nbrs[q[h]]:
+                o = owner[w]
+                if o == g or o == -2:
                     continue
-                o = owner.get(w)
-                if o is None:
+                if o == -1:
                     owner[w] = g
                     q.append(w)
                     members[g].append(w)
@@ -527,16 +534,18 @@ def _flood_groups(nbrs: Sequence[Sequence[int]], inside: set[int], starts: Seque
                 r = find(o)
                 if r != g:  # two floods meet: one component
                     parent[r] = g
+                    merged = True
                     q.extend(queues[r][heads[r]:])
-                    members[g].extend(members[r])
-                    for x in members[r]:
+                    mr = members[r]
+                    members[g].extend(mr)
+                    for x in mr:
                         owner[x] = g
             if heads[g] < len(q):
                 nxt.append(g)
-        active = [g for g in dict.fromkeys(find(g) for g in nxt)]
-    roots = {find(g) for g in queues}
+        active = list(dict.fromkeys(find(g) for g in nxt)) if merged else nxt
+    roots = {find(g) for g in range(k)}
     result = {r: (None if r in active else tuple(sorted(members[r]))) for r in roots}
-    return {s0: find(owner[s0]) for s0 in starts}, result
+    return {s0: find(g) for s0, g in first.items()}, result
 
 
 def operations_from_symmetry(D: OrderedGraph, H: OrderedGraph, sym: Symmetry,
