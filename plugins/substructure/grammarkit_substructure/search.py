@@ -42,7 +42,7 @@ import itertools
 import operator
 from itertools import repeat
 from dataclasses import dataclass, field
-from typing import Callable, Iterable, Sequence
+from typing import Callable, Collection, Iterable, Sequence
 
 import numpy as np
 
@@ -596,6 +596,8 @@ class _Pieces:
         self.floods_h: dict = self.floods_d if same else {}
         self.rest_d: dict = {}
         self.rest_h: dict = self.rest_d if same else {}
+        self.connected_d = not len(D) or not D.outside_component(0)
+        self.connected_h = not len(H) or not H.outside_component(0)
 
     @staticmethod
     def rest(G: OrderedGraph, v: int, cache: dict) -> Side:
@@ -618,10 +620,12 @@ class _Pieces:
             out = cache[key] = [*_flood_groups(G.nbrs, inside, starts), None]
         return out
 
-    def operations(self, pairs: Sequence[tuple[int, int]], rows: Sequence[Sequence[int]]) -> list[tuple]:
+    def operations(self, pairs: Sequence[tuple[int, int]], rows: Sequence[Sequence[int]],
+                   A: Collection[int] | None = None, B: Collection[int] | None = None) -> list[tuple]:
         """(cut pairs, removed Side, copied Side, recursive, size of both pieces) of every
         operation of the closed symmetry with the (a, f(a)) `pairs` (sorted by a); rows[k]: the
-        host neighbours of f(a) at a's edge positions (the correspondence sigma applied)."""
+        host neighbours of f(a) at a's edge positions (the correspondence sigma applied).
+        A, B: the matched nodes of each side, when the caller has them (the walk's dicts)."""
         D, H = self.D, self.H
         dn = D.nbrs
         if len(pairs) == 1:
@@ -636,8 +640,9 @@ class _Pieces:
                 return self.finish(tuple(bpairs), self.rest(H, b, self.rest_h), self.rest(D, a, self.rest_d))
             A, B = {a}, {b}
         else:
-            A = {x for x, _ in pairs}
-            B = {y for _, y in pairs}
+            if A is None or B is None:
+                A = {x for x, _ in pairs}
+                B = {y for _, y in pairs}
             bpairs = [(a, w, b, w2) for (a, b), row in zip(pairs, rows)
                       for w, w2 in zip(dn[a], row) if w not in A]
             if not bpairs:
@@ -646,8 +651,8 @@ class _Pieces:
         flood_h = self._flood(H, B, [p[3] for p in bpairs], self.floods_h)
         gd, comps_d = flood_d[0], flood_d[1]
         gh, comps_h = flood_h[0], flood_h[1]
-        other_d = D.outside_component(pairs[0][0])
-        other_h = H.outside_component(pairs[0][1])
+        other_d = () if self.connected_d else D.outside_component(pairs[0][0])
+        other_h = () if self.connected_h else H.outside_component(pairs[0][1])
         if len(comps_d) == 1 and len(comps_h) == 1:  # one group: one operation
             # its pieces depend on the flood only (the node set and the graph): made once
             if flood_d[2] is None:
@@ -824,9 +829,9 @@ def _operations_q0(D: OrderedGraph, H: OrderedGraph, same: bool, progress: Calla
                 if pairs not in ops:
                     ops[pairs] = (rs + cs, _operation(pairs, copied, removed, _REVERSED[rec], 1, 0))
             continue
-        fmap, _, rots = grown
+        fmap, inv, rots = grown
         pairs = sorted(fmap.items())
-        add(pieces.operations(pairs, [row_of(x2, rots[x]) for x, x2 in pairs]), len(pairs), 0)
+        add(pieces.operations(pairs, [row_of(x2, rots[x]) for x, x2 in pairs], fmap, inv), len(pairs), 0)
 
 
 # -- brute force (reference) -----------------------------------------------------------------
