@@ -24,7 +24,8 @@ EXAMPLES = ROOT / "grammars" / "tiling"
 
 
 def _bench():
-    spec = importlib.util.spec_from_file_location("bench_substructure", ROOT / "benchmarks" / "bench_substructure.py")
+    path = ROOT / "benchmarks" / "bench_substructure.py"
+    spec = importlib.util.spec_from_file_location("bench_substructure", path)
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)
     return mod

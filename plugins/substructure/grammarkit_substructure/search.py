@@ -429,14 +429,18 @@ def _walk_q0(D: OrderedGraph, H: OrderedGraph, same: bool, progress: Callable[[i
             for rot in range(max(d, 1)):
                 if same and a == b and rot == 0:
                     continue  # the identity
-                state = (a * nh + b) * kk + rot
-                if state in walked:
-                    continue
                 if not any(map(eq, na, nb_rot[rot])):
-                    # no compatible pair across the seed: the symmetry is {a -> b}
-                    if same:  # its inverse {b -> a}, rotation -rot
-                        walked.add((b * nh + a) * kk + ((-rot) % d if d else 0))
+                    # No compatible pair across the seed: the symmetry is {a -> b}. Such a
+                    # seed is in no walked closure (each of their states has a compatible
+                    # pair), so only its inverse can be hashed, and that is a seed of this
+                    # loop only when a = b (b < a is skipped above).
+                    if same and a == b:
+                        if (a * nh + a) * kk + rot in walked:
+                            continue
+                        walked.add((a * nh + a) * kk + ((-rot) % d if d else 0))
                     yield a, b, rot, None
+                    continue
+                if (a * nh + b) * kk + rot in walked:
                     continue
                 grown = _grow0(D, H, cd, ch, a, b, rot, walked, nh, kk)
                 if grown is None:
