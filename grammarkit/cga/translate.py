@@ -25,7 +25,7 @@ from lark import Token, Tree
 
 from ..errors import Diagnostic
 from ..ir import (
-    Arg, Attr, Binary, Bool, Branch, Case, CaseArm, Choice, ChoiceArm, Const, Grammar, Nil, Num,
+    Arg, Attr, Binary, Bool, Branch, Call, Case, CaseArm, Choice, ChoiceArm, Const, Grammar, Nil, Num,
     OpCall, Push, Ref, Repeat, Rule, Seq, Str, Successor, Terminal, Unary,
 )
 from ..ir.base import Span
@@ -1095,9 +1095,13 @@ def _h_set(t, args, block, star, frame, rctx, ctx, span, out):
         if isinstance(value, Bool) and not value.value:
             return [], None
         return [], ("set(trim.horizontal)", "grammarkit makes no horizontal trim planes")
-    if target and target.startswith("material."):
-        raise Untranslatable("op:set(material.*)", f"set({target}, ...): texturing and material "
-                             "properties are not supported", span)
+    if target and target.startswith("material.") and len(args) == 2:
+        value = translate_expr(args[1], ctx)
+        if target.endswith("map") and not _file_name(t, value):
+            raise Untranslatable("texture:expression", f"set({target}, ...) of a computed file name", span)
+        if target.endswith("map") and isinstance(value, Str) and value.value:
+            t.asset(value.value, span)  # listed in the report; the path is made relative on writing
+        return [OpCall(name="set", args=(Arg(value=Ref(name=target)), Arg(value=value)), span=span)], None
     if target and len(args) == 2:
         kinds = {v.name: v.kind for v in t.values}
         if kinds.get(target) == "attr":
@@ -1236,6 +1240,88 @@ def _h_taper(t, args, block, star, frame, rctx, ctx, span, out):
     return [OpCall(name="taper", args=(Arg(value=translate_expr(args[0], ctx)),), span=span)], None
 
 
+# -- texturing (grammarkit/split/texturing.py) -----------------------------------------------------
+# A CGA axis letter of setupProjection -> (grammarkit letter, reversed). World axes are y-up in
+# CGA and z-up in grammarkit, as the lot's scope (frame Y); a face's scope is the identity.
+def _projection_axis(frame: str, world: bool, letter: str) -> tuple[str, bool]:
+    return frames.axis("Y" if world else frame, letter)
+
+
+def _texture_size(tree: Any, size_ref: str, ctx: ExprContext) -> Any:
+    """A texture width/height: `'v` is v times the scope size along that axis, `~v` the size
+    nearest to v that fits a whole number of times into the scope (CGA's floating size)."""
+    if isinstance(tree, Tree) and tree.data == "floating":
+        v = translate_expr(tree.children[-1], ctx)
+        size = Ref(name=size_ref)
+        count = Call(func="max", args=(Num(value=1), Call(func="round", args=(Binary(op="/", left=size, right=v),))))
+        return Binary(op="/", left=size, right=count)
+    return _rel_or_abs(tree, size_ref, ctx)
+
+
+def _negated(e: Any) -> Any:
+    return Num(value=-e.value) if isinstance(e, Num) else Unary(op="-", operand=e)
+
+
+def _h_setup_projection(t, args, block, star, frame, rctx, ctx, span, out):
+    _need(args, 4, 7, "setupProjection", span)
+    axes = _axis_name(args[1]) or ""
+    origin, _, pair = axes.partition(".")
+    if origin not in ("scope", "world") or len(pair) != 2 or any(c not in "xyz" for c in pair) or pair[0] == pair[1]:
+        raise Untranslatable("setupProjection:axes", f"projection axes {axes!r}", span)
+    world = origin == "world"
+    uv_set = translate_expr(args[0], ctx)
+    letters, sizes, offs = [], [], []
+    for k, letter in enumerate(pair):
+        gk, rev = _projection_axis(frame, world, letter)
+        size = _texture_size(args[2 + k], "scope.s" + gk, ctx)
+        off = _rel_or_abs(args[4 + k], "scope.s" + gk, ctx) if len(args) > 4 + k else Num(value=0)
+        if rev:
+            # CGA's coordinate along this axis is -(grammarkit's) (world) or sy - y (a lot's
+            # scope: CGA's z runs from the back): the same tiles with a mirrored size
+            size = _negated(size)
+            off = _negated(off) if world else Binary(op="-", left=Ref(name="scope.s" + gk), right=off)
+        letters.append(gk)
+        sizes.append(size)
+        offs.append(off)
+    call_args_ = [Arg(value=uv_set), Arg(value=Ref(name=f"{origin}.{letters[0]}{letters[1]}")),
+                  Arg(value=sizes[0]), Arg(value=sizes[1])]
+    if not all(isinstance(o, Num) and o.value == 0 for o in offs):
+        call_args_ += [Arg(value=offs[0]), Arg(value=offs[1])]
+    call = OpCall(name="setupProjection", args=tuple(call_args_), span=span)
+    if len(args) == 7 and _literal_number(args[6]) != 0:
+        return [call], ("setupProjection:uwFactor", "the w texture coordinate (uwFactor) is not made")
+    return [call], None
+
+
+def _uv_op(gk: str, lo: int, hi: int):
+    def handler(t, args, block, star, frame, rctx, ctx, span, out):
+        _need(args, lo, hi, gk, span)
+        return [OpCall(name=gk, args=tuple(Arg(value=translate_expr(a, ctx)) for a in args), span=span)], None
+    return handler
+
+
+def _file_name(t: Any, value: Any) -> bool:
+    """Whether a translated value is a file name grammarkit can use: a string, or an attr or
+    const whose CGA value is a string literal."""
+    if isinstance(value, Str):
+        return True
+    if isinstance(value, Ref):
+        for v in t.values:
+            if t.value_names.get(v.name) == value.name:
+                return isinstance(v.value, Tree) and v.value.data == "string"
+    return False
+
+
+def _h_texture(t, args, block, star, frame, rctx, ctx, span, out):
+    _need(args, 1, 1, "texture", span)
+    path = translate_expr(args[0], ctx)
+    if not _file_name(t, path):  # as i(): grammarkit cannot tell the file from an expression
+        raise Untranslatable("texture:expression", "texture() of a computed file name", span)
+    if isinstance(path, Str) and path.value:
+        t.asset(path.value, span)  # listed in the report; made relative to the output on writing
+    return [OpCall(name="texture", args=(Arg(value=path),), span=span)], None
+
+
 _HANDLERS = {
     "extrude": _h_extrude, "split": _h_split, "comp": _h_comp, "offset": _h_offset,
     "roofGable": _roof("roofGable", 5), "roofHip": _roof("roofHip", 3),
@@ -1244,6 +1330,9 @@ _HANDLERS = {
     "i": _h_i, **{name: _h_primitive(name) for name in _PRIMITIVE_OPS},
     "alignScopeToGeometry": _h_align_scope_to_geometry, "alignScopeToAxes": _h_align_scope_to_axes,
     "rotateScope": _h_rotate_scope, "report": _h_report, "reverseNormals": _h_reverse_normals,
+    "setupProjection": _h_setup_projection, "projectUV": _uv_op("projectUV", 1, 1),
+    "texture": _h_texture, "translateUV": _uv_op("translateUV", 3, 3), "scaleUV": _uv_op("scaleUV", 3, 3),
+    "rotateUV": _uv_op("rotateUV", 2, 2), "deleteUV": _uv_op("deleteUV", 1, 1),
 }
 # Operations CGA writes without parentheses.
 _BARE_OPS = {"reverseNormals", "cleanupGeometry", "deleteHoles", "resetGeometry", "resetMaterial",

@@ -551,10 +551,15 @@ class _Compiler:
         fns = self._args(call, spec, scope, params)
         if call.name == "set" and fns:
             fns[0] = constant(self._set_key(call, scope))
-        if call.name == "i" and fns and is_constant(fns[0]) and not str(fns[0](None)).startswith("builtin:"):
+        # file names are relative to the grammar file that says them: made absolute here
+        path_arg = 0 if call.name in ("i", "texture") else (
+            1 if call.name == "set" and len(fns) > 1 and str(fns[0](None)).startswith("material.")
+            and str(fns[0](None)).endswith("map") else None)
+        if path_arg is not None and is_constant(fns[path_arg]) and isinstance(fns[path_arg](None), str) \
+                and fns[path_arg](None) and not fns[path_arg](None).startswith("builtin:"):
             base = Path(call.span.file).parent if call.span and call.span.file else (
                 Path(self.out.base_dir) if self.out.base_dir else Path("."))
-            fns[0] = constant(str((base / str(fns[0](None))).resolve()))
+            fns[path_arg] = constant(str((base / str(fns[path_arg](None))).resolve()))
         _raise_first(check_block(call, spec))
         block = None
         if call.block is not None:
@@ -566,6 +571,8 @@ class _Compiler:
         grammar's); a const, a parameter or an unknown name is an error at the name."""
         ref = call.args[0].value
         name = ref.name
+        if name.startswith("material."):  # CGA's material attributes (grammarkit.split.texturing)
+            return name
         if name in scope.local_attrs and name not in self.grammar_attrs:
             return f"{scope.anchor}.{name}"
         if name in self.grammar_attrs:

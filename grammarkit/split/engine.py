@@ -72,12 +72,14 @@ class Limits:
 class Tag:
     """Semantic tags of one solid or face terminal."""
 
-    __slots__ = ("name", "rule", "object_type", "color", "material", "node", "role")
+    __slots__ = ("name", "rule", "object_type", "color", "material", "node", "role", "texturing")
 
     def __init__(self, name: str, rule: str, object_type: str | None, color: str | None,
-                 material: str | None, node: int, role: str):
+                 material: str | None, node: int, role: str, texturing: Any = None):
         self.name, self.rule, self.object_type = name, rule, object_type
         self.color, self.material, self.node, self.role = color, material, node, role
+        # CGA texturing state (grammarkit.split.texturing.Texturing) or None
+        self.texturing = texturing
 
     def to_dict(self) -> dict:
         return {"name": self.name, "rule": self.rule, "object_type": self.object_type,
@@ -101,7 +103,7 @@ class Derivation:
         self.stack: list[tuple[Shape, tuple]] = []
         # tree: (parent, rule name, kind, origin, axes, size, seed, span, via)
         self.nodes: list[tuple] = []
-        self.tags: list[list] = []  # [name, rule, object type, colour, material, node, role]
+        self.tags: list[list] = []  # [name, rule, object type, colour, material, node, role, texturing]
         self.adds: list[Any] = []  # world-space solids to unite
         # recess cuts: (world-space solid, `on` of the face, tag, origin, axes, size, poly,
         # depth); subtracted when the face lies on an emitted solid, else shown as a reveal
@@ -210,7 +212,7 @@ class Derivation:
         # plain lists in the hot loop; Model turns them into Tag objects on demand
         rule = s.rule
         tags = self.tags
-        tags.append([name, rule.name, rule.otype, s.color, s.material, s.node, role])
+        tags.append([name, rule.name, rule.otype, s.color, s.material, s.node, role, s.tex])
         return len(tags) - 1
 
     def check_extent(self, s: Shape, box: tuple | None = None) -> None:
@@ -298,7 +300,7 @@ class Derivation:
             if s.cut >= 0:  # the recess this face came from takes the terminal's tags
                 t = self.tags[s.cut]
                 if t[6] == "cut-pending":
-                    t[:] = [name, s.rule.name, s.rule.otype, s.color, s.material, s.node, "cut"]
+                    t[:] = [name, s.rule.name, s.rule.otype, s.color, s.material, s.node, "cut", s.tex]
         else:
             tag = self._tag(s, name, "volume")
             self._add(s, tag)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import json
 import math
 import os
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import cached_property
 from typing import Any
 
@@ -178,6 +178,23 @@ def _rgba(hex_color: str | None, default: str) -> tuple[int, int, int, int]:
     return (int(h[0:2], 16), int(h[2:4], 16), int(h[4:6], 16), 255)
 
 
+def _material(name: str | None, rgba: tuple, cga: tuple) -> Any:
+    """The exporters' Material for a terminal's name, colour and CGA material attributes
+    (`set(material.*)`, `texture()`: grammarkit.split.texturing)."""
+    from ..geometry.exporters import Material
+
+    if not cga:
+        return Material(name, rgba)
+    d = dict(cga)
+    if "opacity" in d:
+        rgba = (*rgba[:3], int(round(d.pop("opacity") * 255)))
+    texture = d.pop("colormap", None)
+    metallic, roughness = d.pop("metallic", None), d.pop("roughness", None)
+    double_sided = bool(d.pop("doubleSided", False))
+    return Material(name, rgba, double_sided=double_sided, texture=texture, metallic=metallic,
+                    roughness=roughness, extras=tuple(sorted(d.items())))
+
+
 class Model:
     """One derived building.
 
@@ -291,7 +308,7 @@ class Model:
     def _paint_faces(self, out: np.ndarray) -> None:
         """Face terminals have no volume: they colour the body triangles lying in their region."""
         raw = self._ctx.tags  # plain lists [name, rule, otype, color, material, node, role]
-        faces = [f for f in self._ctx.painting if raw[f[0]][3] or raw[f[0]][4]]
+        faces = [f for f in self._ctx.painting if raw[f[0]][3] or raw[f[0]][4] or raw[f[0]][7] is not None]
         if not faces:
             return
         is_body = np.array([t[6] == "body" for t in raw] + [False], dtype=bool)
@@ -357,6 +374,37 @@ class Model:
         return trimesh.Trimesh(vertices=self.vertices, faces=self.faces, face_colors=colors, process=False,
                                metadata={"name": self.name, "seed": self.seed})
 
+    def _uvs(self, V: np.ndarray, F: np.ndarray, tags: np.ndarray, uv_set: int) -> np.ndarray | None:
+        """Texture coordinates (n, 3, 2) of triangles `F` (with tags `tags`, -1: none) in uv set
+        `uv_set`, NaN where the terminal has none; None when no triangle has any. Each tag's
+        UVs are an affine map of the world position (grammarkit.split.texturing)."""
+        raw = self._ctx.tags
+        maps = np.full((len(raw) + 1, 2, 4), np.nan)
+        any_uv = False
+        for i, t in enumerate(raw):
+            tex = t[7]
+            m = tex.get_uv(uv_set) if tex is not None else None
+            if m is not None:
+                maps[i] = m
+                any_uv = True
+        if not any_uv or not len(F):
+            return None
+        M = maps[tags]  # (n, 2, 4); -1 picks the NaN row appended last
+        P = V[F]  # (n, 3, 3)
+        return np.einsum("nkj,ncj->nck", M[:, :, :3], P) + M[:, None, :, 3]
+
+    @cached_property
+    def triangle_uvs(self) -> np.ndarray | None:
+        """CGA texture coordinates of uv set 0 at the three corners of every solid triangle
+        (shape (n, 3, 2); NaN where the terminal has none), or None when the model has no UVs
+        (docs/cga.md, "Texturing")."""
+        return self._uvs(self.vertices, self.faces, self.triangle_tags, 0)
+
+    @cached_property
+    def surface_uvs(self) -> np.ndarray | None:
+        """Like `triangle_uvs`, for the surface layer's triangles."""
+        return self._uvs(self.surface_vertices, self.surface_faces, self.surface_tags, 0)
+
     @property
     def triangle_materials(self) -> list[str | None]:
         return [self.tags[t].material if t >= 0 else None for t in self.triangle_tags]
@@ -416,7 +464,7 @@ class Model:
         per group the rules, source lines and semantic tags (docs/derive.md, "Files")."""
         from ..geometry.exporters import Material, Scene, Solid
 
-        raw = self._ctx.tags  # plain lists [name, rule, otype, color, material, node, role]
+        raw = self._ctx.tags  # plain lists [name, rule, otype, color, material, node, role, texturing]
         nodes = self._ctx.nodes
         group_of_name: dict[str, int] = {}
         material_index: dict[Material, int] = {}
@@ -427,23 +475,27 @@ class Model:
         tag_kind = np.empty(len(raw) + 1, dtype=np.int64)
         for i, t in enumerate(raw):
             span = nodes[t[5]][7] if 0 <= t[5] < len(nodes) else None
-            key = (t[0], t[1], t[2], t[3], t[4], t[6], span.file if span else None, span.line if span else None)
+            key = (t[0], t[1], t[2], t[3], t[4], t[6], span.file if span else None, span.line if span else None,
+                   t[7].mat if t[7] is not None else ())
             k = kind_of.get(key)
             if k is None:
                 k = kind_of[key] = len(kind_of)
             tag_kind[i] = k
-        untagged = (UNTAGGED, None, None, None, None, "untagged", None, None)
+        untagged = (UNTAGGED, None, None, None, None, "untagged", None, None, ())
         tag_kind[-1] = kind_of.setdefault(untagged, len(kind_of))
         kind_group = np.empty(len(kind_of), dtype=np.int64)
         kind_material = np.empty(len(kind_of), dtype=np.int64)
-        for (name, rule, otype, color, mat_name, role, file, line), k in kind_of.items():
-            rgba = _rgba(color, CUT_COLOR if role == "cut" else DEFAULT_COLOR)
+        for (name, rule, otype, color, mat_name, role, file, line, cga_mat), k in kind_of.items():
+            # a textured terminal without a colour is white, as CGA's default: glTF multiplies the
+            # texture by the base colour
+            textured = color is None and any(k == "colormap" for k, _ in cga_mat)
+            rgba = _rgba(color, "#ffffff" if textured else CUT_COLOR if role == "cut" else DEFAULT_COLOR)
             g = group_of_name.get(name)
             if g is None:
                 g = group_of_name[name] = len(info)
                 info.append({"terminal": name, "rules": set(), "sources": set(), "object_types": set(),
                              "roles": set(), "materials": set()})
-            mat = Material(mat_name, rgba)
+            mat = _material(mat_name, rgba, cga_mat)
             m = material_index.get(mat)
             if m is None:
                 m = material_index[mat] = len(materials)
@@ -477,7 +529,7 @@ class Model:
             face_group = tag_group[tri_tags]
             solids.append(Solid(name, self.vertices, self.faces, face_group, group_list(face_group, False),
                                 tag_material[tri_tags], materials,
-                                extras={"grammar": self.name, "seed": self.seed}))
+                                extras={"grammar": self.name, "seed": self.seed}, uv=self.triangle_uvs))
         if len(self.surface_faces):
             # the surface layer: its own node, flagged as a surface (no inside, not part of the
             # solid's watertight guarantee), double-sided materials (docs/language.md, "Solids and surfaces")
@@ -486,10 +538,11 @@ class Model:
             used = np.unique(tag_material[stags])
             remap = np.zeros(len(materials), dtype=np.int64)
             remap[used] = np.arange(len(used))
-            smats = [Material(materials[m].name, materials[m].rgba, double_sided=True) for m in used.tolist()]
+            smats = [replace(materials[m], double_sided=True) for m in used.tolist()]
             solids.append(Solid(f"{name} surfaces", self.surface_vertices, self.surface_faces, face_group,
                                 group_list(face_group, True), remap[tag_material[stags]], smats,
-                                extras={"grammar": self.name, "seed": self.seed, "surface": True}))
+                                extras={"grammar": self.name, "seed": self.seed, "surface": True},
+                                uv=self.surface_uvs))
         extras = {"grammar": self.name, "seed": self.seed,
                   "attrs": {k: v for k, v in self.attrs.items() if isinstance(v, (int, float, str, bool))},
                   "bindings": dict(self.bindings),
@@ -498,17 +551,29 @@ class Model:
             extras["reports"] = self.reports  # CGA's reports, in the building node's extras
         return Scene(name, solids, extras)
 
-    def save(self, path: Any, format: str | None = None) -> Any:
+    def save(self, path: Any, format: str | None = None, textures: str = "embed") -> Any:
         """Write the model through grammarkit's exporters (format from `format` or the suffix:
         glb, gltf, obj, stl, ply), atomically; returns the path. Colours, materials, terminal
-        groups and attrs are kept (see docs/derive.md, "Files")."""
+        groups and attrs are kept (see docs/derive.md, "Files"). glTF/GLB texture images (CGA
+        texturing, docs/cga.md) are embedded, or with `textures="reference"` referenced by
+        URIs relative to the written file."""
+        from dataclasses import replace as replace_spec
+        from functools import partial
         from pathlib import Path
 
-        from ..geometry.exporters import encode_with, exporter_for
+        from ..geometry.exporters import encode_glb, encode_gltf, encode_with, exporter_for
         from ..run.writer import write_files
 
         path = Path(path)
-        write_files({path: encode_with(exporter_for(path, format), self)})
+        spec = exporter_for(path, format)
+        if textures != "embed":
+            encoders = {"glb": encode_glb, "gltf": encode_gltf}
+            if textures != "reference":
+                raise ValueError(f"textures must be 'embed' or 'reference', got {textures!r}")
+            if spec.format in encoders:
+                spec = replace_spec(spec, encode=partial(encoders[spec.format], textures="reference",
+                                                         base=path.parent))
+        write_files({path: encode_with(spec, self)})
         return path
 
     def _repr_png_(self) -> bytes:

@@ -16,6 +16,9 @@ from ..registry import FitSpec, OperationSpec, Param
 AXES = ("x", "y", "z")
 FACE_SELECTORS = ("top", "bottom", "side", "front", "back", "left", "right", "all")
 # comp's selectors (grammarkit/split/comp.py); "<index>" stands for the integer selectors 0, 1, ...
+# setupProjection's axes (the same list as grammarkit.split.texturing.AXES; kept here so that
+# `grammarkit check` does not import the engine)
+PROJECTION_AXES = tuple(f"{o}.{a}" for o in ("scope", "world") for a in ("xy", "xz", "yx", "yz", "zx", "zy"))
 COMP_SELECTORS = FACE_SELECTORS + ("vertical", "horizontal", "aslant", "nutant", "volume", "<index>")
 
 class LazyApply:
@@ -97,7 +100,26 @@ _SPECS: tuple[OperationSpec, ...] = (
     OperationSpec("report", (Param("key", "string"), Param("value", "any")),
                   doc="Collect a value under a report key (Model.reports; the model's metadata)."),
     OperationSpec("set", (Param("attr", "name"), Param("value", "any")),
-                  doc="Change an attr for this shape and everything derived from it (CGA's set)."),
+                  doc="Change an attr for this shape and everything derived from it (CGA's set); "
+                      "`set(material.opacity, 0.5)` and the other CGA material attributes too."),
+    # texturing (grammarkit/split/texturing.py; docs/cga.md "Texturing")
+    OperationSpec("setupProjection", (Param("uvset"), Param("axes", "axis", choices=PROJECTION_AXES),
+                                      Param("width"), Param("height"),
+                                      Param("width_offset", required=False, default=0.0),
+                                      Param("height_offset", required=False, default=0.0)),
+                  doc="A planar texture projection for a uv set: origin and u/v axes of the scope or "
+                      "the world, a texture tile of width x height world units."),
+    OperationSpec("projectUV", (Param("uvset"),),
+                  doc="Bake the uv set's projection into the shape's texture coordinates."),
+    OperationSpec("texture", (Param("path", "string"),),
+                  doc="The colour texture (CGA's material.colormap) of the shape; makes no UVs."),
+    OperationSpec("translateUV", (Param("uvset"), Param("u"), Param("v")),
+                  doc="Shift the texture coordinates of a uv set (texture units)."),
+    OperationSpec("scaleUV", (Param("uvset"), Param("u"), Param("v")),
+                  doc="Scale the texture coordinates of a uv set."),
+    OperationSpec("rotateUV", (Param("uvset"), Param("angle")),
+                  doc="Turn the texture coordinates of a uv set about the uv origin (degrees)."),
+    OperationSpec("deleteUV", (Param("uvset"),), doc="Remove the texture coordinates of a uv set."),
 )
 
 
