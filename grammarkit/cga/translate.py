@@ -792,9 +792,19 @@ class Translator:
             key_tree = entry.children[0].children[0]
             sel = key_tree.children[0].value if isinstance(key_tree, Tree) and key_tree.data in (
                 "ref", "number") else None
+            approx_sel = None
             if mode == "offset-parts":
                 mapped = (sel,) if sel in ("inside", "border") else None
                 body_frame = frame
+            elif mode == "shape-parts":
+                mapped = (sel,) if sel in ("shape", "remainder") else None
+                body_frame = frame
+            elif mode == "edges":
+                if sel is not None and key_tree.data == "number":
+                    mapped = (int(float(sel)),) if float(sel).is_integer() else None
+                else:
+                    mapped, approx_sel = frames.edge_selectors(frame, sel) if sel else (None, None)
+                body_frame = frame  # setback faces and the remainder lie in the face's plane
             elif sel is not None and key_tree.data == "number":
                 # an index: CGA's and grammarkit's face orders agree (bottom 0, top 1, sides)
                 mapped = (int(float(sel)),) if float(sel).is_integer() and float(sel) >= 0 else None
@@ -808,10 +818,13 @@ class Translator:
                 self._record("selector", str(sel), "dropped", span, feature=f"comp-selector:{sel}",
                              message=f"comp selector {sel!r} is not supported", counting=rctx.counting)
                 continue
-            if entry.data == "merged_entry":
+            if entry.data == "merged_entry" and mode != "shape-parts":
                 self._record("selector", f"{sel}=", "approximated", span, feature="comp:merge",
                              message=f"'{sel} =' (the selected faces as one shape) sends each face "
                              "on its own", counting=rctx.counting)
+            elif approx_sel is not None:
+                self._record("selector", sel, "approximated", span, feature=f"setback-selector:{sel}",
+                             message=approx_sel, counting=rctx.counting)
             else:
                 self._record("selector", sel, "translated", span, counting=rctx.counting)
             for gsel in mapped:
@@ -1240,6 +1253,87 @@ def _h_taper(t, args, block, star, frame, rctx, ctx, span, out):
     return [OpCall(name="taper", args=(Arg(value=translate_expr(args[0], ctx)),), span=span)], None
 
 
+# -- lots (grammarkit/split/lots.py) --------------------------------------------------------------
+def _h_setback(gk: str):
+    def handler(t, args, block, star, frame, rctx, ctx, span, out):
+        if block is None:
+            raise Untranslatable(f"op:{gk}", f"{gk}() without a block", span)
+        _need(args, 1, 2, gk, span)
+        dist_tree = args[0]
+        op = gk
+        # setback(comp(fe) { all: expr }) is CGA's long form of setbackPerEdge(expr)
+        if isinstance(dist_tree, Tree) and dist_tree.data == "func_block_call":
+            inner = _comp_fe_all(dist_tree) if gk == "setback" else None
+            if inner is None:
+                raise Untranslatable("setback:array", "per-edge distances other than "
+                                     "comp(fe) { all: ... }", span)
+            op, dist_tree = "setbackPerEdge", inner
+        d = translate_expr(dist_tree, ctx)
+        entries = t.comp_entries(block, frame, rctx, "edges")
+        if not entries:
+            raise Untranslatable("setback:no-selector", "none of its selectors is supported", span)
+        call = OpCall(name=op, args=(Arg(value=d),), block=tuple(entries), span=span)
+        if len(args) == 2:
+            return [call], (f"{gk}:uvSet", "the uv set of uv selectors is ignored")
+        return [call], None
+    return handler
+
+
+def _comp_fe_all(tree: Tree) -> Any:
+    """The expression of `comp(fe) { all: expr }` (CGA's comp function), or None."""
+    name = next((c.value for c in tree.children if isinstance(c, Token)), None)
+    args = call_args(tree)
+    block = next((c for c in tree.children if isinstance(c, Tree) and c.data == "block"), None)
+    if name != "comp" or len(args) != 1 or _axis_name(args[0]) != "fe" or block is None:
+        return None
+    entries = [e for e in block.children if isinstance(e, Tree)]
+    if len(entries) != 1 or entries[0].data != "entry":
+        return None
+    key = entries[0].children[0].children[0]
+    if not (isinstance(key, Tree) and key.data == "ref" and key.children[0].value == "all"):
+        return None
+    body = entries[0].children[-1]
+    if isinstance(body, Tree) and body.data == "entry_body":
+        if len(body.children) != 1 or not isinstance(body.children[0], Tree):
+            return None
+        body = body.children[0]
+    # the entry was parsed as a rule body: its one item read back as an expression
+    if body.data == "call":
+        return Tree("func_call", body.children)
+    if body.data == "name":
+        return Tree("ref", body.children)
+    return body
+
+
+def _h_shape_op(gk: str, n: int):
+    def handler(t, args, block, star, frame, rctx, ctx, span, out):
+        if block is None:
+            raise Untranslatable(f"op:{gk}", f"{gk}() without a block", span)
+        _need(args, n, n, gk, span)
+        if frame != "Y":
+            raise Untranslatable(f"{gk}:face", f"{gk}() on a face of a volume (its front is CGA's "
+                                 "scope -z, which grammarkit's faces do not have)", span)
+        entries = t.comp_entries(block, frame, rctx, "shape-parts")
+        if not entries:
+            raise Untranslatable(f"{gk}:no-selector", "none of its selectors is supported", span)
+        return [OpCall(name=gk, args=tuple(Arg(value=translate_expr(a, ctx)) for a in args),
+                       block=tuple(entries), span=span)], None
+    return handler
+
+
+def _h_inner_rectangle(t, args, block, star, frame, rctx, ctx, span, out):
+    if block is None:
+        raise Untranslatable("op:innerRectangle", "innerRectangle without a block", span)
+    _need(args, 0, 1, "innerRectangle", span)
+    mode = _axis_name(args[0]) if args else "scope"
+    if mode not in ("scope", "edge"):
+        raise Untranslatable("innerRectangle:align", f"innerRectangle({mode})", span)
+    entries = t.comp_entries(block, frame, rctx, "shape-parts")
+    if not entries:
+        raise Untranslatable("innerRectangle:no-selector", "none of its selectors is supported", span)
+    return [OpCall(name="innerRectangle", args=(Arg(value=Ref(name=mode)),), block=tuple(entries), span=span)], None
+
+
 # -- texturing (grammarkit/split/texturing.py) -----------------------------------------------------
 # A CGA axis letter of setupProjection -> (grammarkit letter, reversed). World axes are y-up in
 # CGA and z-up in grammarkit, as the lot's scope (frame Y); a face's scope is the identity.
@@ -1333,6 +1427,10 @@ _HANDLERS = {
     "setupProjection": _h_setup_projection, "projectUV": _uv_op("projectUV", 1, 1),
     "texture": _h_texture, "translateUV": _uv_op("translateUV", 3, 3), "scaleUV": _uv_op("scaleUV", 3, 3),
     "rotateUV": _uv_op("rotateUV", 2, 2), "deleteUV": _uv_op("deleteUV", 1, 1),
+    "setback": _h_setback("setback"), "setbackPerEdge": _h_setback("setbackPerEdge"),
+    "setbackToArea": _h_setback("setbackToArea"), "shapeL": _h_shape_op("shapeL", 2),
+    "shapeU": _h_shape_op("shapeU", 3), "shapeO": _h_shape_op("shapeO", 4),
+    "innerRectangle": _h_inner_rectangle,
 }
 # Operations CGA writes without parentheses.
 _BARE_OPS = {"reverseNormals", "cleanupGeometry", "deleteHoles", "resetGeometry", "resetMaterial",

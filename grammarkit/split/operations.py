@@ -19,6 +19,9 @@ FACE_SELECTORS = ("top", "bottom", "side", "front", "back", "left", "right", "al
 # setupProjection's axes (the same list as grammarkit.split.texturing.AXES; kept here so that
 # `grammarkit check` does not import the engine)
 PROJECTION_AXES = tuple(f"{o}.{a}" for o in ("scope", "world") for a in ("xy", "xz", "yx", "yz", "zx", "zy"))
+# setback's edge selectors (grammarkit/split/lots.py)
+SETBACK_SELECTORS = ("front", "back", "left", "right", "top", "bottom", "side", "south", "north", "west", "east",
+                     "all", "remainder", "<index>")
 COMP_SELECTORS = FACE_SELECTORS + ("vertical", "horizontal", "aslant", "nutant", "volume", "<index>")
 
 class LazyApply:
@@ -102,6 +105,24 @@ _SPECS: tuple[OperationSpec, ...] = (
     OperationSpec("set", (Param("attr", "name"), Param("value", "any")),
                   doc="Change an attr for this shape and everything derived from it (CGA's set); "
                       "`set(material.opacity, 0.5)` and the other CGA material attributes too."),
+    # lots and massing (grammarkit/split/lots.py; docs/operations.md "Setbacks")
+    OperationSpec("setback", (Param("distance"),), block="selectors", selectors=SETBACK_SELECTORS,
+                  doc="Move the selected edges of a face inwards: a face per edge, and the remainder."),
+    OperationSpec("setbackPerEdge", (Param("distance", "expr"),), block="selectors", selectors=SETBACK_SELECTORS,
+                  doc="setback() with the distance evaluated on every edge (comp.index: the edge's index)."),
+    OperationSpec("setbackToArea", (Param("area"),), block="selectors", selectors=SETBACK_SELECTORS,
+                  doc="setback() with the distance that leaves a remainder of the given area."),
+    OperationSpec("shapeL", (Param("front_width"), Param("left_width")), block="selectors",
+                  selectors=("shape", "remainder"), doc="An L-shaped footprint: front and left wings."),
+    OperationSpec("shapeU", (Param("front_width"), Param("right_width"), Param("left_width")), block="selectors",
+                  selectors=("shape", "remainder"), doc="A U-shaped footprint: front, right and left wings."),
+    OperationSpec("shapeO", (Param("front_width"), Param("right_width"), Param("back_width"), Param("left_width")),
+                  block="selectors", selectors=("shape", "remainder"),
+                  doc="An O-shaped footprint: wings along all four sides around a court."),
+    OperationSpec("innerRectangle", (Param("align", "axis", required=False, default="scope",
+                                           choices=("scope", "edge")),),
+                  block="selectors", selectors=("shape", "remainder"),
+                  doc="The largest rectangle in a face (aligned to the scope or to an edge), and the rest."),
     # texturing (grammarkit/split/texturing.py; docs/cga.md "Texturing")
     OperationSpec("setupProjection", (Param("uvset"), Param("axes", "axis", choices=PROJECTION_AXES),
                                       Param("width"), Param("height"),

@@ -27,6 +27,9 @@ from .assets import builtin_asset, load_asset, load_asset_mesh
 from .engine import rotation
 from .scope_ops import op_align_scope_to_axes, op_align_scope_to_geometry, op_reverse_normals, op_rotate_scope
 from .shape import FACE, VOLUME, Shape
+from .lots import (
+    op_inner_rectangle, op_setback, op_setback_per_edge, op_setback_to_area, op_shape_l, op_shape_o, op_shape_u,
+)
 from .texturing import (
     moved, op_delete_uv, op_project_uv, op_rotate_uv, op_scale_uv, op_setup_projection, op_texture, op_translate_uv,
     set_material,
@@ -603,6 +606,8 @@ BUILTIN_APPLY = {
     "setupProjection": op_setup_projection, "projectUV": op_project_uv, "texture": op_texture,
     "translateUV": op_translate_uv, "scaleUV": op_scale_uv, "rotateUV": op_rotate_uv,
     "deleteUV": op_delete_uv,
+    "setback": op_setback, "setbackPerEdge": op_setback_per_edge, "setbackToArea": op_setback_to_area,
+    "shapeL": op_shape_l, "shapeU": op_shape_u, "shapeO": op_shape_o, "innerRectangle": op_inner_rectangle,
 }
 
 
