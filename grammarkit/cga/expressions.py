@@ -39,7 +39,7 @@ _FUNCTIONS: dict[str, tuple[str, int, int | None]] = {
 _TEXT_FUNCTIONS = {"str", "substring", "listItem", "listFirst", "listLast", "listRange", "replace"}
 _BINARY = {"+": "+", "-": "-", "*": "*", "/": "/", "%": "%", "==": "==", "!=": "!=",
            "<": "<", "<=": "<=", ">": ">", ">=": ">="}
-_INDEX_REFS = {"split.index", "split.total", "comp.index", "comp.total"}
+_INDEX_REFS = {"split.index", "split.total", "comp.index", "comp.total", "comp.sel"}
 _GEOMETRY_REFS = {"geometry.area", "geometry.volume", "geometry.nVertices", "geometry.isRectangular"}
 MAX_INLINE_DEPTH = 16
 

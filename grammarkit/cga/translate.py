@@ -46,8 +46,7 @@ _UI_ANNOTATIONS = {"@Order", "@Group", "@Description", "@Hidden", "@Color", "@Di
 
 # CGA operations grammarkit has no counterpart for yet. They are dropped with a warning whose
 # feature is `op:<name>`; listed here only to word the message.
-_TEXTURING = {"setupProjection", "projectUV", "texture", "tileUV", "translateUV", "rotateUV",
-              "scaleUV", "normalizeUV", "deleteUV", "setNormals", "softenNormals"}
+_TEXTURING = {"tileUV", "normalizeUV", "copyUV", "insertAlongUV", "setNormals", "softenNormals"}
 _METADATA = {"print", "label"}
 
 
@@ -695,7 +694,8 @@ class Translator:
         ctx = self._ctx(frame, rctx.params)
         if handler is None:
             if name in _TEXTURING:
-                why = "texturing and UVs are not supported"
+                why = ("grammarkit's texturing has no such operation (it has setupProjection, projectUV, "
+                       "translateUV, scaleUV, rotateUV, deleteUV, texture)")
             elif name in _METADATA:
                 why = "reports, prints and labels are not collected"
             elif name[:1].isupper():
@@ -799,6 +799,18 @@ class Translator:
             elif mode == "shape-parts":
                 mapped = (sel,) if sel in ("shape", "remainder") else None
                 body_frame = frame
+            elif mode == "components":
+                # edges and vertices: their scope is x along, y the normal, as CGA's faces (frame Z)
+                body_frame = "Z"
+                if sel is not None and key_tree.data == "number":
+                    mapped = (int(float(sel)),) if float(sel).is_integer() and float(sel) >= 0 else None
+                elif sel in ("all", "border", "inside", "eave", "ridge", "hip", "valley"):
+                    mapped = (sel,)
+                elif frame == "Y" and sel in ("front", "back", "left", "right", "top", "bottom", "side",
+                                              "vertical", "horizontal", "aslant", "nutant"):
+                    mapped = (sel,)  # classified about the up axis: CGA's y is grammarkit's z here
+                else:
+                    mapped = None
             elif mode == "edges":
                 if sel is not None and key_tree.data == "number":
                     mapped = (int(float(sel)),) if float(sel).is_integer() else None
@@ -955,8 +967,14 @@ def _h_comp(t, args, block, star, frame, rctx, ctx, span, out):
         entries = t.comp_entries(block, frame, rctx, "offset-parts")
         out.pop()
         return [prev.model_copy(update={"block": tuple(entries)})], None
+    if mode in ("e", "v"):
+        entries = t.comp_entries(block, frame, rctx, "components")
+        if not entries:
+            raise Untranslatable("comp:no-selector", "none of its selectors is supported", span)
+        return [OpCall(name="comp", args=(Arg(value=Ref(name=mode)),), block=tuple(entries), span=span)], None
     if mode != "f":
-        raise Untranslatable(f"op:comp({mode})", f"comp({mode}) is not supported (only comp(f))", span)
+        raise Untranslatable(f"op:comp({mode})", f"comp({mode}) is not supported (only comp(f), comp(e), "
+                             "comp(v))", span)
     entries = t.comp_entries(block, frame, rctx, "faces")
     if not entries:
         raise Untranslatable("comp:no-selector", "none of its selectors is supported", span)

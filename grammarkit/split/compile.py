@@ -417,6 +417,8 @@ class _Compiler:
                 return lambda s: s.si
             if name in ("split.total", "comp.total"):
                 return lambda s: s.st
+            if name == "comp.sel":
+                return lambda s: s.csel if type(s) is not ValueEnv else ""
             if name.startswith("geometry."):
                 from .geometry_queries import GEOMETRY_QUERIES
 

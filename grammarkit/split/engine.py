@@ -179,6 +179,9 @@ class Derivation:
                 c.si, c.st = item[2], item[3]
             else:
                 c.si, c.st = i, total  # split.index / split.total of the child
+            sel = slot.sel
+            if sel is not None:  # comp.sel: the branch's selector ("front", "3", ...)
+                c.csel = sel if type(sel) is str else str(sel)
             c._rng = None
             self._node(c, parent, via)
             pending.append((c, slot.body))

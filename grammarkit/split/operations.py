@@ -22,7 +22,9 @@ PROJECTION_AXES = tuple(f"{o}.{a}" for o in ("scope", "world") for a in ("xy", "
 # setback's edge selectors (grammarkit/split/lots.py)
 SETBACK_SELECTORS = ("front", "back", "left", "right", "top", "bottom", "side", "south", "north", "west", "east",
                      "all", "remainder", "<index>")
-COMP_SELECTORS = FACE_SELECTORS + ("vertical", "horizontal", "aslant", "nutant", "volume", "<index>")
+COMP_SELECTORS = FACE_SELECTORS + ("vertical", "horizontal", "aslant", "nutant", "volume", "<index>",
+                                   # comp(e) / comp(v) (grammarkit/split/comp_edges.py)
+                                   "border", "inside", "eave", "ridge", "hip", "valley")
 
 class LazyApply:
     """`apply` of a built-in operation: imports grammarkit.split.ops when first called.
@@ -49,10 +51,11 @@ _SPECS: tuple[OperationSpec, ...] = (
     OperationSpec("extrude", (Param("height"),), doc="Extrude a face along its normal into a volume."),
     OperationSpec("taper", (Param("height"), Param("top_scale", required=False, default=0.0)),
                   doc="Extrude a face, scaling the top about the centroid (0: to a point)."),
-    OperationSpec("comp", (Param("mode", "axis", choices=("f",)),), block="selectors",
+    OperationSpec("comp", (Param("mode", "axis", choices=("f", "e", "v")),), block="selectors",
                   selectors=COMP_SELECTORS,
-                  doc="Decompose a shape into its faces (the shape is consumed unless `volume:` "
-                      "keeps it); selectors by orientation, `all`, an index, `volume`."),
+                  doc="Decompose a shape into its faces (f), edges (e) or vertices (v) (the shape is "
+                      "consumed unless `volume:` keeps it); selectors by orientation, `all`, an index, "
+                      "`volume`; for edges also `border`, `inside`, `eave`, `ridge`, `hip`, `valley`."),
     OperationSpec("split", (Param("axis", "axis", choices=AXES),), block="sizes",
                   doc="Split the scope along an axis into absolute, relative and floating parts."),
     OperationSpec("repeat", (Param("axis", "axis", choices=AXES), Param("size"),
