@@ -250,6 +250,18 @@ def _call(name: str, args: list[Any], span: Span | None, ctx: ExprContext) -> An
         if len(args) < lo or (hi is not None and len(args) > hi):
             raise Untranslatable(f"fn:{name}", f"{name}() with {len(args)} arguments", span)
         return Call(func=gk, args=tuple(translate_expr(a, ctx) for a in args), span=span)
+    if name in ("inside", "overlaps", "touches") and len(args) <= 2:
+        # occlusion queries: the target keyword and the label as literal strings
+        target = args[0].children[0].value if args and isinstance(args[0], Tree) and args[0].data == "ref" else None
+        if args and target not in ("intra", "inter", "all"):
+            raise Untranslatable(f"fn:{name}", f"{name}() target {target!r}", span)
+        out = [Str(value=target, span=span)] if args else []
+        if len(args) == 2:
+            label = translate_expr(args[1], ctx)
+            if not isinstance(label, Str):
+                raise Untranslatable(f"fn:{name}", f"{name}() with a computed label", span)
+            out.append(label)
+        return Call(func=name, args=tuple(out), span=span)
     if name == "listRandom" and len(args) == 1:
         # an item drawn uniformly: listItem(l, floor(rand(0, listSize(l))))
         lst = translate_expr(args[0], ctx)

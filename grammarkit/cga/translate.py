@@ -47,7 +47,7 @@ _UI_ANNOTATIONS = {"@Order", "@Group", "@Description", "@Hidden", "@Color", "@Di
 # CGA operations grammarkit has no counterpart for yet. They are dropped with a warning whose
 # feature is `op:<name>`; listed here only to word the message.
 _TEXTURING = {"tileUV", "normalizeUV", "copyUV", "insertAlongUV", "setNormals", "softenNormals"}
-_METADATA = {"print", "label"}
+_METADATA = {"print"}
 
 
 @dataclass
@@ -697,7 +697,7 @@ class Translator:
                 why = ("grammarkit's texturing has no such operation (it has setupProjection, projectUV, "
                        "translateUV, scaleUV, rotateUV, deleteUV, texture)")
             elif name in _METADATA:
-                why = "reports, prints and labels are not collected"
+                why = "prints are not collected (report() is)"
             elif name[:1].isupper():
                 why = ("no rule of this name and arity in this file (a rule that an importing "
                        "file defines?)")
@@ -1339,6 +1339,12 @@ def _h_shape_op(gk: str, n: int):
     return handler
 
 
+def _h_label(t, args, block, star, frame, rctx, ctx, span, out):
+    _need(args, 1, 1, "label", span)
+    name = translate_expr(args[0], ctx)
+    return [OpCall(name="label", args=(Arg(value=name),), span=span)], None
+
+
 def _h_inner_rectangle(t, args, block, star, frame, rctx, ctx, span, out):
     if block is None:
         raise Untranslatable("op:innerRectangle", "innerRectangle without a block", span)
@@ -1448,7 +1454,7 @@ _HANDLERS = {
     "setback": _h_setback("setback"), "setbackPerEdge": _h_setback("setbackPerEdge"),
     "setbackToArea": _h_setback("setbackToArea"), "shapeL": _h_shape_op("shapeL", 2),
     "shapeU": _h_shape_op("shapeU", 3), "shapeO": _h_shape_op("shapeO", 4),
-    "innerRectangle": _h_inner_rectangle,
+    "innerRectangle": _h_inner_rectangle, "label": _h_label,
 }
 # Operations CGA writes without parentheses.
 _BARE_OPS = {"reverseNormals", "cleanupGeometry", "deleteHoles", "resetGeometry", "resetMaterial",

@@ -122,6 +122,10 @@ class Derivation:
         # report(key, value) calls in derivation order: key -> values (CGA's reports)
         self.reports: dict[str, list] = {}
         self.est_tris = 0
+        # occluders for inside()/overlaps()/touches() (grammarkit/split/occlusion.py): kept only
+        # when the grammar asks such queries (terminals are registered as they are made)
+        self.occlusion: Any = None
+        self.track_occlusion = bool(getattr(compiled, "uses_occlusion", False))
         self.context = OperationContext(self)
 
     # -- bookkeeping --------------------------------------------------------------------
@@ -192,6 +196,15 @@ class Derivation:
         self.stack.append((s, steps))
 
     def run(self) -> None:
+        from .occlusion import set_active
+
+        previous = set_active(self)  # occlusion queries find their derivation through it
+        try:
+            self._run()
+        finally:
+            set_active(previous)
+
+    def _run(self) -> None:
         stack = self.stack
         while stack:
             s, steps = stack.pop()
@@ -201,6 +214,14 @@ class Derivation:
                     break
             else:
                 self.leaf(s, s.rule.name)
+
+    def occluder(self, s: Shape, label: str | None) -> None:
+        """Register `s`'s geometry for the occlusion queries of later shapes."""
+        if self.occlusion is None:
+            from .occlusion import Occlusion
+
+            self.occlusion = Occlusion()
+        self.occlusion.add(s, label)
 
     def run_inline(self, s: Shape, steps: tuple) -> Shape | None:
         """Run a nested sequence (a case arm, a choice) on `s`; returns what is left of it."""
@@ -308,6 +329,8 @@ class Derivation:
             tag = self._tag(s, name, "volume")
             self._add(s, tag)
         self.leaves.append((tag, s.o, s.ax, s.sz))
+        if self.track_occlusion:
+            self.occluder(s, None)
 
     def add_body(self, s: Shape) -> None:
         """A volume decomposed by comp(f) stays as the solid body its faces decorate."""

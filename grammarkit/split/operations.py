@@ -126,6 +126,9 @@ _SPECS: tuple[OperationSpec, ...] = (
                                            choices=("scope", "edge")),),
                   block="selectors", selectors=("shape", "remainder"),
                   doc="The largest rectangle in a face (aligned to the scope or to an edge), and the rest."),
+    OperationSpec("label", (Param("name", "string"),),
+                  doc="Make the shape (as it is now) an occluder with this label for inside(), "
+                      "overlaps() and touches() of shapes derived later."),
     # texturing (grammarkit/split/texturing.py; docs/cga.md "Texturing")
     OperationSpec("setupProjection", (Param("uvset"), Param("axes", "axis", choices=PROJECTION_AXES),
                                       Param("width"), Param("height"),
@@ -179,6 +182,11 @@ def grammarkit_insert_fits() -> Iterable[FitSpec]:
 @hookimpl
 def grammarkit_functions() -> Iterable[Any]:
     """CGA's string and list functions (grammarkit/split/strings.py; pure Python, light)."""
+    from ..registry import FunctionSpec
     from .strings import STRING_FUNCTIONS
 
-    return STRING_FUNCTIONS
+    # CGA's occlusion queries: the split compiler binds them to the shape they are evaluated on
+    # (grammarkit/split/occlusion.py), so they have no value-only implementation here
+    occlusion = tuple(FunctionSpec(name, 0, 2, f"CGA's {name}(target = \"intra\", label): a query against the "
+                                   "model derived so far (split grammars)") for name in ("inside", "overlaps", "touches"))
+    return (*STRING_FUNCTIONS, *occlusion)
