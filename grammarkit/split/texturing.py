@@ -20,6 +20,7 @@ operation runs): copies share it, operations replace it.
 from __future__ import annotations
 
 import math
+from functools import lru_cache
 from typing import Any
 
 from .shape import Shape
@@ -230,13 +231,9 @@ def set_material(ctx: Any, s: Shape, key: str, value: Any) -> Shape:
         value = bool(value)
     elif sub.endswith("map"):
         value = str(value)
-        if value and not value.startswith("builtin:"):
-            from pathlib import Path
-
-            p = Path(value) if Path(value).is_absolute() else Path(ctx.base_dir or ".") / value
-            if not p.is_file():
-                ctx.warn(f"set({key}, ...): texture file not found: {value} (the material is exported "
-                         "without it)")
+        if value and not value.startswith("builtin:") and not _is_file(value, ctx.base_dir or "."):
+            ctx.warn(f"set({key}, ...): texture file not found: {value} (the material is exported "
+                     "without it)")
         value = value or None  # "" clears the map, as in CGA
     elif isinstance(value, tuple):
         raise ValueError(f"set({key}, ...): the value must be a number, a string or a boolean")
@@ -244,11 +241,29 @@ def set_material(ctx: Any, s: Shape, key: str, value: Any) -> Shape:
     return c
 
 
+@lru_cache(maxsize=256)
+def _is_file(path: str, base: str) -> bool:
+    """Whether a texture file exists (asked once per path: facades set the same map thousands
+    of times; a file appearing during a derivation is not looked for again)."""
+    from pathlib import Path
+
+    p = Path(path) if Path(path).is_absolute() else Path(base) / path
+    return p.is_file()
+
+
 def moved(s: Shape, o: tuple, ax: tuple, f: tuple = (1.0, 1.0, 1.0)) -> None:
     """`s`'s geometry was moved from the frame (o, ax) to its current scope, scaled by `f` per
     scope axis (s()): its baked UVs move along (uv(p_new) = uv_old(p_old))."""
     st = s.tex
     if st is None or not st.uv:
+        return
+    if ax == s.ax and f == (1.0, 1.0, 1.0):
+        # a translation by d (t, center): uv(p) = M (p - d), only the constant column changes
+        if o == s.o:
+            return
+        d = (s.o[0] - o[0], s.o[1] - o[1], s.o[2] - o[2])
+        s.tex = st.replace(uv=tuple((k, tuple((r[0], r[1], r[2], r[3] - r[0] * d[0] - r[1] * d[1] - r[2] * d[2])
+                                              for r in m)) for k, m in st.uv))
         return
     # p_old = o + A diag(1/f) A'^T (p_new - o')  ->  a 4 x 4 affine map T; new Mat = Mat @ T
     A, B = ax, s.ax
