@@ -202,3 +202,20 @@ def test_untextured_models_are_unchanged():
     assert m.triangle_uvs is None and m.surface_uvs is None
     assert all(t.texturing is None for t in m.tags)
     assert math.isclose(m.manifold.volume(), 10 * 8 * 6, rel_tol=1e-2)
+
+
+def test_the_cli_writes_textured_glb(tmp_path, png):
+    from click.testing import CliRunner
+
+    from grammarkit.cli import main
+
+    (tmp_path / "t.grammar").write_text(
+        'Lot --> extrude(6) comp(f) { side: setupProjection(0, scope.xy, 2, 3) texture("bricks.png") projectUV(0) '
+        "Wall. | volume: Mass. }\n")
+    out = tmp_path / "out.glb"
+    res = CliRunner().invoke(main, ["derive", str(tmp_path / "t.grammar"), "-o", str(out)])
+    assert res.exit_code == 0, res.output
+    data = out.read_bytes()
+    doc = json.loads(data[20:20 + int.from_bytes(data[12:16], "little")])
+    assert doc["images"][0]["mimeType"] == "image/png"
+    assert any("TEXCOORD_0" in p["attributes"] for m in doc["meshes"] for p in m["primitives"])
