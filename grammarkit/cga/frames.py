@@ -42,7 +42,10 @@ _SELECTORS: dict[str, dict[str, tuple[str, ...]]] = {
           "nutant": ("nutant",)},
     "Z": {"front": ("top",), "back": ("bottom",), "left": ("left",), "right": ("right",),
           "top": ("back",), "bottom": ("front",), "side": ("top", "bottom", "left", "right"),
-          "all": ("all",)},
+          "all": ("all",),
+          # CGA's horizontal faces look along its y (up the facade): grammarkit's +-y, the
+          # quadrants `back`/`front` (exact for boxes); vertical ones are the other four
+          "horizontal": ("back", "front"), "vertical": ("top", "bottom", "left", "right")},
 }
 
 

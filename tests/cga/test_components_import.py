@@ -32,3 +32,13 @@ def test_orientation_selectors_on_a_face_volume_are_reported():
                       filename="t.cga")
     assert r.ok
     assert {c.feature for c in r.report.constructs if c.status == "dropped"} == {"comp-selector:vertical"}
+
+
+def test_horizontal_and_vertical_faces_of_a_volume_on_a_facade():
+    r = translate_cga("Lot --> extrude(6) comp(f) { front: B }\nB --> extrude(1) comp(f) { horizontal: H | vertical: V }\n",
+                      filename="t.cga")
+    assert r.ok and r.report.warned == 0
+    m = grammarkit.derive(r.grammar, lot=LOT)
+    sizes = sorted((p.name, tuple(round(v, 6) for v in p.size)) for p in m.parts)
+    # the balcony's top and bottom slabs are CGA's horizontal faces; its front, back and ends vertical
+    assert sizes == [("H", (20.0, 1.0, 0.0))] * 2 + [("V", (6.0, 1.0, 0.0))] * 2 + [("V", (20.0, 6.0, 0.0))] * 2
