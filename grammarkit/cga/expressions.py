@@ -108,10 +108,17 @@ class ExprContext:
     inlining: tuple[str, ...] = ()
     # Called for every CGA function that was inlined (its declaration counts as translated).
     on_inline: Callable[[str], None] | None = None
+    # Inside an s()/t()/setupProjection argument: the grammarkit scope size a `'v` anywhere in
+    # the expression is relative to (`'1 + 0.3` is scope.sy + 0.3); None elsewhere.
+    relative: str | None = None
 
     def with_frame(self, frame: frames.Frame) -> "ExprContext":
         return ExprContext(self.filename, frame, self.params, self.values, self.functions,
-                           self.bound, self.inlining, self.on_inline)
+                           self.bound, self.inlining, self.on_inline, self.relative)
+
+    def with_relative(self, size_ref: str | None) -> "ExprContext":
+        return ExprContext(self.filename, self.frame, self.params, self.values, self.functions,
+                           self.bound, self.inlining, self.on_inline, size_ref)
 
 
 def translate_expr(node: Any, ctx: ExprContext) -> Any:
@@ -157,6 +164,10 @@ def translate_expr(node: Any, ctx: ExprContext) -> Any:
     if kind == "not_op":
         return Unary(op="!", operand=translate_expr(kids[-1], ctx), span=span)
     if kind == "rel":
+        if ctx.relative is not None:
+            v = translate_expr(kids[-1], ctx)
+            size = Ref(name=ctx.relative, span=span)
+            return size if isinstance(v, Num) and v.value == 1 else Binary(op="*", left=v, right=size, span=span)
         raise Untranslatable("expr:relative", "a relative value ' outside a split size or "
                              "s()/t() argument is not supported", span)
     if kind == "floating":

@@ -1016,13 +1016,9 @@ def _roof(gk: str, max_args: int):
 
 
 def _rel_or_abs(tree: Any, size_ref: str, ctx: ExprContext) -> Any:
-    """An s()/t() argument: `'v` is v times the scope size along that axis."""
-    if isinstance(tree, Tree) and tree.data == "rel":
-        v = translate_expr(tree.children[-1], ctx)
-        if isinstance(v, Num) and v.value == 1:
-            return Ref(name=size_ref)
-        return Binary(op="*", left=v, right=Ref(name=size_ref))
-    return translate_expr(tree, ctx)
+    """An s()/t() argument: `'v` is v times the scope size along that axis, also inside the
+    argument's expression (`'1 + 0.3`: the size plus 0.3)."""
+    return translate_expr(tree, ctx.with_relative(size_ref))
 
 
 def _is_rel_one(tree: Any) -> bool:
@@ -1191,6 +1187,8 @@ def _h_align_scope_to_geometry(t, args, block, star, frame, rctx, ctx, span, out
     if len(args) == 3:
         if _axis_name(args[2]) == "longest":
             edge = Str(value="longest")
+        elif _axis_name(args[2]) == "world.lowest":
+            edge = Str(value="lowest")
         elif _axis_name(args[2]) is not None and "." in (_axis_name(args[2]) or ""):
             raise Untranslatable("alignScopeToGeometry:orientation", f"edge orientation "
                                  f"{_axis_name(args[2])!r}", span)
