@@ -8,8 +8,8 @@ labelled "wall". The targets are CGA's: `"intra"` (this building's shapes; the d
 `"all"` mean the same here, because a derivation builds one lot; `"inter"` (other lots) finds
 nothing.
 
-Candidates are found by their world bounding boxes in an R-tree (the `rtree` package, a
-grammarkit dependency), then tested exactly with manifold3d booleans:
+Candidates are found by their scope boxes in an R-tree (the `rtree` package, a grammarkit
+dependency); only those are built as solids (once) and tested exactly with manifold3d booleans:
 
 - `overlaps()`: the shape shrunk by a tolerance T (1 mm) on every side intersects an occluder;
 - `touches()`: it does not overlap any, but the shape grown by T intersects one (shared faces,
@@ -80,37 +80,56 @@ def _solid(s: Shape, grow: float, thick: float) -> Any:
     return None if solid.is_empty() else solid
 
 
-def _box(solid: Any) -> tuple:
-    return tuple(solid.bounding_box())
-
-
 class Occlusion:
     """The occluders of one derivation: (tree node, label, world solid) with an R-tree of their
     bounding boxes."""
 
     def __init__(self) -> None:
-        self.items: list[tuple[int, str | None, Any]] = []
+        # (tree node, label, the shape, its solid once a query needed it)
+        self.items: list[list] = []
         self._index: Any = None
 
     def add(self, s: Shape, label: str | None) -> None:
-        solid = _solid(s, 0.0, TOLERANCE / 10)
-        if solid is None:
-            return
+        if s.kind == FACE and (s.sz[0] <= 1e-9 or s.sz[1] <= 1e-9):
+            return  # an edge or a vertex: never an occluder
         if self._index is None:
             from rtree import index
 
             props = index.Property()
             props.dimension = 3
             self._index = index.Index(properties=props)
-        self._index.insert(len(self.items), _box(solid))
-        self.items.append((s.node, label, solid))
+        # the scope box (which holds the geometry) grown by the tolerance: the solid itself is
+        # built only when a query's box meets this one
+        self._index.insert(len(self.items), _scope_box(s))
+        self.items.append([s.node, label, s, None])
 
     def candidates(self, box: tuple, exclude: set[int], label: str | None) -> list[Any]:
         if self._index is None:
             return []
-        hits = sorted(self._index.intersection(box))  # deterministic order
-        return [self.items[i][2] for i in hits
-                if self.items[i][0] not in exclude and (label is None or self.items[i][1] == label)]
+        out = []
+        for i in sorted(self._index.intersection(box)):  # deterministic order
+            item = self.items[i]
+            if item[0] in exclude or (label is not None and item[1] != label):
+                continue
+            if item[3] is None:
+                item[3] = _solid(item[2], 0.0, TOLERANCE / 10) or False
+            if item[3] is not False:
+                out.append(item[3])
+        return out
+
+
+def _scope_box(s: Shape) -> tuple:
+    """World bounding box of the scope, grown by the tolerance."""
+    xs, ys, zs = [], [], []
+    for cx in (0.0, s.sz[0]):
+        for cy in (0.0, s.sz[1]):
+            for cz in (0.0, s.sz[2]):
+                x, y, z = s.world(cx, cy, cz)
+                xs.append(x)
+                ys.append(y)
+                zs.append(z)
+    t = TOLERANCE
+    return (min(xs) - t, min(ys) - t, min(zs) - t, max(xs) + t, max(ys) + t, max(zs) + t)
 
 
 def _ancestors(derivation: Any, node: int) -> set[int]:
