@@ -109,6 +109,7 @@ class Derivation:
         # depth); subtracted when the face lies on an emitted solid, else shown as a reveal
         self.cuts: list[tuple] = []
         self.post_adds: list[Any] = []  # solids to add after the cuts (built inside a recess)
+        self.add_boxes: list[tuple] = []  # world bounding box of each of `adds`
         self.id_tag: dict[int, int] = {}  # manifold original ID -> tag index
         self.faces: list[tuple] = []  # face terminals: (tag, origin, axes, size, poly, on)
         # geometry id of every volume emitted as a solid -> (scope when emitted, tag): a face
@@ -294,8 +295,15 @@ class Derivation:
         self.solid_of[s.gid] = ((s.o, s.ax, s.sz), tag)
         # solids built inside a recess (a mullion) are added after the cuts, or the cut eats them
         n = len(self.adds) + len(self.post_adds)
-        (self.post_adds if s.cut >= 0 else self.adds).append(
-            solid.transform(welded_frame(s.o, s.ax, s.sz, weld_of(n))))
+        frame_m = welded_frame(s.o, s.ax, s.sz, weld_of(n))
+        if s.cut >= 0:
+            self.post_adds.append(solid.transform(frame_m))
+        else:
+            self.adds.append(solid.transform(frame_m))
+            # its world bounding box, from the scope (cheaper than asking the transformed solid,
+            # which would apply the transform now): the final boolean groups solids by them
+            local = (0.0, 0.0, 0.0, *s.sz) if s.solid is None else solid.bounding_box()
+            self.add_boxes.append(_box_of(frame_m, local))
         self.est_tris += tris
         if self.est_tris > self.limits.max_triangles:  # stop now, not after building them all
             raise LimitError(
@@ -440,6 +448,22 @@ class OperationContext:
         if message not in d.warned:
             d.warned.add(message)
             d.warnings.append(message)
+
+
+def _box_of(m: list, local: tuple) -> tuple:
+    """The world bounding box of the local box `local` (x0, y0, z0, x1, y1, z1) under the
+    affine map `m` (3 x 4 rows)."""
+    lo, hi = [], []
+    for r in range(3):
+        row = m[r]
+        a = b = row[3]
+        for k in range(3):
+            u, v = row[k] * local[k], row[k] * local[k + 3]
+            a += min(u, v)
+            b += max(u, v)
+        lo.append(a)
+        hi.append(b)
+    return (lo[0], lo[1], lo[2], hi[0], hi[1], hi[2])
 
 
 def weld_of(n: int) -> float:

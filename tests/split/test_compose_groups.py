@@ -2,6 +2,8 @@
 the groups side by side (grammarkit/split/model.py): the same solid as one union of everything."""
 from __future__ import annotations
 
+from pathlib import Path
+
 import pytest
 
 import grammarkit
@@ -14,7 +16,11 @@ TEXT = ("Lot --> split(y) { 4: split(x) { { 1: extrude(3) comp(f) { front: split
 
 
 def test_grouped_union_equals_the_single_union(monkeypatch):
+    calls = []
+    real = split_model._compose_groups
+    monkeypatch.setattr(split_model, "_compose_groups", lambda *a: calls.append(len(a[2])) or real(*a))
     grouped = grammarkit.derive(TEXT, lot=LOT)
+    assert calls == [21]  # 20 kiosks and the wall, each united on its own
     monkeypatch.setattr(split_model, "MIN_GROUPED", 10 ** 9)  # force one union of everything
     single = grammarkit.derive(TEXT, lot=LOT)
     assert grouped.manifold.volume() == pytest.approx(single.manifold.volume(), rel=1e-9)
@@ -34,3 +40,10 @@ def test_groups_are_found_by_touching_boxes():
               cube.translate((10.0, 0, 0))]
     # 0-1 touch, 1-3 touch, 3-2 touch: one chain; the fifth apart
     assert split_model._disjoint_groups(solids) == [[0, 1, 2, 3], [4]]
+
+
+def test_a_connected_building_takes_the_single_union(monkeypatch):
+    calls = []
+    monkeypatch.setattr(split_model, "_disjoint_groups", lambda *a: calls.append(1) or [[0]])
+    m = grammarkit.derive(Path(__file__).resolve().parents[2] / "grammars" / "paris.grammar")
+    assert calls == [] and m.mesh.is_watertight  # no gap along an axis, fewer than 256 solids
