@@ -13,7 +13,9 @@
    corpus file that imports and derives (grammars/cga/*.cga, on a 20 x 16 m lot, assets
    dropped): median derive time over --building-runs runs, split into the final booleans
    (`grammarkit.split.model.compose`: union, cuts, mesh) and the rest (Python derivation),
-   with terminals, triangles (solid + surface layer) and the ratio Python / booleans.
+   with terminals, triangles (solid + surface layer) and the ratio Python / booleans; and the
+   booleans' baseline measured in the same run, one union of every solid (`1-union ms`,
+   grouping off), with its ratio to the grouped booleans (`x grouped`: > 1 is a speed-up).
    --only-buildings skips 1-3.
 
 Targets (issue 3): median <= 30 ms per Paris building and <= 2x the floor.
@@ -158,9 +160,10 @@ def per_building(runs: int) -> None:
         finally:
             spent.append(time.perf_counter() - t)
     split_model.compose = timed_compose
+    grouped_min = split_model.MIN_GROUPED
     try:
         print(f"\n{'building':34s} {'terminals':>9s} {'triangles':>9s} {'derive ms':>9s} "
-              f"{'boolean ms':>10s} {'python ms':>9s} {'py/bool':>7s}  note")
+              f"{'boolean ms':>10s} {'python ms':>9s} {'py/bool':>7s} {'1-union ms':>10s} {'x grouped':>9s}  note")
         for label, g, lot in _buildings():
             try:
                 kw = {"lot": lot} if lot else {}
@@ -169,20 +172,30 @@ def per_building(runs: int) -> None:
                 print(f"{label:34s} {'-':>9s} {'-':>9s} {'-':>9s} {'-':>10s} {'-':>9s} {'-':>7s}  "
                       f"does not derive: {type(exc).__name__}")
                 continue
-            totals, booleans = [], []
+            totals, booleans, single = [], [], []
             for _ in range(runs):
                 spent.clear()
                 t = time.perf_counter()
                 grammarkit.derive(g, seed=0, **kw)
                 totals.append(time.perf_counter() - t)
                 booleans.append(sum(spent))
+                # the baseline in the same run: one union of every solid (no grouping)
+                split_model.MIN_GROUPED = 10 ** 9
+                spent.clear()
+                try:
+                    grammarkit.derive(g, seed=0, **kw)
+                finally:
+                    split_model.MIN_GROUPED = grouped_min
+                single.append(sum(spent))
             d = statistics.median(totals) * 1e3
             b = statistics.median(booleans) * 1e3
+            b1 = statistics.median(single) * 1e3
             py = max(d - b, 0.0)
             print(f"{label:34s} {len(m.parts):9d} {m.triangle_count:9d} {d:9.1f} {b:10.1f} {py:9.1f} "
-                  f"{py / b if b > 0 else float('inf'):7.2f}")
+                  f"{py / b if b > 0 else float('inf'):7.2f} {b1:10.1f} {b1 / b if b > 0 else 1.0:9.2f}")
     finally:
         split_model.compose = compose
+        split_model.MIN_GROUPED = grouped_min
     print(f"(building runs={runs}, load average={os.getloadavg()[0]:.2f}; the machine is shared: "
           "numbers are noisy)")
 

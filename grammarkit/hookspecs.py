@@ -132,6 +132,10 @@ class ShapeView(Protocol):
     on: tuple | None
     trims: tuple  # CGA trim planes ((world point, world normal), ...) that clip inserted meshes
     trim_on: bool  # whether i() clips by them (CGA's trim.vertical; the trim() operation)
+    # CGA texturing state (grammarkit.split.texturing.Texturing: projections, baked UVs as affine
+    # maps of the world position, material attributes) or None. An operation that moves a
+    # shape's geometry calls grammarkit.split.texturing.moved so its UVs move along.
+    tex: Any
     # the attr/const values the shape's expressions read, shared between shapes until an
     # operation (CGA's set()) gives one shape a changed copy
     values: dict

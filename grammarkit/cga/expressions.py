@@ -39,7 +39,7 @@ _FUNCTIONS: dict[str, tuple[str, int, int | None]] = {
 _TEXT_FUNCTIONS = {"str", "substring", "listItem", "listFirst", "listLast", "listRange", "replace"}
 _BINARY = {"+": "+", "-": "-", "*": "*", "/": "/", "%": "%", "==": "==", "!=": "!=",
            "<": "<", "<=": "<=", ">": ">", ">=": ">="}
-_INDEX_REFS = {"split.index", "split.total", "comp.index", "comp.total"}
+_INDEX_REFS = {"split.index", "split.total", "comp.index", "comp.total", "comp.sel"}
 _GEOMETRY_REFS = {"geometry.area", "geometry.volume", "geometry.nVertices", "geometry.isRectangular"}
 MAX_INLINE_DEPTH = 16
 
@@ -108,10 +108,17 @@ class ExprContext:
     inlining: tuple[str, ...] = ()
     # Called for every CGA function that was inlined (its declaration counts as translated).
     on_inline: Callable[[str], None] | None = None
+    # Inside an s()/t()/setupProjection argument: the grammarkit scope size a `'v` anywhere in
+    # the expression is relative to (`'1 + 0.3` is scope.sy + 0.3); None elsewhere.
+    relative: str | None = None
 
     def with_frame(self, frame: frames.Frame) -> "ExprContext":
         return ExprContext(self.filename, frame, self.params, self.values, self.functions,
-                           self.bound, self.inlining, self.on_inline)
+                           self.bound, self.inlining, self.on_inline, self.relative)
+
+    def with_relative(self, size_ref: str | None) -> "ExprContext":
+        return ExprContext(self.filename, self.frame, self.params, self.values, self.functions,
+                           self.bound, self.inlining, self.on_inline, size_ref)
 
 
 def translate_expr(node: Any, ctx: ExprContext) -> Any:
@@ -157,6 +164,10 @@ def translate_expr(node: Any, ctx: ExprContext) -> Any:
     if kind == "not_op":
         return Unary(op="!", operand=translate_expr(kids[-1], ctx), span=span)
     if kind == "rel":
+        if ctx.relative is not None:
+            v = translate_expr(kids[-1], ctx)
+            size = Ref(name=ctx.relative, span=span)
+            return size if isinstance(v, Num) and v.value == 1 else Binary(op="*", left=v, right=size, span=span)
         raise Untranslatable("expr:relative", "a relative value ' outside a split size or "
                              "s()/t() argument is not supported", span)
     if kind == "floating":
@@ -250,6 +261,18 @@ def _call(name: str, args: list[Any], span: Span | None, ctx: ExprContext) -> An
         if len(args) < lo or (hi is not None and len(args) > hi):
             raise Untranslatable(f"fn:{name}", f"{name}() with {len(args)} arguments", span)
         return Call(func=gk, args=tuple(translate_expr(a, ctx) for a in args), span=span)
+    if name in ("inside", "overlaps", "touches") and len(args) <= 2:
+        # occlusion queries: the target keyword and the label as literal strings
+        target = args[0].children[0].value if args and isinstance(args[0], Tree) and args[0].data == "ref" else None
+        if args and target not in ("intra", "inter", "all"):
+            raise Untranslatable(f"fn:{name}", f"{name}() target {target!r}", span)
+        out = [Str(value=target, span=span)] if args else []
+        if len(args) == 2:
+            label = translate_expr(args[1], ctx)
+            if not isinstance(label, Str):
+                raise Untranslatable(f"fn:{name}", f"{name}() with a computed label", span)
+            out.append(label)
+        return Call(func=name, args=tuple(out), span=span)
     if name == "listRandom" and len(args) == 1:
         # an item drawn uniformly: listItem(l, floor(rand(0, listSize(l))))
         lst = translate_expr(args[0], ctx)

@@ -42,7 +42,10 @@ _SELECTORS: dict[str, dict[str, tuple[str, ...]]] = {
           "nutant": ("nutant",)},
     "Z": {"front": ("top",), "back": ("bottom",), "left": ("left",), "right": ("right",),
           "top": ("back",), "bottom": ("front",), "side": ("top", "bottom", "left", "right"),
-          "all": ("all",)},
+          "all": ("all",),
+          # CGA's horizontal faces look along its y (up the facade): grammarkit's +-y, the
+          # quadrants `back`/`front` (exact for boxes); vertical ones are the other four
+          "horizontal": ("back", "front"), "vertical": ("top", "bottom", "left", "right")},
 }
 
 
@@ -70,3 +73,35 @@ def center_axes(frame: Frame, axes: str) -> str | None:
     except KeyError:
         return None
     return "".join(sorted(mapped))
+
+
+# CGA setback edge selector -> (grammarkit selectors, approximation note or None). Edges are
+# classified by their outward normal in the face's plane: on a lot (frame Y) CGA's scope
+# quadrants front/back/left/right are grammarkit's, no edge is top/bottom and `side` is every
+# edge; on a facade (frame Z) top/bottom are grammarkit's top/bottom (the scope's +-y) and
+# front/back take no edge. World quadrants keep their names (grammarkit's world is z-up with
+# +y north, CGA's y-up with +z south). CGA's object and street quadrants fall back to the
+# scope ones (street.* needs CityEngine's street-width attributes, which grammarkit lots lack).
+_EDGE_BASE: dict[str, dict[str, tuple[str, ...]]] = {
+    "Y": {"front": ("front",), "back": ("back",), "left": ("left",), "right": ("right",), "top": (),
+          "bottom": (), "side": ("all",), "all": ("all",), "remainder": ("remainder",)},
+    "Z": {"front": (), "back": (), "left": ("left",), "right": ("right",), "top": ("top",), "bottom": ("bottom",),
+          "side": ("side",), "all": ("all",), "remainder": ("remainder",)},
+}
+_WORLD = {"world.south": ("south",), "world.north": ("north",), "world.west": ("west",), "world.east": ("east",),
+          "world.side": ("all",), "world.up": (), "world.down": ()}
+
+
+def edge_selectors(frame: Frame, selector: str) -> tuple[tuple[str, ...] | None, str | None]:
+    """(grammarkit selectors, approximation note) for a CGA setback selector; (None, None) if
+    there is no counterpart."""
+    if selector in _WORLD:
+        return _WORLD[selector], None
+    prefix, _, rest = selector.rpartition(".")
+    base = _EDGE_BASE[frame]
+    if prefix in ("object", "street") and rest in base:
+        return base[rest], (f"{selector} is taken as the scope's {rest} (grammarkit lots have no "
+                            f"{'street' if prefix == 'street' else 'object'} frame)")
+    if prefix:
+        return None, None
+    return base.get(selector), None

@@ -117,7 +117,7 @@ def _position(d: Diagnostic) -> tuple:
 
 
 def _relocate_assets(grammar: Grammar, report: ImportReport, output: "str | Path | None") -> Grammar:
-    """Point `i()` paths of found assets at the files, relative to the output grammar."""
+    """Point `i()` and texture paths of found assets at the files, relative to the output grammar."""
     found = {a["path"]: a["resolved"] for a in report.assets if a["found"]}
     if not found:
         return grammar
@@ -127,15 +127,25 @@ def _relocate_assets(grammar: Grammar, report: ImportReport, output: "str | Path
 
     def walk(node: Any) -> Any:
         if isinstance(node, dict):
-            if node.get("kind") == "op" and node.get("name") == "i" and node.get("args"):
-                first = node["args"][0]["value"]
-                if first.get("kind") == "str" and first["value"] in mapping:
-                    first["value"] = mapping[first["value"]]
+            if node.get("kind") == "op" and node.get("args") and (
+                    node.get("name") in ("i", "texture") or _is_material_map(node)):
+                arg = node["args"][0 if node.get("name") != "set" else 1]["value"]
+                if arg.get("kind") == "str" and arg["value"] in mapping:
+                    arg["value"] = mapping[arg["value"]]
             return {k: walk(v) for k, v in node.items()}
-        if isinstance(node, list):
+        if isinstance(node, (list, tuple)):  # pydantic dumps tuple fields (blocks) as tuples
             return [walk(v) for v in node]
         return node
     return Grammar.model_validate(walk(data))
+
+
+def _is_material_map(node: dict) -> bool:
+    """`set(material.colormap, "file")` and the other texture maps."""
+    if node.get("name") != "set" or len(node["args"]) != 2:
+        return False
+    target = node["args"][0]["value"]
+    name = target.get("name", "") if isinstance(target, dict) else ""
+    return name.startswith("material.") and name.endswith("map")
 
 
 def _check(result: ImportResult, out_text: str, output: "str | Path | None") -> None:

@@ -25,7 +25,7 @@ from lark import Token, Tree
 
 from ..errors import Diagnostic
 from ..ir import (
-    Arg, Attr, Binary, Bool, Branch, Case, CaseArm, Choice, ChoiceArm, Const, Grammar, Nil, Num,
+    Arg, Attr, Binary, Bool, Branch, Call, Case, CaseArm, Choice, ChoiceArm, Const, Grammar, Nil, Num,
     OpCall, Push, Ref, Repeat, Rule, Seq, Str, Successor, Terminal, Unary,
 )
 from ..ir.base import Span
@@ -46,9 +46,8 @@ _UI_ANNOTATIONS = {"@Order", "@Group", "@Description", "@Hidden", "@Color", "@Di
 
 # CGA operations grammarkit has no counterpart for yet. They are dropped with a warning whose
 # feature is `op:<name>`; listed here only to word the message.
-_TEXTURING = {"setupProjection", "projectUV", "texture", "tileUV", "translateUV", "rotateUV",
-              "scaleUV", "normalizeUV", "deleteUV", "setNormals", "softenNormals"}
-_METADATA = {"print", "label"}
+_TEXTURING = {"tileUV", "normalizeUV", "copyUV", "insertAlongUV", "setNormals", "softenNormals"}
+_METADATA = {"print"}
 
 
 @dataclass
@@ -695,9 +694,10 @@ class Translator:
         ctx = self._ctx(frame, rctx.params)
         if handler is None:
             if name in _TEXTURING:
-                why = "texturing and UVs are not supported"
+                why = ("grammarkit's texturing has no such operation (it has setupProjection, projectUV, "
+                       "translateUV, scaleUV, rotateUV, deleteUV, texture)")
             elif name in _METADATA:
-                why = "reports, prints and labels are not collected"
+                why = "prints are not collected (report() is)"
             elif name[:1].isupper():
                 why = ("no rule of this name and arity in this file (a rule that an importing "
                        "file defines?)")
@@ -792,9 +792,31 @@ class Translator:
             key_tree = entry.children[0].children[0]
             sel = key_tree.children[0].value if isinstance(key_tree, Tree) and key_tree.data in (
                 "ref", "number") else None
+            approx_sel = None
             if mode == "offset-parts":
                 mapped = (sel,) if sel in ("inside", "border") else None
                 body_frame = frame
+            elif mode == "shape-parts":
+                mapped = (sel,) if sel in ("shape", "remainder") else None
+                body_frame = frame
+            elif mode == "components":
+                # edges and vertices: their scope is x along, y the normal, as CGA's faces (frame Z)
+                body_frame = "Z"
+                if sel is not None and key_tree.data == "number":
+                    mapped = (int(float(sel)),) if float(sel).is_integer() and float(sel) >= 0 else None
+                elif sel in ("all", "border", "inside", "eave", "ridge", "hip", "valley"):
+                    mapped = (sel,)
+                elif frame == "Y" and sel in ("front", "back", "left", "right", "top", "bottom", "side",
+                                              "vertical", "horizontal", "aslant", "nutant"):
+                    mapped = (sel,)  # classified about the up axis: CGA's y is grammarkit's z here
+                else:
+                    mapped = None
+            elif mode == "edges":
+                if sel is not None and key_tree.data == "number":
+                    mapped = (int(float(sel)),) if float(sel).is_integer() else None
+                else:
+                    mapped, approx_sel = frames.edge_selectors(frame, sel) if sel else (None, None)
+                body_frame = frame  # setback faces and the remainder lie in the face's plane
             elif sel is not None and key_tree.data == "number":
                 # an index: CGA's and grammarkit's face orders agree (bottom 0, top 1, sides)
                 mapped = (int(float(sel)),) if float(sel).is_integer() and float(sel) >= 0 else None
@@ -808,10 +830,13 @@ class Translator:
                 self._record("selector", str(sel), "dropped", span, feature=f"comp-selector:{sel}",
                              message=f"comp selector {sel!r} is not supported", counting=rctx.counting)
                 continue
-            if entry.data == "merged_entry":
+            if entry.data == "merged_entry" and mode != "shape-parts":
                 self._record("selector", f"{sel}=", "approximated", span, feature="comp:merge",
                              message=f"'{sel} =' (the selected faces as one shape) sends each face "
                              "on its own", counting=rctx.counting)
+            elif approx_sel is not None:
+                self._record("selector", sel, "approximated", span, feature=f"setback-selector:{sel}",
+                             message=approx_sel, counting=rctx.counting)
             else:
                 self._record("selector", sel, "translated", span, counting=rctx.counting)
             for gsel in mapped:
@@ -942,8 +967,14 @@ def _h_comp(t, args, block, star, frame, rctx, ctx, span, out):
         entries = t.comp_entries(block, frame, rctx, "offset-parts")
         out.pop()
         return [prev.model_copy(update={"block": tuple(entries)})], None
+    if mode in ("e", "v"):
+        entries = t.comp_entries(block, frame, rctx, "components")
+        if not entries:
+            raise Untranslatable("comp:no-selector", "none of its selectors is supported", span)
+        return [OpCall(name="comp", args=(Arg(value=Ref(name=mode)),), block=tuple(entries), span=span)], None
     if mode != "f":
-        raise Untranslatable(f"op:comp({mode})", f"comp({mode}) is not supported (only comp(f))", span)
+        raise Untranslatable(f"op:comp({mode})", f"comp({mode}) is not supported (only comp(f), comp(e), "
+                             "comp(v))", span)
     entries = t.comp_entries(block, frame, rctx, "faces")
     if not entries:
         raise Untranslatable("comp:no-selector", "none of its selectors is supported", span)
@@ -985,13 +1016,9 @@ def _roof(gk: str, max_args: int):
 
 
 def _rel_or_abs(tree: Any, size_ref: str, ctx: ExprContext) -> Any:
-    """An s()/t() argument: `'v` is v times the scope size along that axis."""
-    if isinstance(tree, Tree) and tree.data == "rel":
-        v = translate_expr(tree.children[-1], ctx)
-        if isinstance(v, Num) and v.value == 1:
-            return Ref(name=size_ref)
-        return Binary(op="*", left=v, right=Ref(name=size_ref))
-    return translate_expr(tree, ctx)
+    """An s()/t() argument: `'v` is v times the scope size along that axis, also inside the
+    argument's expression (`'1 + 0.3`: the size plus 0.3)."""
+    return translate_expr(tree, ctx.with_relative(size_ref))
 
 
 def _is_rel_one(tree: Any) -> bool:
@@ -1095,9 +1122,13 @@ def _h_set(t, args, block, star, frame, rctx, ctx, span, out):
         if isinstance(value, Bool) and not value.value:
             return [], None
         return [], ("set(trim.horizontal)", "grammarkit makes no horizontal trim planes")
-    if target and target.startswith("material."):
-        raise Untranslatable("op:set(material.*)", f"set({target}, ...): texturing and material "
-                             "properties are not supported", span)
+    if target and target.startswith("material.") and len(args) == 2:
+        value = translate_expr(args[1], ctx)
+        if target.endswith("map") and not _file_name(t, value):
+            raise Untranslatable("texture:expression", f"set({target}, ...) of a computed file name", span)
+        if target.endswith("map") and isinstance(value, Str) and value.value:
+            t.asset(value.value, span)  # listed in the report; the path is made relative on writing
+        return [OpCall(name="set", args=(Arg(value=Ref(name=target)), Arg(value=value)), span=span)], None
     if target and len(args) == 2:
         kinds = {v.name: v.kind for v in t.values}
         if kinds.get(target) == "attr":
@@ -1156,6 +1187,8 @@ def _h_align_scope_to_geometry(t, args, block, star, frame, rctx, ctx, span, out
     if len(args) == 3:
         if _axis_name(args[2]) == "longest":
             edge = Str(value="longest")
+        elif _axis_name(args[2]) == "world.lowest":
+            edge = Str(value="lowest")
         elif _axis_name(args[2]) is not None and "." in (_axis_name(args[2]) or ""):
             raise Untranslatable("alignScopeToGeometry:orientation", f"edge orientation "
                                  f"{_axis_name(args[2])!r}", span)
@@ -1236,6 +1269,175 @@ def _h_taper(t, args, block, star, frame, rctx, ctx, span, out):
     return [OpCall(name="taper", args=(Arg(value=translate_expr(args[0], ctx)),), span=span)], None
 
 
+# -- lots (grammarkit/split/lots.py) --------------------------------------------------------------
+def _h_setback(gk: str):
+    def handler(t, args, block, star, frame, rctx, ctx, span, out):
+        if block is None:
+            raise Untranslatable(f"op:{gk}", f"{gk}() without a block", span)
+        _need(args, 1, 2, gk, span)
+        dist_tree = args[0]
+        op = gk
+        # setback(comp(fe) { all: expr }) is CGA's long form of setbackPerEdge(expr)
+        if isinstance(dist_tree, Tree) and dist_tree.data == "func_block_call":
+            inner = _comp_fe_all(dist_tree) if gk == "setback" else None
+            if inner is None:
+                raise Untranslatable("setback:array", "per-edge distances other than "
+                                     "comp(fe) { all: ... }", span)
+            op, dist_tree = "setbackPerEdge", inner
+        d = translate_expr(dist_tree, ctx)
+        entries = t.comp_entries(block, frame, rctx, "edges")
+        if not entries:
+            raise Untranslatable("setback:no-selector", "none of its selectors is supported", span)
+        call = OpCall(name=op, args=(Arg(value=d),), block=tuple(entries), span=span)
+        if len(args) == 2:
+            return [call], (f"{gk}:uvSet", "the uv set of uv selectors is ignored")
+        return [call], None
+    return handler
+
+
+def _comp_fe_all(tree: Tree) -> Any:
+    """The expression of `comp(fe) { all: expr }` (CGA's comp function), or None."""
+    name = next((c.value for c in tree.children if isinstance(c, Token)), None)
+    args = call_args(tree)
+    block = next((c for c in tree.children if isinstance(c, Tree) and c.data == "block"), None)
+    if name != "comp" or len(args) != 1 or _axis_name(args[0]) != "fe" or block is None:
+        return None
+    entries = [e for e in block.children if isinstance(e, Tree)]
+    if len(entries) != 1 or entries[0].data != "entry":
+        return None
+    key = entries[0].children[0].children[0]
+    if not (isinstance(key, Tree) and key.data == "ref" and key.children[0].value == "all"):
+        return None
+    body = entries[0].children[-1]
+    if isinstance(body, Tree) and body.data == "entry_body":
+        if len(body.children) != 1 or not isinstance(body.children[0], Tree):
+            return None
+        body = body.children[0]
+    # the entry was parsed as a rule body: its one item read back as an expression
+    if body.data == "call":
+        return Tree("func_call", body.children)
+    if body.data == "name":
+        return Tree("ref", body.children)
+    return body
+
+
+def _h_shape_op(gk: str, n: int):
+    def handler(t, args, block, star, frame, rctx, ctx, span, out):
+        if block is None:
+            raise Untranslatable(f"op:{gk}", f"{gk}() without a block", span)
+        _need(args, n, n, gk, span)
+        if frame != "Y":
+            raise Untranslatable(f"{gk}:face", f"{gk}() on a face of a volume (its front is CGA's "
+                                 "scope -z, which grammarkit's faces do not have)", span)
+        entries = t.comp_entries(block, frame, rctx, "shape-parts")
+        if not entries:
+            raise Untranslatable(f"{gk}:no-selector", "none of its selectors is supported", span)
+        return [OpCall(name=gk, args=tuple(Arg(value=translate_expr(a, ctx)) for a in args),
+                       block=tuple(entries), span=span)], None
+    return handler
+
+
+def _h_label(t, args, block, star, frame, rctx, ctx, span, out):
+    _need(args, 1, 1, "label", span)
+    name = translate_expr(args[0], ctx)
+    return [OpCall(name="label", args=(Arg(value=name),), span=span)], None
+
+
+def _h_inner_rectangle(t, args, block, star, frame, rctx, ctx, span, out):
+    if block is None:
+        raise Untranslatable("op:innerRectangle", "innerRectangle without a block", span)
+    _need(args, 0, 1, "innerRectangle", span)
+    mode = _axis_name(args[0]) if args else "scope"
+    if mode not in ("scope", "edge"):
+        raise Untranslatable("innerRectangle:align", f"innerRectangle({mode})", span)
+    entries = t.comp_entries(block, frame, rctx, "shape-parts")
+    if not entries:
+        raise Untranslatable("innerRectangle:no-selector", "none of its selectors is supported", span)
+    return [OpCall(name="innerRectangle", args=(Arg(value=Ref(name=mode)),), block=tuple(entries), span=span)], None
+
+
+# -- texturing (grammarkit/split/texturing.py) -----------------------------------------------------
+# A CGA axis letter of setupProjection -> (grammarkit letter, reversed). World axes are y-up in
+# CGA and z-up in grammarkit, as the lot's scope (frame Y); a face's scope is the identity.
+def _projection_axis(frame: str, world: bool, letter: str) -> tuple[str, bool]:
+    return frames.axis("Y" if world else frame, letter)
+
+
+def _texture_size(tree: Any, size_ref: str, ctx: ExprContext) -> Any:
+    """A texture width/height: `'v` is v times the scope size along that axis, `~v` the size
+    nearest to v that fits a whole number of times into the scope (CGA's floating size)."""
+    if isinstance(tree, Tree) and tree.data == "floating":
+        v = translate_expr(tree.children[-1], ctx)
+        size = Ref(name=size_ref)
+        count = Call(func="max", args=(Num(value=1), Call(func="round", args=(Binary(op="/", left=size, right=v),))))
+        return Binary(op="/", left=size, right=count)
+    return _rel_or_abs(tree, size_ref, ctx)
+
+
+def _negated(e: Any) -> Any:
+    return Num(value=-e.value) if isinstance(e, Num) else Unary(op="-", operand=e)
+
+
+def _h_setup_projection(t, args, block, star, frame, rctx, ctx, span, out):
+    _need(args, 4, 7, "setupProjection", span)
+    axes = _axis_name(args[1]) or ""
+    origin, _, pair = axes.partition(".")
+    if origin not in ("scope", "world") or len(pair) != 2 or any(c not in "xyz" for c in pair) or pair[0] == pair[1]:
+        raise Untranslatable("setupProjection:axes", f"projection axes {axes!r}", span)
+    world = origin == "world"
+    uv_set = translate_expr(args[0], ctx)
+    letters, sizes, offs = [], [], []
+    for k, letter in enumerate(pair):
+        gk, rev = _projection_axis(frame, world, letter)
+        size = _texture_size(args[2 + k], "scope.s" + gk, ctx)
+        off = _rel_or_abs(args[4 + k], "scope.s" + gk, ctx) if len(args) > 4 + k else Num(value=0)
+        if rev:
+            # CGA's coordinate along this axis is -(grammarkit's) (world) or sy - y (a lot's
+            # scope: CGA's z runs from the back): the same tiles with a mirrored size
+            size = _negated(size)
+            off = _negated(off) if world else Binary(op="-", left=Ref(name="scope.s" + gk), right=off)
+        letters.append(gk)
+        sizes.append(size)
+        offs.append(off)
+    call_args_ = [Arg(value=uv_set), Arg(value=Ref(name=f"{origin}.{letters[0]}{letters[1]}")),
+                  Arg(value=sizes[0]), Arg(value=sizes[1])]
+    if not all(isinstance(o, Num) and o.value == 0 for o in offs):
+        call_args_ += [Arg(value=offs[0]), Arg(value=offs[1])]
+    call = OpCall(name="setupProjection", args=tuple(call_args_), span=span)
+    if len(args) == 7 and _literal_number(args[6]) != 0:
+        return [call], ("setupProjection:uwFactor", "the w texture coordinate (uwFactor) is not made")
+    return [call], None
+
+
+def _uv_op(gk: str, lo: int, hi: int):
+    def handler(t, args, block, star, frame, rctx, ctx, span, out):
+        _need(args, lo, hi, gk, span)
+        return [OpCall(name=gk, args=tuple(Arg(value=translate_expr(a, ctx)) for a in args), span=span)], None
+    return handler
+
+
+def _file_name(t: Any, value: Any) -> bool:
+    """Whether a translated value is a file name grammarkit can use: a string, or an attr or
+    const whose CGA value is a string literal."""
+    if isinstance(value, Str):
+        return True
+    if isinstance(value, Ref):
+        for v in t.values:
+            if t.value_names.get(v.name) == value.name:
+                return isinstance(v.value, Tree) and v.value.data == "string"
+    return False
+
+
+def _h_texture(t, args, block, star, frame, rctx, ctx, span, out):
+    _need(args, 1, 1, "texture", span)
+    path = translate_expr(args[0], ctx)
+    if not _file_name(t, path):  # as i(): grammarkit cannot tell the file from an expression
+        raise Untranslatable("texture:expression", "texture() of a computed file name", span)
+    if isinstance(path, Str) and path.value:
+        t.asset(path.value, span)  # listed in the report; made relative to the output on writing
+    return [OpCall(name="texture", args=(Arg(value=path),), span=span)], None
+
+
 _HANDLERS = {
     "extrude": _h_extrude, "split": _h_split, "comp": _h_comp, "offset": _h_offset,
     "roofGable": _roof("roofGable", 5), "roofHip": _roof("roofHip", 3),
@@ -1244,6 +1446,13 @@ _HANDLERS = {
     "i": _h_i, **{name: _h_primitive(name) for name in _PRIMITIVE_OPS},
     "alignScopeToGeometry": _h_align_scope_to_geometry, "alignScopeToAxes": _h_align_scope_to_axes,
     "rotateScope": _h_rotate_scope, "report": _h_report, "reverseNormals": _h_reverse_normals,
+    "setupProjection": _h_setup_projection, "projectUV": _uv_op("projectUV", 1, 1),
+    "texture": _h_texture, "translateUV": _uv_op("translateUV", 3, 3), "scaleUV": _uv_op("scaleUV", 3, 3),
+    "rotateUV": _uv_op("rotateUV", 2, 2), "deleteUV": _uv_op("deleteUV", 1, 1),
+    "setback": _h_setback("setback"), "setbackPerEdge": _h_setback("setbackPerEdge"),
+    "setbackToArea": _h_setback("setbackToArea"), "shapeL": _h_shape_op("shapeL", 2),
+    "shapeU": _h_shape_op("shapeU", 3), "shapeO": _h_shape_op("shapeO", 4),
+    "innerRectangle": _h_inner_rectangle, "label": _h_label,
 }
 # Operations CGA writes without parentheses.
 _BARE_OPS = {"reverseNormals", "cleanupGeometry", "deleteHoles", "resetGeometry", "resetMaterial",

@@ -29,6 +29,8 @@ __all__ = ["Binding", "BoundArgument", "bind_operation", "check_block", "check_s
 Fold = Callable[[Any], Any]  # expression -> constant value, or None when not constant
 
 _HEX = frozenset("0123456789abcdefABCDEF")
+# name parameters may be these dotted names (CGA's material shape attributes, for set())
+DOTTED_NAMES = ("material.",)
 
 
 def parse_color(value: Any) -> str | None:
@@ -154,13 +156,15 @@ def bind_operation(call: Any, spec: Any, fold: Fold | None = None, *, label: str
 def _argument_problem(label: str, p: Param, v: Any, where: Any, fold: Fold | None,
                       registries: Any = None, fold_fixed: Fold | None = None) -> Diagnostic | None:
     if p.type in ("axis", "selector"):
-        if not isinstance(v, Ref) or "." in v.name or (p.choices and v.name not in p.choices):
+        # a dotted name only where the parameter lists it (setupProjection's `scope.xy`)
+        if not isinstance(v, Ref) or (p.choices and v.name not in p.choices) or ("." in v.name and not p.choices):
             shown = "|".join(p.choices) if p.choices else "a name"
             return _error(f"argument '{p.name}' of {label} must be {shown}", where, "bad-argument-type")
         return None
     if p.type == "name":
         what = p.names[:-1] if p.names.endswith("s") else (p.names or "name")
-        if not isinstance(v, Ref) or "." in v.name:
+        # CGA's material attributes are the one dotted name set() takes (`set(material.opacity, 0.5)`)
+        if not isinstance(v, Ref) or ("." in v.name and not v.name.startswith(DOTTED_NAMES)):
             return _error(f"argument '{p.name}' of {label} must be the name of a {what}", where,
                           "bad-argument-type")
         known = getattr(registries, p.names, None) if registries is not None and p.names else None

@@ -27,7 +27,7 @@ from .suggest import closest_first, known_hint
 # Dotted names the engines provide while deriving (see docs/language.md).
 BUILTIN_REFS = frozenset({
     "scope.sx", "scope.sy", "scope.sz", "scope.tx", "scope.ty", "scope.tz",
-    "split.index", "split.total", "comp.index", "comp.total",
+    "split.index", "split.total", "comp.index", "comp.total", "comp.sel",
     # the shape's geometry (split grammars; grammarkit/split/geometry_queries.py)
     "geometry.area", "geometry.volume", "geometry.nVertices", "geometry.isRectangular",
 })

@@ -77,6 +77,12 @@ class Material:
     rgba: tuple[int, int, int, int]
     # surfaces (open faces, see docs/language.md "Solids and surfaces") are seen from both sides
     double_sided: bool = False
+    # CGA materials (docs/cga.md, "Texturing"): the colour texture's file (absolute path), PBR
+    # factors, and the other material attributes as sorted (key, value) pairs (kept in extras)
+    texture: str | None = None
+    metallic: float | None = None
+    roughness: float | None = None
+    extras: tuple = ()
 
     @property
     def label(self) -> str:
@@ -101,6 +107,9 @@ class Solid:
     matrix: np.ndarray | None = None
     extras: dict = field(default_factory=dict)
     key: bytes | None = None
+    # texture coordinates at the corners of every face, (n, 3, 2), NaN where a face has none;
+    # written (as TEXCOORD_0) for the faces whose material has a texture
+    uv: np.ndarray | None = None
 
     def face_rgba(self) -> np.ndarray:
         palette = np.array([m.rgba for m in self.materials] or [DEFAULT_RGBA], dtype=np.uint8)
@@ -309,8 +318,15 @@ class _GltfBuilder:
     accessors across primitives, node extras and a root transform, which trimesh's exporter
     does not offer, and doing it directly is several times faster."""
 
-    def __init__(self, ambiguous: set[str] = frozenset()) -> None:
+    def __init__(self, ambiguous: set[str] = frozenset(), textures: str = "embed",
+                 base: Path | None = None) -> None:
         self.ambiguous = ambiguous  # material names used with several colours
+        self.textures = textures  # "embed" (image in the buffer) or "reference" (relative URI)
+        self.base = base  # the output file's folder, for "reference"
+        self.images: list[dict] = []
+        self.gl_textures: list[dict] = []
+        self.samplers: list[dict] = []
+        self.image_index: dict[str, int | None] = {}
         self.chunks: list[bytes] = []
         self.size = 0
         self.views: list[dict] = []
@@ -320,12 +336,15 @@ class _GltfBuilder:
         self.meshes: list[dict] = []
         self.nodes: list[dict] = []
 
-    def _view(self, data: bytes, target: int) -> int:
+    def _view(self, data: bytes, target: int | None) -> int:
         pad = (-self.size) % 4
         if pad:
             self.chunks.append(b"\0" * pad)
             self.size += pad
-        self.views.append({"buffer": 0, "byteOffset": self.size, "byteLength": len(data), "target": target})
+        view = {"buffer": 0, "byteOffset": self.size, "byteLength": len(data)}
+        if target is not None:  # image data has no target
+            view["target"] = target
+        self.views.append(view)
         self.chunks.append(data)
         self.size += len(data)
         return len(self.views) - 1
@@ -351,6 +370,8 @@ class _GltfBuilder:
             lin = srgb_to_linear(np.asarray(mat.rgba[:3], dtype=np.float64) / 255.0)
             glassy = bool(mat.name) and "glass" in mat.name.lower()
             name = mat.label
+            if mat.texture is not None and not mat.name:  # a textured material is named by its image
+                name = f"{Path(mat.texture).name} #{mat.rgba[0]:02x}{mat.rgba[1]:02x}{mat.rgba[2]:02x}"
             if mat.name in self.ambiguous:
                 name = "{} #{:02x}{:02x}{:02x}".format(mat.name, *mat.rgba[:3])
             entry = {"name": name,
@@ -358,6 +379,19 @@ class _GltfBuilder:
                          "baseColorFactor": [round(float(x), 6) for x in lin] + [round(mat.rgba[3] / 255.0, 6)],
                          "metallicFactor": 0.0, "roughnessFactor": 0.1 if glassy else 0.8},
                      "extras": {"srgb": mat.label if not mat.name else "#{:02x}{:02x}{:02x}".format(*mat.rgba[:3])}}
+            if mat.metallic is not None:
+                entry["pbrMetallicRoughness"]["metallicFactor"] = round(float(mat.metallic), 6)
+            if mat.roughness is not None:
+                entry["pbrMetallicRoughness"]["roughnessFactor"] = round(float(mat.roughness), 6)
+            if mat.texture is not None:
+                tex = self.texture(mat.texture)
+                if tex is not None:
+                    entry["pbrMetallicRoughness"]["baseColorTexture"] = {"index": tex}
+                else:
+                    entry["extras"]["missing_texture"] = mat.texture
+                entry["extras"]["colormap"] = Path(mat.texture).name
+            if mat.extras:
+                entry["extras"]["cga"] = {k: v for k, v in mat.extras}
             if mat.rgba[3] < 255:
                 entry["alphaMode"] = "BLEND"
             if mat.double_sided:
@@ -369,6 +403,43 @@ class _GltfBuilder:
             self.materials.append(entry)
             idx = self.material_index[mat] = len(self.materials) - 1
         return idx
+
+    def has_texture(self, mat: Material) -> bool:
+        """Whether `mat`'s primitives carry TEXCOORD_0 (its texture file can be written)."""
+        return mat.texture is not None and self.texture(mat.texture) is not None
+
+    def texture(self, path: str) -> int | None:
+        """The glTF texture of an image file (embedded in the buffer, or referenced by a URI
+        relative to the output file), or None when the file cannot be used: not found, or not
+        PNG/JPEG (the only image formats of core glTF)."""
+        if path in self.image_index:
+            return self.image_index[path]
+        mime = {".png": "image/png", ".jpg": "image/jpeg", ".jpeg": "image/jpeg"}.get(Path(path).suffix.lower())
+        file = Path(path)
+        if mime is None or path.startswith("builtin:") or not file.is_file():
+            self.image_index[path] = None
+            return None
+        if self.textures == "reference":
+            import os
+            from urllib.parse import quote
+
+            rel = os.path.relpath(file.resolve(), (self.base or Path(".")).resolve())
+            image: dict = {"uri": quote(rel.replace(os.sep, "/")), "name": file.name}
+        else:
+            image = {"bufferView": self._view(file.read_bytes(), None), "mimeType": mime, "name": file.name}
+        self.images.append(image)
+        if not self.samplers:  # CGA textures tile: repeat in both directions
+            self.samplers.append({"magFilter": 9729, "minFilter": 9987, "wrapS": 10497, "wrapT": 10497})
+        self.gl_textures.append({"source": len(self.images) - 1, "sampler": 0})
+        self.image_index[path] = idx = len(self.gl_textures) - 1
+        return idx
+
+    def texcoords(self, uv: np.ndarray) -> int:
+        # glTF's uv origin is the image's top left, CGA's its bottom left: v -> 1 - v
+        t = np.ascontiguousarray(np.column_stack([uv[:, 0], 1.0 - uv[:, 1]]), dtype=np.float32)
+        view = self._view(t.tobytes(), _ARRAY_BUFFER)
+        self.accessors.append({"bufferView": view, "componentType": _FLOAT, "count": len(t), "type": "VEC2"})
+        return len(self.accessors) - 1
 
     def node(self, entry: dict) -> int:
         self.nodes.append(entry)
@@ -387,16 +458,20 @@ class _GltfBuilder:
             "accessors": self.accessors, "bufferViews": self.views,
             "buffers": [{"byteLength": self.size}],
         }
+        if self.images:
+            doc.update(images=self.images, textures=self.gl_textures, samplers=self.samplers)
         return doc
 
 
-def _build_gltf(scene: Scene) -> tuple[dict, bytes]:
+def _build_gltf(scene: Scene, textures: str = "embed", base: Path | None = None) -> tuple[dict, bytes]:
+    if textures not in ("embed", "reference"):
+        raise ShapeError(f"textures must be 'embed' or 'reference', got {textures!r}")
     colours_of: dict[str, set] = {}
     for solid in scene.solids:
         for mat in solid.materials:
             if mat.name:
                 colours_of.setdefault(mat.name, set()).add(mat.rgba)
-    b = _GltfBuilder({n for n, c in colours_of.items() if len(c) > 1})
+    b = _GltfBuilder({n for n, c in colours_of.items() if len(c) > 1}, textures, base)
     children: list[int] = []
     shared_mesh: dict[bytes, int] = {}
     all_labels: list[str] = []
@@ -425,13 +500,19 @@ def _build_gltf(scene: Scene) -> tuple[dict, bytes]:
         starts = np.concatenate([[0], cuts])
         ends = np.concatenate([cuts, [len(skey)]])
         prims_by_group: dict[int, list[dict]] = {}
+        textured: list[tuple[int, int, np.ndarray]] = []  # (group, material, face indices)
         for s, e in zip(starts.tolist(), ends.tolist()):
             k = int(skey[s])
             g, m = divmod(k, n_mat)
+            mat = solid.materials[m] if solid.materials else Material(None, DEFAULT_RGBA)
+            if solid.uv is not None and b.has_texture(mat):
+                textured.append((g, m, order[s:e]))
+                continue
             acc = b.indices(F[order[s:e]], nv)
-            prim = {"attributes": {"POSITION": pos}, "indices": acc, "mode": 4,
-                    "material": b.material(solid.materials[m] if solid.materials else Material(None, DEFAULT_RGBA))}
+            prim = {"attributes": {"POSITION": pos}, "indices": acc, "mode": 4, "material": b.material(mat)}
             prims_by_group.setdefault(g, []).append(prim)
+        if textured:
+            _textured_primitives(b, solid, F, textured, prims_by_group)
         single = len(prims_by_group) == 1 and len(solid.groups) == 1
         if single:
             (prims,) = prims_by_group.values()
@@ -461,12 +542,44 @@ def _build_gltf(scene: Scene) -> tuple[dict, bytes]:
     return doc, binary
 
 
+def _textured_primitives(b: _GltfBuilder, solid: Solid, F: np.ndarray, textured: list,
+                         prims_by_group: dict) -> None:
+    """Primitives of textured materials: their own vertex set, one vertex per (position, uv)
+    pair (a vertex on a texture seam needs two uvs), with POSITION values copied bit for bit
+    from the solid's vertices, so a reader welding by position still gets the closed solid."""
+    uv = np.nan_to_num(np.asarray(solid.uv, dtype=np.float64), nan=0.0)
+    faces = np.concatenate([f for _, _, f in textured])
+    corner_v = F[faces].reshape(-1)
+    corner_uv = np.ascontiguousarray(uv[faces].reshape(-1, 2), dtype=np.float32)
+    # key: the vertex index and the uv's float32 bits (exact: equal floats weld)
+    bits = corner_uv.view(np.uint32).astype(np.uint64)
+    keys = np.column_stack([corner_v.astype(np.uint64), bits[:, 0], bits[:, 1]])
+    uniq, inv = np.unique(keys, axis=0, return_inverse=True)
+    inv = inv.reshape(-1)
+    first = np.zeros(len(uniq), dtype=np.int64)
+    first[inv[::-1]] = np.arange(len(inv))[::-1]
+    V = np.asarray(solid.vertices)[uniq[:, 0].astype(np.int64)]
+    pos = b.positions(V)
+    tc = b.texcoords(corner_uv[first].astype(np.float64))
+    new_faces = inv.reshape(-1, 3)
+    at = 0
+    for g, m, f in textured:
+        n = len(f)
+        acc = b.indices(new_faces[at:at + n], len(V))
+        at += n
+        prim = {"attributes": {"POSITION": pos, "TEXCOORD_0": tc}, "indices": acc, "mode": 4,
+                "material": b.material(solid.materials[m])}
+        prims_by_group.setdefault(g, []).append(prim)
+
+
 def _json_bytes(doc: dict) -> bytes:
     return json.dumps(doc, separators=(",", ":"), sort_keys=False, allow_nan=False).encode("utf-8")
 
 
-def encode_glb(obj: Any) -> bytes:
-    doc, binary = _build_gltf(solids_of(obj))
+def encode_glb(obj: Any, textures: str = "embed", base: Path | None = None) -> bytes:
+    """GLB bytes. Texture images are embedded (`textures="embed"`) or referenced by URIs
+    relative to the folder `base` the file will be written to (`"reference"`)."""
+    doc, binary = _build_gltf(solids_of(obj), textures, base)
     js = _json_bytes(doc)
     js += b" " * ((-len(js)) % 4)
     total = 12 + 8 + len(js) + 8 + len(binary)
@@ -475,8 +588,8 @@ def encode_glb(obj: Any) -> bytes:
                      struct.pack("<I4s", len(binary), b"BIN\0"), binary])
 
 
-def encode_gltf(obj: Any) -> bytes:
-    doc, binary = _build_gltf(solids_of(obj))
+def encode_gltf(obj: Any, textures: str = "embed", base: Path | None = None) -> bytes:
+    doc, binary = _build_gltf(solids_of(obj), textures, base)
     doc["buffers"][0]["uri"] = "data:application/octet-stream;base64," + base64.b64encode(binary).decode("ascii")
     doc["buffers"][0]["byteLength"] = len(binary)
     return json.dumps(doc, indent=1, allow_nan=False).encode("utf-8")

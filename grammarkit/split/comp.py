@@ -213,6 +213,15 @@ def _rect_or_poly(poly: Any, sx: float, sy: float) -> Any:
 
 def op_comp(ctx: Any, s: Shape, args: Any, block: Any) -> list:
     mode = str(args[0])
+    if mode in ("e", "v"):  # edges and vertices (grammarkit/split/comp_edges.py)
+        from .comp_edges import op_comp_edges, op_comp_vertices
+
+        out = (op_comp_edges if mode == "e" else op_comp_vertices)(ctx, s, args, block)
+        for slot in block:
+            if slot.sel == "volume":
+                out.append((s.copy(), slot, 0, 1))
+                break
+        return out
     if mode != "f":
         raise ValueError(f"comp({mode}) is not supported")
     if s.kind == FACE:

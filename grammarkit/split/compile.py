@@ -122,6 +122,9 @@ class CompiledGrammar:
         self.bindings: dict[str, str] = {}  # anchor -> snippet name
         self.base_dir = str(Path(grammar.source_path).parent) if grammar.source_path else None
         self._defaults: dict[str, Any] | None = None
+        # whether an expression asks inside()/overlaps()/touches(): derivations then keep
+        # their terminals as occluders (grammarkit/split/occlusion.py)
+        self.uses_occlusion = False
 
     @property
     def grammar(self) -> Grammar | None:
@@ -402,6 +405,7 @@ class _Compiler:
     def _expr(self, e: Any, scope: _Scope, params: tuple[str, ...]) -> Callable:
         glob = self.global_names
         grammar_attrs = self.grammar_attrs
+        e = self._occlusion_refs(e)
 
         def resolve(name: str, span: Span | None) -> Callable | None:
             if name in params:
@@ -417,6 +421,15 @@ class _Compiler:
                 return lambda s: s.si
             if name in ("split.total", "comp.total"):
                 return lambda s: s.st
+            if name == "comp.sel":
+                return lambda s: s.csel if type(s) is not ValueEnv else ""
+            if name.startswith("occlusion:"):
+                from .occlusion import query
+
+                _kind, kind, target, label = name.split(":", 3)
+                lab = label or None
+                return lambda s, _k=kind, _t=target, _l=lab: (
+                    query(_k, s, _t, _l) if type(s) is not ValueEnv else False)
             if name.startswith("geometry."):
                 from .geometry_queries import GEOMETRY_QUERIES
 
@@ -551,21 +564,65 @@ class _Compiler:
         fns = self._args(call, spec, scope, params)
         if call.name == "set" and fns:
             fns[0] = constant(self._set_key(call, scope))
-        if call.name == "i" and fns and is_constant(fns[0]) and not str(fns[0](None)).startswith("builtin:"):
+        if call.name == "setbackPerEdge" and fns:
+            # the operation evaluates the distance itself, once per edge, on the edge's shape
+            fns[0] = constant(fns[0])
+        # file names are relative to the grammar file that says them: made absolute here
+        path_arg = 0 if call.name in ("i", "texture") else (
+            1 if call.name == "set" and len(fns) > 1 and str(fns[0](None)).startswith("material.")
+            and str(fns[0](None)).endswith("map") else None)
+        if path_arg is not None and is_constant(fns[path_arg]) and isinstance(fns[path_arg](None), str) \
+                and fns[path_arg](None) and not fns[path_arg](None).startswith("builtin:"):
             base = Path(call.span.file).parent if call.span and call.span.file else (
                 Path(self.out.base_dir) if self.out.base_dir else Path("."))
-            fns[0] = constant(str((base / str(fns[0](None))).resolve()))
+            fns[path_arg] = constant(str((base / str(fns[path_arg](None))).resolve()))
         _raise_first(check_block(call, spec))
         block = None
         if call.block is not None:
             block = self._block(call, spec, scope, params, rule, index)
         return _op_step(apply, tuple(fns), block, call.span, call.name, plugin)
 
+    def _occlusion_refs(self, e: Any) -> Any:
+        """CGA's occlusion queries `inside("intra", "label")` as references the resolver binds
+        to the shape evaluated on (their arguments must be literal strings)."""
+        from .occlusion import OCCLUSION_FUNCTIONS, TARGETS
+
+        if isinstance(e, E.Call) and e.func in OCCLUSION_FUNCTIONS:
+            args = list(e.args)
+            if len(args) > 2 or not all(isinstance(a, E.Str) for a in args):
+                raise GrammarError(f"{e.func}() takes a target (\"intra\", \"inter\" or \"all\") and a label, "
+                                   "as literal strings", e.span, code="bad-argument-value")
+            target = args[0].value if args else "intra"
+            if target not in TARGETS:
+                raise GrammarError(f"{e.func}(): the target must be \"intra\", \"inter\" or \"all\", got "
+                                   f"{target!r}", e.span, code="bad-argument-value")
+            label = args[1].value if len(args) > 1 else ""
+            self.out.uses_occlusion = True
+            return E.Ref(name=f"occlusion:{e.func}:{target}:{label}", span=e.span)
+        if isinstance(e, (E.Call, E.Unary, E.Binary, E.Vector)):
+            updates = {}
+            for field_name in ("args", "items"):
+                v = getattr(e, field_name, None)
+                if v is not None:
+                    new = tuple(self._occlusion_refs(x) for x in v)
+                    if any(a is not b for a, b in zip(new, v)):
+                        updates[field_name] = new
+            for field_name in ("operand", "left", "right"):
+                v = getattr(e, field_name, None)
+                if v is not None:
+                    new = self._occlusion_refs(v)
+                    if new is not v:
+                        updates[field_name] = new
+            return e.model_copy(update=updates) if updates else e
+        return e
+
     def _set_key(self, call: S.OpCall, scope: _Scope) -> str:
         """The values key of the attr `set(name, ...)` changes (a snippet's own attr, or the
         grammar's); a const, a parameter or an unknown name is an error at the name."""
         ref = call.args[0].value
         name = ref.name
+        if name.startswith("material."):  # CGA's material attributes (grammarkit.split.texturing)
+            return name
         if name in scope.local_attrs and name not in self.grammar_attrs:
             return f"{scope.anchor}.{name}"
         if name in self.grammar_attrs:
@@ -629,7 +686,7 @@ def _shape_free(e: Any, params: tuple[str, ...], mutable: frozenset = frozenset(
     one derivation."""
     if isinstance(e, E.Ref):
         return (e.name not in params and e.name not in mutable
-                and not e.name.startswith(("scope.", "split.", "comp.", "geometry.")))
+                and not e.name.startswith(("scope.", "split.", "comp.", "geometry.", "occlusion:")))
     if isinstance(e, E.Call):
         return e.func != "rand" and all(_shape_free(a, params, mutable) for a in e.args)
     if isinstance(e, E.Unary):

@@ -72,12 +72,14 @@ class Limits:
 class Tag:
     """Semantic tags of one solid or face terminal."""
 
-    __slots__ = ("name", "rule", "object_type", "color", "material", "node", "role")
+    __slots__ = ("name", "rule", "object_type", "color", "material", "node", "role", "texturing")
 
     def __init__(self, name: str, rule: str, object_type: str | None, color: str | None,
-                 material: str | None, node: int, role: str):
+                 material: str | None, node: int, role: str, texturing: Any = None):
         self.name, self.rule, self.object_type = name, rule, object_type
         self.color, self.material, self.node, self.role = color, material, node, role
+        # CGA texturing state (grammarkit.split.texturing.Texturing) or None
+        self.texturing = texturing
 
     def to_dict(self) -> dict:
         return {"name": self.name, "rule": self.rule, "object_type": self.object_type,
@@ -101,12 +103,13 @@ class Derivation:
         self.stack: list[tuple[Shape, tuple]] = []
         # tree: (parent, rule name, kind, origin, axes, size, seed, span, via)
         self.nodes: list[tuple] = []
-        self.tags: list[list] = []  # [name, rule, object type, colour, material, node, role]
+        self.tags: list[list] = []  # [name, rule, object type, colour, material, node, role, texturing]
         self.adds: list[Any] = []  # world-space solids to unite
         # recess cuts: (world-space solid, `on` of the face, tag, origin, axes, size, poly,
         # depth); subtracted when the face lies on an emitted solid, else shown as a reveal
         self.cuts: list[tuple] = []
         self.post_adds: list[Any] = []  # solids to add after the cuts (built inside a recess)
+        self.add_boxes: list[tuple] = []  # world bounding box of each of `adds`
         self.id_tag: dict[int, int] = {}  # manifold original ID -> tag index
         self.faces: list[tuple] = []  # face terminals: (tag, origin, axes, size, poly, on)
         # geometry id of every volume emitted as a solid -> (scope when emitted, tag): a face
@@ -120,6 +123,10 @@ class Derivation:
         # report(key, value) calls in derivation order: key -> values (CGA's reports)
         self.reports: dict[str, list] = {}
         self.est_tris = 0
+        # occluders for inside()/overlaps()/touches() (grammarkit/split/occlusion.py): kept only
+        # when the grammar asks such queries (terminals are registered as they are made)
+        self.occlusion: Any = None
+        self.track_occlusion = bool(getattr(compiled, "uses_occlusion", False))
         self.context = OperationContext(self)
 
     # -- bookkeeping --------------------------------------------------------------------
@@ -177,6 +184,9 @@ class Derivation:
                 c.si, c.st = item[2], item[3]
             else:
                 c.si, c.st = i, total  # split.index / split.total of the child
+            sel = slot.sel
+            if sel is not None:  # comp.sel: the branch's selector ("front", "3", ...)
+                c.csel = sel if type(sel) is str else str(sel)
             c._rng = None
             self._node(c, parent, via)
             pending.append((c, slot.body))
@@ -187,6 +197,15 @@ class Derivation:
         self.stack.append((s, steps))
 
     def run(self) -> None:
+        from .occlusion import set_active
+
+        previous = set_active(self)  # occlusion queries find their derivation through it
+        try:
+            self._run()
+        finally:
+            set_active(previous)
+
+    def _run(self) -> None:
         stack = self.stack
         while stack:
             s, steps = stack.pop()
@@ -196,6 +215,14 @@ class Derivation:
                     break
             else:
                 self.leaf(s, s.rule.name)
+
+    def occluder(self, s: Shape, label: str | None) -> None:
+        """Register `s`'s geometry for the occlusion queries of later shapes."""
+        if self.occlusion is None:
+            from .occlusion import Occlusion
+
+            self.occlusion = Occlusion()
+        self.occlusion.add(s, label)
 
     def run_inline(self, s: Shape, steps: tuple) -> Shape | None:
         """Run a nested sequence (a case arm, a choice) on `s`; returns what is left of it."""
@@ -210,7 +237,7 @@ class Derivation:
         # plain lists in the hot loop; Model turns them into Tag objects on demand
         rule = s.rule
         tags = self.tags
-        tags.append([name, rule.name, rule.otype, s.color, s.material, s.node, role])
+        tags.append([name, rule.name, rule.otype, s.color, s.material, s.node, role, s.tex])
         return len(tags) - 1
 
     def check_extent(self, s: Shape, box: tuple | None = None) -> None:
@@ -268,8 +295,15 @@ class Derivation:
         self.solid_of[s.gid] = ((s.o, s.ax, s.sz), tag)
         # solids built inside a recess (a mullion) are added after the cuts, or the cut eats them
         n = len(self.adds) + len(self.post_adds)
-        (self.post_adds if s.cut >= 0 else self.adds).append(
-            solid.transform(welded_frame(s.o, s.ax, s.sz, weld_of(n))))
+        frame_m = welded_frame(s.o, s.ax, s.sz, weld_of(n))
+        if s.cut >= 0:
+            self.post_adds.append(solid.transform(frame_m))
+        else:
+            self.adds.append(solid.transform(frame_m))
+            # its world bounding box, from the scope (cheaper than asking the transformed solid,
+            # which would apply the transform now): the final boolean groups solids by them
+            local = (0.0, 0.0, 0.0, *s.sz) if s.solid is None else solid.bounding_box()
+            self.add_boxes.append(_box_of(frame_m, local))
         self.est_tris += tris
         if self.est_tris > self.limits.max_triangles:  # stop now, not after building them all
             raise LimitError(
@@ -298,11 +332,13 @@ class Derivation:
             if s.cut >= 0:  # the recess this face came from takes the terminal's tags
                 t = self.tags[s.cut]
                 if t[6] == "cut-pending":
-                    t[:] = [name, s.rule.name, s.rule.otype, s.color, s.material, s.node, "cut"]
+                    t[:] = [name, s.rule.name, s.rule.otype, s.color, s.material, s.node, "cut", s.tex]
         else:
             tag = self._tag(s, name, "volume")
             self._add(s, tag)
         self.leaves.append((tag, s.o, s.ax, s.sz))
+        if self.track_occlusion:
+            self.occluder(s, None)
 
     def add_body(self, s: Shape) -> None:
         """A volume decomposed by comp(f) stays as the solid body its faces decorate."""
@@ -412,6 +448,22 @@ class OperationContext:
         if message not in d.warned:
             d.warned.add(message)
             d.warnings.append(message)
+
+
+def _box_of(m: list, local: tuple) -> tuple:
+    """The world bounding box of the local box `local` (x0, y0, z0, x1, y1, z1) under the
+    affine map `m` (3 x 4 rows)."""
+    lo, hi = [], []
+    for r in range(3):
+        row = m[r]
+        a = b = row[3]
+        for k in range(3):
+            u, v = row[k] * local[k], row[k] * local[k + 3]
+            a += min(u, v)
+            b += max(u, v)
+        lo.append(a)
+        hi.append(b)
+    return (lo[0], lo[1], lo[2], hi[0], hi[1], hi[2])
 
 
 def weld_of(n: int) -> float:

@@ -5,7 +5,7 @@ from __future__ import annotations
 import json
 import math
 import os
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import cached_property
 from typing import Any
 
@@ -102,12 +102,24 @@ def compose(ctx: Derivation, where: Any) -> tuple[Any, Any]:
     ctx.check_triangles(ctx.est_tris, where)
     if not adds:
         adds, post = post, []
-    body = adds[0] if len(adds) == 1 else Manifold.batch_boolean(adds, manifold3d.OpType.Add)
-    if cuts:
-        body = Manifold.batch_boolean([body, *cuts], manifold3d.OpType.Subtract)
-    if post:
-        body = Manifold.batch_boolean([body, *post], manifold3d.OpType.Add)
-    body = _drop_slivers(body)
+    boxes = ctx.add_boxes if adds is ctx.adds and len(ctx.add_boxes) == len(adds) else None
+    groups = None
+    if not post and len(adds) >= MIN_GROUPED:
+        if boxes is None:
+            boxes = [tuple(m.bounding_box()) for m in adds]
+        # the R-tree costs ~1.5 ms per 150 solids: asked when the boxes fall apart along an
+        # axis (then there are separate groups), or when there are many solids
+        if len(adds) >= ALWAYS_GROUPED or _gap_along_an_axis(boxes):
+            groups = _disjoint_groups(adds, boxes)
+    if groups is not None and len(groups) > 1:
+        body = _compose_groups(adds, cuts, groups)  # slivers dropped group by group
+    else:
+        body = adds[0] if len(adds) == 1 else Manifold.batch_boolean(adds, manifold3d.OpType.Add)
+        if cuts:
+            body = Manifold.batch_boolean([body, *cuts], manifold3d.OpType.Subtract)
+        if post:
+            body = Manifold.batch_boolean([body, *post], manifold3d.OpType.Add)
+        body = _drop_slivers(body)
     mesh = body.to_mesh()
     status = body.status()
     if status != manifold3d.Error.NoError:
@@ -157,6 +169,78 @@ def surface_layer(ctx: Derivation) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return np.concatenate(verts), np.concatenate(tris), np.concatenate(tags)
 
 
+# Solids whose (grown) bounding boxes touch no other solid's cannot overlap it: such groups are
+# united on their own and put side by side with Manifold.compose, which costs nothing, instead
+# of one union of everything (a model of many separate parts: pipes, plants, kiosks). Below
+# this many solids the single union is as fast; a model of one connected group (a building,
+# every part welded to the next) takes the single union exactly as before (its boxes leave no
+# gap along any axis, so the groups are not even looked for below ALWAYS_GROUPED solids).
+MIN_GROUPED = 16
+
+
+ALWAYS_GROUPED = 256
+
+
+def _gap_along_an_axis(boxes: list) -> bool:
+    """Whether the boxes' extents along x, y or z leave a gap (a plane between two groups of
+    solids): sort-and-sweep, no pairs."""
+    arr = np.asarray(boxes, dtype=np.float64)
+    for k in range(3):
+        lo, hi = arr[:, k], arr[:, k + 3]
+        order = np.argsort(lo, kind="stable")
+        reach = np.maximum.accumulate(hi[order])
+        if (lo[order][1:] > reach[:-1]).any():
+            return True
+    return False
+
+
+def _disjoint_groups(solids: list, boxes: list | None = None) -> list[list[int]]:
+    """Indices of the solids in groups whose bounding boxes (closed; given, or asked from the
+    solids) overlap, transitively; an R-tree finds the neighbours, union-find joins them.
+    Groups in order of their first solid."""
+    from rtree import index
+
+    props = index.Property()
+    props.dimension = 3
+    if boxes is None:
+        boxes = [tuple(m.bounding_box()) for m in solids]
+    tree = index.Index(((i, b, None) for i, b in enumerate(boxes)), properties=props)
+    parent = list(range(len(solids)))
+
+    def find(i: int) -> int:
+        while parent[i] != i:
+            parent[i] = parent[parent[i]]
+            i = parent[i]
+        return i
+    for i, b in enumerate(boxes):
+        for j in tree.intersection(b):
+            a, c = find(i), find(j)
+            if a != c:
+                parent[max(a, c)] = min(a, c)
+    groups: dict[int, list[int]] = {}
+    for i in range(len(solids)):
+        groups.setdefault(find(i), []).append(i)
+    return sorted(groups.values(), key=lambda g: g[0])
+
+
+def _compose_groups(adds: list, cuts: list, groups: list[list[int]]) -> Any:
+    """The union of `adds` minus `cuts`, group by group (each cut only where its box meets the
+    group's), the groups composed side by side."""
+    parts = []
+    cut_boxes = [tuple(c.bounding_box()) for c in cuts]
+    for g in groups:
+        solid = adds[g[0]] if len(g) == 1 else Manifold.batch_boolean([adds[i] for i in g], manifold3d.OpType.Add)
+        x0, y0, z0, x1, y1, z1 = solid.bounding_box()
+        mine = [c for c, (a0, b0, c0, a1, b1, c1) in zip(cuts, cut_boxes)
+                if a0 <= x1 and x0 <= a1 and b0 <= y1 and y0 <= b1 and c0 <= z1 and z0 <= c1]
+        if mine:
+            solid = Manifold.batch_boolean([solid, *mine], manifold3d.OpType.Subtract)
+        if len(g) > 1 or mine:  # a lone solid untouched by cuts has no slivers
+            solid = _drop_slivers(solid)
+        parts.append(solid)
+    return Manifold.compose(parts)
+
+
 # A shell of the union whose volume is below this (cubic model units) is a degenerate sliver
 # (two faces of the same zero-thickness wedge, e.g. where a recess cut grazes a roof's knife-edge
 # eave): it has no material, only pinched edges that break watertightness on reading back.
@@ -176,6 +260,23 @@ def _drop_slivers(body: Any) -> Any:
 def _rgba(hex_color: str | None, default: str) -> tuple[int, int, int, int]:
     h = (hex_color or default).lstrip("#")
     return (int(h[0:2], 16), int(h[2:4], 16), int(h[4:6], 16), 255)
+
+
+def _material(name: str | None, rgba: tuple, cga: tuple) -> Any:
+    """The exporters' Material for a terminal's name, colour and CGA material attributes
+    (`set(material.*)`, `texture()`: grammarkit.split.texturing)."""
+    from ..geometry.exporters import Material
+
+    if not cga:
+        return Material(name, rgba)
+    d = dict(cga)
+    if "opacity" in d:
+        rgba = (*rgba[:3], int(round(d.pop("opacity") * 255)))
+    texture = d.pop("colormap", None)
+    metallic, roughness = d.pop("metallic", None), d.pop("roughness", None)
+    double_sided = bool(d.pop("doubleSided", False))
+    return Material(name, rgba, double_sided=double_sided, texture=texture, metallic=metallic,
+                    roughness=roughness, extras=tuple(sorted(d.items())))
 
 
 class Model:
@@ -291,7 +392,7 @@ class Model:
     def _paint_faces(self, out: np.ndarray) -> None:
         """Face terminals have no volume: they colour the body triangles lying in their region."""
         raw = self._ctx.tags  # plain lists [name, rule, otype, color, material, node, role]
-        faces = [f for f in self._ctx.painting if raw[f[0]][3] or raw[f[0]][4]]
+        faces = [f for f in self._ctx.painting if raw[f[0]][3] or raw[f[0]][4] or raw[f[0]][7] is not None]
         if not faces:
             return
         is_body = np.array([t[6] == "body" for t in raw] + [False], dtype=bool)
@@ -357,6 +458,37 @@ class Model:
         return trimesh.Trimesh(vertices=self.vertices, faces=self.faces, face_colors=colors, process=False,
                                metadata={"name": self.name, "seed": self.seed})
 
+    def _uvs(self, V: np.ndarray, F: np.ndarray, tags: np.ndarray, uv_set: int) -> np.ndarray | None:
+        """Texture coordinates (n, 3, 2) of triangles `F` (with tags `tags`, -1: none) in uv set
+        `uv_set`, NaN where the terminal has none; None when no triangle has any. Each tag's
+        UVs are an affine map of the world position (grammarkit.split.texturing)."""
+        raw = self._ctx.tags
+        maps = np.full((len(raw) + 1, 2, 4), np.nan)
+        any_uv = False
+        for i, t in enumerate(raw):
+            tex = t[7]
+            m = tex.get_uv(uv_set) if tex is not None else None
+            if m is not None:
+                maps[i] = m
+                any_uv = True
+        if not any_uv or not len(F):
+            return None
+        M = maps[tags]  # (n, 2, 4); -1 picks the NaN row appended last
+        P = V[F]  # (n, 3, 3)
+        return np.einsum("nkj,ncj->nck", M[:, :, :3], P) + M[:, None, :, 3]
+
+    @cached_property
+    def triangle_uvs(self) -> np.ndarray | None:
+        """CGA texture coordinates of uv set 0 at the three corners of every solid triangle
+        (shape (n, 3, 2); NaN where the terminal has none), or None when the model has no UVs
+        (docs/cga.md, "Texturing")."""
+        return self._uvs(self.vertices, self.faces, self.triangle_tags, 0)
+
+    @cached_property
+    def surface_uvs(self) -> np.ndarray | None:
+        """Like `triangle_uvs`, for the surface layer's triangles."""
+        return self._uvs(self.surface_vertices, self.surface_faces, self.surface_tags, 0)
+
     @property
     def triangle_materials(self) -> list[str | None]:
         return [self.tags[t].material if t >= 0 else None for t in self.triangle_tags]
@@ -416,7 +548,7 @@ class Model:
         per group the rules, source lines and semantic tags (docs/derive.md, "Files")."""
         from ..geometry.exporters import Material, Scene, Solid
 
-        raw = self._ctx.tags  # plain lists [name, rule, otype, color, material, node, role]
+        raw = self._ctx.tags  # plain lists [name, rule, otype, color, material, node, role, texturing]
         nodes = self._ctx.nodes
         group_of_name: dict[str, int] = {}
         material_index: dict[Material, int] = {}
@@ -427,23 +559,27 @@ class Model:
         tag_kind = np.empty(len(raw) + 1, dtype=np.int64)
         for i, t in enumerate(raw):
             span = nodes[t[5]][7] if 0 <= t[5] < len(nodes) else None
-            key = (t[0], t[1], t[2], t[3], t[4], t[6], span.file if span else None, span.line if span else None)
+            key = (t[0], t[1], t[2], t[3], t[4], t[6], span.file if span else None, span.line if span else None,
+                   t[7].mat if t[7] is not None else ())
             k = kind_of.get(key)
             if k is None:
                 k = kind_of[key] = len(kind_of)
             tag_kind[i] = k
-        untagged = (UNTAGGED, None, None, None, None, "untagged", None, None)
+        untagged = (UNTAGGED, None, None, None, None, "untagged", None, None, ())
         tag_kind[-1] = kind_of.setdefault(untagged, len(kind_of))
         kind_group = np.empty(len(kind_of), dtype=np.int64)
         kind_material = np.empty(len(kind_of), dtype=np.int64)
-        for (name, rule, otype, color, mat_name, role, file, line), k in kind_of.items():
-            rgba = _rgba(color, CUT_COLOR if role == "cut" else DEFAULT_COLOR)
+        for (name, rule, otype, color, mat_name, role, file, line, cga_mat), k in kind_of.items():
+            # a textured terminal without a colour is white, as CGA's default: glTF multiplies the
+            # texture by the base colour
+            textured = color is None and any(k == "colormap" for k, _ in cga_mat)
+            rgba = _rgba(color, "#ffffff" if textured else CUT_COLOR if role == "cut" else DEFAULT_COLOR)
             g = group_of_name.get(name)
             if g is None:
                 g = group_of_name[name] = len(info)
                 info.append({"terminal": name, "rules": set(), "sources": set(), "object_types": set(),
                              "roles": set(), "materials": set()})
-            mat = Material(mat_name, rgba)
+            mat = _material(mat_name, rgba, cga_mat)
             m = material_index.get(mat)
             if m is None:
                 m = material_index[mat] = len(materials)
@@ -477,7 +613,7 @@ class Model:
             face_group = tag_group[tri_tags]
             solids.append(Solid(name, self.vertices, self.faces, face_group, group_list(face_group, False),
                                 tag_material[tri_tags], materials,
-                                extras={"grammar": self.name, "seed": self.seed}))
+                                extras={"grammar": self.name, "seed": self.seed}, uv=self.triangle_uvs))
         if len(self.surface_faces):
             # the surface layer: its own node, flagged as a surface (no inside, not part of the
             # solid's watertight guarantee), double-sided materials (docs/language.md, "Solids and surfaces")
@@ -486,10 +622,11 @@ class Model:
             used = np.unique(tag_material[stags])
             remap = np.zeros(len(materials), dtype=np.int64)
             remap[used] = np.arange(len(used))
-            smats = [Material(materials[m].name, materials[m].rgba, double_sided=True) for m in used.tolist()]
+            smats = [replace(materials[m], double_sided=True) for m in used.tolist()]
             solids.append(Solid(f"{name} surfaces", self.surface_vertices, self.surface_faces, face_group,
                                 group_list(face_group, True), remap[tag_material[stags]], smats,
-                                extras={"grammar": self.name, "seed": self.seed, "surface": True}))
+                                extras={"grammar": self.name, "seed": self.seed, "surface": True},
+                                uv=self.surface_uvs))
         extras = {"grammar": self.name, "seed": self.seed,
                   "attrs": {k: v for k, v in self.attrs.items() if isinstance(v, (int, float, str, bool))},
                   "bindings": dict(self.bindings),
@@ -498,17 +635,29 @@ class Model:
             extras["reports"] = self.reports  # CGA's reports, in the building node's extras
         return Scene(name, solids, extras)
 
-    def save(self, path: Any, format: str | None = None) -> Any:
+    def save(self, path: Any, format: str | None = None, textures: str = "embed") -> Any:
         """Write the model through grammarkit's exporters (format from `format` or the suffix:
         glb, gltf, obj, stl, ply), atomically; returns the path. Colours, materials, terminal
-        groups and attrs are kept (see docs/derive.md, "Files")."""
+        groups and attrs are kept (see docs/derive.md, "Files"). glTF/GLB texture images (CGA
+        texturing, docs/cga.md) are embedded, or with `textures="reference"` referenced by
+        URIs relative to the written file."""
+        from dataclasses import replace as replace_spec
+        from functools import partial
         from pathlib import Path
 
-        from ..geometry.exporters import encode_with, exporter_for
+        from ..geometry.exporters import encode_glb, encode_gltf, encode_with, exporter_for
         from ..run.writer import write_files
 
         path = Path(path)
-        write_files({path: encode_with(exporter_for(path, format), self)})
+        spec = exporter_for(path, format)
+        if textures != "embed":
+            encoders = {"glb": encode_glb, "gltf": encode_gltf}
+            if textures != "reference":
+                raise ValueError(f"textures must be 'embed' or 'reference', got {textures!r}")
+            if spec.format in encoders:
+                spec = replace_spec(spec, encode=partial(encoders[spec.format], textures="reference",
+                                                         base=path.parent))
+        write_files({path: encode_with(spec, self)})
         return path
 
     def _repr_png_(self) -> bytes:

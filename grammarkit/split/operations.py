@@ -16,7 +16,15 @@ from ..registry import FitSpec, OperationSpec, Param
 AXES = ("x", "y", "z")
 FACE_SELECTORS = ("top", "bottom", "side", "front", "back", "left", "right", "all")
 # comp's selectors (grammarkit/split/comp.py); "<index>" stands for the integer selectors 0, 1, ...
-COMP_SELECTORS = FACE_SELECTORS + ("vertical", "horizontal", "aslant", "nutant", "volume", "<index>")
+# setupProjection's axes (the same list as grammarkit.split.texturing.AXES; kept here so that
+# `grammarkit check` does not import the engine)
+PROJECTION_AXES = tuple(f"{o}.{a}" for o in ("scope", "world") for a in ("xy", "xz", "yx", "yz", "zx", "zy"))
+# setback's edge selectors (grammarkit/split/lots.py)
+SETBACK_SELECTORS = ("front", "back", "left", "right", "top", "bottom", "side", "south", "north", "west", "east",
+                     "all", "remainder", "<index>")
+COMP_SELECTORS = FACE_SELECTORS + ("vertical", "horizontal", "aslant", "nutant", "volume", "<index>",
+                                   # comp(e) / comp(v) (grammarkit/split/comp_edges.py)
+                                   "border", "inside", "eave", "ridge", "hip", "valley")
 
 class LazyApply:
     """`apply` of a built-in operation: imports grammarkit.split.ops when first called.
@@ -43,10 +51,11 @@ _SPECS: tuple[OperationSpec, ...] = (
     OperationSpec("extrude", (Param("height"),), doc="Extrude a face along its normal into a volume."),
     OperationSpec("taper", (Param("height"), Param("top_scale", required=False, default=0.0)),
                   doc="Extrude a face, scaling the top about the centroid (0: to a point)."),
-    OperationSpec("comp", (Param("mode", "axis", choices=("f",)),), block="selectors",
+    OperationSpec("comp", (Param("mode", "axis", choices=("f", "e", "v")),), block="selectors",
                   selectors=COMP_SELECTORS,
-                  doc="Decompose a shape into its faces (the shape is consumed unless `volume:` "
-                      "keeps it); selectors by orientation, `all`, an index, `volume`."),
+                  doc="Decompose a shape into its faces (f), edges (e) or vertices (v) (the shape is "
+                      "consumed unless `volume:` keeps it); selectors by orientation, `all`, an index, "
+                      "`volume`; for edges also `border`, `inside`, `eave`, `ridge`, `hip`, `valley`."),
     OperationSpec("split", (Param("axis", "axis", choices=AXES),), block="sizes",
                   doc="Split the scope along an axis into absolute, relative and floating parts."),
     OperationSpec("repeat", (Param("axis", "axis", choices=AXES), Param("size"),
@@ -97,7 +106,47 @@ _SPECS: tuple[OperationSpec, ...] = (
     OperationSpec("report", (Param("key", "string"), Param("value", "any")),
                   doc="Collect a value under a report key (Model.reports; the model's metadata)."),
     OperationSpec("set", (Param("attr", "name"), Param("value", "any")),
-                  doc="Change an attr for this shape and everything derived from it (CGA's set)."),
+                  doc="Change an attr for this shape and everything derived from it (CGA's set); "
+                      "`set(material.opacity, 0.5)` and the other CGA material attributes too."),
+    # lots and massing (grammarkit/split/lots.py; docs/operations.md "Setbacks")
+    OperationSpec("setback", (Param("distance"),), block="selectors", selectors=SETBACK_SELECTORS,
+                  doc="Move the selected edges of a face inwards: a face per edge, and the remainder."),
+    OperationSpec("setbackPerEdge", (Param("distance", "expr"),), block="selectors", selectors=SETBACK_SELECTORS,
+                  doc="setback() with the distance evaluated on every edge (comp.index: the edge's index)."),
+    OperationSpec("setbackToArea", (Param("area"),), block="selectors", selectors=SETBACK_SELECTORS,
+                  doc="setback() with the distance that leaves a remainder of the given area."),
+    OperationSpec("shapeL", (Param("front_width"), Param("left_width")), block="selectors",
+                  selectors=("shape", "remainder"), doc="An L-shaped footprint: front and left wings."),
+    OperationSpec("shapeU", (Param("front_width"), Param("right_width"), Param("left_width")), block="selectors",
+                  selectors=("shape", "remainder"), doc="A U-shaped footprint: front, right and left wings."),
+    OperationSpec("shapeO", (Param("front_width"), Param("right_width"), Param("back_width"), Param("left_width")),
+                  block="selectors", selectors=("shape", "remainder"),
+                  doc="An O-shaped footprint: wings along all four sides around a court."),
+    OperationSpec("innerRectangle", (Param("align", "axis", required=False, default="scope",
+                                           choices=("scope", "edge")),),
+                  block="selectors", selectors=("shape", "remainder"),
+                  doc="The largest rectangle in a face (aligned to the scope or to an edge), and the rest."),
+    OperationSpec("label", (Param("name", "string"),),
+                  doc="Make the shape (as it is now) an occluder with this label for inside(), "
+                      "overlaps() and touches() of shapes derived later."),
+    # texturing (grammarkit/split/texturing.py; docs/cga.md "Texturing")
+    OperationSpec("setupProjection", (Param("uvset"), Param("axes", "axis", choices=PROJECTION_AXES),
+                                      Param("width"), Param("height"),
+                                      Param("width_offset", required=False, default=0.0),
+                                      Param("height_offset", required=False, default=0.0)),
+                  doc="A planar texture projection for a uv set: origin and u/v axes of the scope or "
+                      "the world, a texture tile of width x height world units."),
+    OperationSpec("projectUV", (Param("uvset"),),
+                  doc="Bake the uv set's projection into the shape's texture coordinates."),
+    OperationSpec("texture", (Param("path", "string"),),
+                  doc="The colour texture (CGA's material.colormap) of the shape; makes no UVs."),
+    OperationSpec("translateUV", (Param("uvset"), Param("u"), Param("v")),
+                  doc="Shift the texture coordinates of a uv set (texture units)."),
+    OperationSpec("scaleUV", (Param("uvset"), Param("u"), Param("v")),
+                  doc="Scale the texture coordinates of a uv set."),
+    OperationSpec("rotateUV", (Param("uvset"), Param("angle")),
+                  doc="Turn the texture coordinates of a uv set about the uv origin (degrees)."),
+    OperationSpec("deleteUV", (Param("uvset"),), doc="Remove the texture coordinates of a uv set."),
 )
 
 
@@ -133,6 +182,11 @@ def grammarkit_insert_fits() -> Iterable[FitSpec]:
 @hookimpl
 def grammarkit_functions() -> Iterable[Any]:
     """CGA's string and list functions (grammarkit/split/strings.py; pure Python, light)."""
+    from ..registry import FunctionSpec
     from .strings import STRING_FUNCTIONS
 
-    return STRING_FUNCTIONS
+    # CGA's occlusion queries: the split compiler binds them to the shape they are evaluated on
+    # (grammarkit/split/occlusion.py), so they have no value-only implementation here
+    occlusion = tuple(FunctionSpec(name, 0, 2, f"CGA's {name}(target = \"intra\", label): a query against the "
+                                   "model derived so far (split grammars)") for name in ("inside", "overlaps", "touches"))
+    return (*STRING_FUNCTIONS, *occlusion)

@@ -27,6 +27,14 @@ from .assets import builtin_asset, load_asset, load_asset_mesh
 from .engine import rotation
 from .scope_ops import op_align_scope_to_axes, op_align_scope_to_geometry, op_reverse_normals, op_rotate_scope
 from .shape import FACE, VOLUME, Shape
+from .lots import (
+    op_inner_rectangle, op_setback, op_setback_per_edge, op_setback_to_area, op_shape_l, op_shape_o, op_shape_u,
+)
+from .occlusion import op_label
+from .texturing import (
+    moved, op_delete_uv, op_project_uv, op_rotate_uv, op_scale_uv, op_setup_projection, op_texture, op_translate_uv,
+    set_material,
+)
 
 Manifold = manifold3d.Manifold
 AXIS = {"x": 0, "y": 1, "z": 2}
@@ -389,11 +397,14 @@ def op_roof_mansard(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
 def op_t(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
     x, y, z = (_num(v, "t()") for v in args[:3])
     (a0, a1, a2), (b0, b1, b2), (c0, c1, c2) = s.ax
+    o0 = s.o
     c = s
     c.o = (s.o[0] + a0 * x + b0 * y + c0 * z, s.o[1] + a1 * x + b1 * y + c1 * z,
            s.o[2] + a2 * x + b2 * y + c2 * z)
     if c.on is not None and (x or y or z):
         c.on = None  # a face moved off its volume is a surface of its own
+    if c.tex is not None:
+        moved(c, o0, c.ax)  # baked UVs move with the geometry
     return c
 
 
@@ -407,6 +418,8 @@ def op_r(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
     c.ax = new  # type: ignore[assignment]
     if c.on is not None and (rx or ry or rz):
         c.on = None
+    if c.tex is not None:
+        moved(c, c.o, ax)
     return c
 
 
@@ -424,6 +437,8 @@ def op_s(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
         c.solid = s.solid.scale(f)
     if s.kind == FACE and new[2] > EPS and s.poly is None:
         c.kind = VOLUME  # a face given a depth becomes a box (e.g. to insert a mesh in it)
+    if c.tex is not None:
+        moved(c, s.o, s.ax, f)
     return c
 
 
@@ -444,7 +459,10 @@ def op_center(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
     c = s
     if c.on is not None and tuple(o) != s.o:
         c.on = None
+    o0 = c.o
     c.o = tuple(o)  # type: ignore[assignment]
+    if c.tex is not None:
+        moved(c, o0, c.ax)
     return c
 
 
@@ -492,7 +510,7 @@ def op_insert(ctx: Any, s: Shape, args: Any, block: Any) -> Shape | None:
             solid = _trimmed(solid, s)
             if solid.is_empty():
                 return None  # trimmed away entirely
-        return s.derived(s.o, size, None, VOLUME, solid=solid)
+        return _untextured(s.derived(s.o, size, None, VOLUME, solid=solid))
     if rel.startswith("builtin:"):
         raise ValueError(f"i(): fit {fit!r} needs a mesh file, not the built-in {rel!r}")
     fits = ctx.registries.fits if ctx.registries is not None else {}
@@ -511,7 +529,15 @@ def op_insert(ctx: Any, s: Shape, args: Any, block: Any) -> Shape | None:
     size = (x1 - x0, y1 - y0, z1 - z0)
     if not all(math.isfinite(v) for v in size) or min(size) < 0:
         raise ValueError(f"fit {fit!r} returned an empty or broken mesh for {path.name}")
-    return s.derived(s.o, size, None, VOLUME, solid=solid.translate((-x0, -y0, -z0)))
+    return _untextured(s.derived(s.o, size, None, VOLUME, solid=solid.translate((-x0, -y0, -z0))))
+
+
+def _untextured(s: Shape) -> Shape:
+    """An inserted mesh is new geometry: the UVs baked into the shape it replaces are not its
+    own (grammarkit does not read assets' UVs; the material attributes stay)."""
+    if s.tex is not None and s.tex.uv:
+        s.tex = s.tex.replace(uv=())
+    return s
 
 
 # -- tags ------------------------------------------------------------------------------------
@@ -539,6 +565,8 @@ def op_set(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
     """CGA's `set(attr, value)`: the shape and its descendants see the new value; other shapes
     keep theirs (each shape carries its values, shared until one is changed)."""
     key, value = str(args[0]), args[1]
+    if key.startswith("material."):
+        return set_material(ctx, s, key, value)
     if isinstance(value, tuple):
         raise ValueError(f"set({key}, ...): the value must be a number, a string or a boolean")
     c = s
@@ -576,6 +604,12 @@ BUILTIN_APPLY = {
     "alignScopeToGeometry": op_align_scope_to_geometry, "alignScopeToAxes": op_align_scope_to_axes,
     "rotateScope": op_rotate_scope, "report": op_report, "reverseNormals": op_reverse_normals,
     "trim": op_trim,
+    "setupProjection": op_setup_projection, "projectUV": op_project_uv, "texture": op_texture,
+    "translateUV": op_translate_uv, "scaleUV": op_scale_uv, "rotateUV": op_rotate_uv,
+    "deleteUV": op_delete_uv,
+    "setback": op_setback, "setbackPerEdge": op_setback_per_edge, "setbackToArea": op_setback_to_area,
+    "shapeL": op_shape_l, "shapeU": op_shape_u, "shapeO": op_shape_o, "innerRectangle": op_inner_rectangle,
+    "label": op_label,
 }
 
 

@@ -66,15 +66,25 @@ def turn_scope(s: Shape, ux: float, uy: float) -> Shape:
 
 def op_align_scope_to_geometry(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
     """`alignScopeToGeometry(edge)`: x along edge `edge` of the outline (its outer contour, in
-    order; negative counts from the end, as in CGA) or along the `"longest"` edge."""
+    order; negative counts from the end, as in CGA), along the `"longest"` edge, or along the
+    `"lowest"` one (CGA's world.lowest: the lowest midpoint in the world; the longest of those
+    at that height)."""
     edge = args[0]
     ring = s.contours()[0]
     n = len(ring)
     lengths = [math.dist(ring[i], ring[(i + 1) % n]) for i in range(n)]
     if isinstance(edge, str):
-        if edge != "longest":
-            raise ValueError(f"alignScopeToGeometry(): edge must be a number or \"longest\", got {edge!r}")
-        i = max(range(n), key=lambda k: (round(lengths[k], 9), -k))
+        if edge == "longest":
+            i = max(range(n), key=lambda k: (round(lengths[k], 9), -k))
+        elif edge == "lowest":
+            def height(k: int) -> float:
+                (x0, y0), (x1, y1) = ring[k], ring[(k + 1) % n]
+                return s.world((x0 + x1) / 2, (y0 + y1) / 2, 0.0)[2]
+            i = min((k for k in range(n) if lengths[k] >= EPS),
+                    key=lambda k: (round(height(k), 6), -round(lengths[k], 9), k))
+        else:
+            raise ValueError(f"alignScopeToGeometry(): edge must be a number, \"longest\" or \"lowest\", "
+                             f"got {edge!r}")
     elif isinstance(edge, bool) or not isinstance(edge, (int, float)) or not float(edge).is_integer():
         raise ValueError(f"alignScopeToGeometry(): edge must be a whole number, got {edge!r}")
     else:

@@ -40,7 +40,7 @@ class Shape:
     __slots__ = (
         "o", "ax", "sz", "kind", "poly", "solid", "color", "material", "rule", "params",
         "seed", "node", "depth", "si", "st", "entry", "cut", "values", "_rng", "gid", "on",
-        "trims", "trim_on",
+        "trims", "trim_on", "tex", "csel",
     )
 
     def __init__(self, o: Vec, ax: tuple[Vec, Vec, Vec], sz: Vec, kind: str = FACE,
@@ -70,6 +70,10 @@ class Shape:
         self.on: tuple | None = None
         self.trims: tuple = ()  # CGA trim planes (world point, world normal) for inserts
         self.trim_on = True  # CGA's trim.vertical: whether i() clips by the trim planes
+        # CGA texturing state (grammarkit.split.texturing.Texturing): projections, baked UVs,
+        # material attributes; None until a texturing operation runs
+        self.tex: Any = None
+        self.csel = ""  # comp.sel: the selector of the block branch that made the shape
 
     def copy(self) -> "Shape":
         c = Shape.__new__(Shape)
@@ -78,6 +82,7 @@ class Shape:
         c.seed, c.node, c.depth, c.si, c.st = self.seed, self.node, self.depth, self.si, self.st
         c.entry, c.cut, c.values, c._rng = self.entry, self.cut, self.values, None
         c.gid, c.on, c.trims, c.trim_on = self.gid, self.on, self.trims, self.trim_on
+        c.tex, c.csel = self.tex, self.csel
         return c
 
     def derived(self, o: Vec, sz: Vec, poly: Any = None, kind: str | None = None,
@@ -93,6 +98,7 @@ class Shape:
         c.gid = next(_GIDS)
         c.on = self.on if c.kind == FACE else None
         c.trims, c.trim_on = self.trims, self.trim_on
+        c.tex, c.csel = self.tex, self.csel
         return c
 
     def rng(self) -> random.Random:

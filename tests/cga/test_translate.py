@@ -174,16 +174,16 @@ def test_block_before_more_items_keeps_the_shape():
 
 
 def test_untranslatable_constructs_warn_with_location_and_feature():
-    text = ("Lot -->\n  setupProjection(0, scope.xy, 2, 2)\n  extrude(geometry.angle(zenith) * 0.1)\n"
+    text = ("Lot -->\n  tileUV(0, 2, 2)\n  extrude(geometry.angle(zenith) * 0.1)\n"
             "  print(\"h\")\n  X.\n")
     result = translate_cga(text, filename="w.cga")
     assert result.ok
     warnings = [d for d in result.diagnostics if d.severity == "warning"]
     assert [(d.span.line, d.span.column) for d in warnings] == [(2, 3), (3, 3), (4, 3)]
     assert {c.feature for c in result.report.constructs if c.status != "translated"} == {
-        "op:setupProjection", "fn:geometry.angle", "op:print"}
+        "op:tileUV", "fn:geometry.angle", "op:print"}
     formatted = warnings[0].format(text)
-    assert formatted.startswith("w.cga:2:3: warning: not translated: setupProjection()")
+    assert formatted.startswith("w.cga:2:3: warning: not translated: tileUV()")
     assert "    ^" in formatted
 
 

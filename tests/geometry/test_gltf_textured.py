@@ -1,0 +1,46 @@
+"""Khronos' glTF validator reports nothing (no errors, warnings, infos or hints) on GLB and glTF
+files with CGA texturing: TEXCOORD_0 on textured primitives, embedded and referenced images,
+a sampler, PBR factors and transparency (docs/cga.md, "Texturing")."""
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import grammarkit
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "js"))
+from _node import JS_DIR, node_or_skip, package_or_skip  # noqa: E402
+
+LOT = [(0.0, 0.0), (12.0, 0.0), (12.0, 9.0), (0.0, 9.0)]
+TEXT = ('Lot --> extrude(9) comp(f) { side: Facade | top: setupProjection(0, world.xy, 3, 3) '
+        'texture("roof.jpg") projectUV(0) set(material.opacity, 0.8) Roof. | volume: Mass. }\n'
+        'Facade --> setupProjection(0, scope.xy, 2, 3) texture("bricks.png") projectUV(0) '
+        'split(y) { { ~3: split(x) { ~1: Wall. | 1.2: recess(0.3) set(material.metallic, 0.5) Glass. '
+        '| ~1: Wall. } }* }\n')
+
+
+def test_textured_files_validate_cleanly(tmp_path):
+    from PIL import Image
+
+    Image.new("RGB", (16, 16), (170, 70, 50)).save(tmp_path / "bricks.png")
+    Image.new("RGB", (16, 16), (60, 60, 70)).save(tmp_path / "roof.jpg")
+    (tmp_path / "t.grammar").write_text(TEXT)
+    m = grammarkit.derive(str(tmp_path / "t.grammar"), lot=LOT)
+    assert m.triangle_uvs is not None
+    files = [m.save(tmp_path / "m.glb"), m.save(tmp_path / "m.gltf"),
+             m.save(tmp_path / "r.gltf", textures="reference"), m.save(tmp_path / "r.glb", textures="reference")]
+    node = node_or_skip()
+    package_or_skip("gltf-validator")
+    proc = subprocess.run([node, str(JS_DIR / "validate.mjs"), *map(str, files)], capture_output=True,
+                          text=True, timeout=300, cwd=JS_DIR)
+    assert proc.returncode == 0, proc.stderr
+    reports = [json.loads(line) for line in proc.stdout.splitlines() if line.strip()]
+    assert len(reports) == 4
+    for r in reports[:3]:
+        assert (r["errors"], r["warnings"], r["infos"], r["hints"]) == (0, 0, 0, 0), r
+    # a GLB that references its images: valid, the validator only notes the URIs (info URI_GLB)
+    r = reports[3]
+    assert (r["errors"], r["warnings"], r["hints"]) == (0, 0, 0)
+    assert {m["code"] for m in r["messages"]} == {"URI_GLB"}
