@@ -136,6 +136,15 @@ def placement_order(graph: TypedGraph) -> list[tuple[int, int]]:
     return out
 
 
+def _relative(Fa: np.ndarray, Fb: np.ndarray) -> np.ndarray:
+    """b's frame in a's, inv(Fa) @ Fb, for rigid frames (the inverse is the transpose)."""
+    R = Fa[:3, :3].T
+    out = np.eye(4)
+    out[:3, :3] = R @ Fb[:3, :3]
+    out[:3, 3] = R @ (Fb[:3, 3] - Fa[:3, 3])
+    return out
+
+
 @dataclass
 class _State:
     score: float
@@ -171,7 +180,7 @@ class ConsistentDecoder:
     def _touch(self, ta: str, va: str, Fa: np.ndarray, tb: str, vb: str, Fb: np.ndarray) -> bool:
         """Do parts a and b touch (exact test at the instantiator's tolerance)? Cached by the
         rounded placement of b in a's frame."""
-        rel = np.linalg.inv(Fa) @ Fb
+        rel = _relative(Fa, Fb)
         size = max(self.inst.library.sizes.get(ta, 1.0), self.inst.library.sizes.get(tb, 1.0)) or 1.0
         key = (ta, va, tb, vb, tuple(np.round(rel[:3, 3] / (1e-6 * size)).astype(np.int64).tolist()),
                tuple(np.round(rel[:3, :3].ravel() / 1e-6).astype(np.int64).tolist()))
@@ -289,7 +298,7 @@ class ConsistentDecoder:
                         new_cats[(min(x, y), max(x, y))] = k if x < y else cats.reverse.get(k, k)
                     ok = True
                     for w in others:
-                        kw, _d = cats.classify(T[w], T[y], np.linalg.inv(st.frames[w]) @ Fy,
+                        kw, _d = cats.classify(T[w], T[y], _relative(st.frames[w], Fy),
                                                st.variants[w] or None, vy or None)
                         if kw is None:
                             ok = False

@@ -342,15 +342,17 @@ def save_edge_model(em: EdgeModel, path: str | Path) -> Path:
 
 
 def load_edge_model(path: str | Path, grammar: Any = None) -> EdgeModel:
-    """Load an `.edges` file; with `grammar`, refuse one trained for another grammar."""
+    """Load an `.edges` file (or `builtin:NAME`, a shipped one); with `grammar`, refuse one
+    trained for another grammar."""
     from safetensors import SafetensorError
     from safetensors.torch import load_file
 
     from grammarkit.run import grammar_hash
 
+    from .modelfile import resolve
     from .predictor import CategoryLSTM, PredictorConfig
 
-    path = Path(path)
+    path = resolve(path, ".edges")
     if not path.exists():
         raise ModelFileError(f"{path}: no such model file")
     if path.is_dir():
