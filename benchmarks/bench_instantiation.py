@@ -134,7 +134,9 @@ def main() -> int:
     ap.add_argument("--fast-tries", type=int, default=8, help="backtracking rows: tries per graph")
     ap.add_argument("--fast-budget", type=int, default=400, help="backtracking rows: insertions per try")
     ap.add_argument("--skip-e2e", action="store_true")
-    ap.add_argument("--e2e-rows", default="paper,backtracking,consistent,consistent-median,sampler",
+    ap.add_argument("--parts", default="accuracy,instantiation,e2e",
+                    help="comma-separated parts to run: accuracy, instantiation, e2e")
+    ap.add_argument("--e2e-rows", default="paper,backtracking,consistent,sampler",
                     help="comma-separated end-to-end rows to run")
     ap.add_argument("--inst-graphs", type=int, default=None, help="instantiate only the first N held-out graphs")
     ap.add_argument("--vae", default="builtin:castle", help="string-VAE model for the end-to-end rows "
@@ -199,8 +201,26 @@ def main() -> int:
     print(f"\ncategories: {len(cats)} ("
           + ", ".join(f"{a}-{b} {len(v)}" for (a, b), v in sorted(cats.by_pair.items()))
           + f"); {len(test_idx)} held-out graphs")
+    parts = set(args.parts.split(","))
+    if args.skip_e2e:
+        parts.discard("e2e")
     # 1. accuracy on held-out graphs
     test_ds = pick(test_idx)
+    if "accuracy" in parts:
+        accuracy_tables(args, grammar, models, test_ds, decoder, cats)
+    if "instantiation" in parts:
+        instantiation_tables(args, grammar, models, test_ds, inst, decoder, cats)
+    if "e2e" in parts:
+        end_to_end(args, grammar, models, full)
+    return 0
+
+
+def accuracy_tables(args, grammar, models, test_ds, decoder, cats) -> None:  # noqa: ANN001
+    from grammarkit_string_vae.consistent import ConsistentDecoder
+    from grammarkit_string_vae.edgemodel import _examples, evaluate
+    from grammarkit_string_vae.instantiate import Instantiator
+
+    em = models["bidirectional"][0]
     print("\n## Edge-category accuracy on held-out graphs\n")
     rows_ = []
     for name, (m, _p, secs) in models.items():
@@ -228,8 +248,16 @@ def main() -> int:
     print(table(["epoch", "seconds", "per character", "majority", "log-prob sum", "joint"],
                 [[r["epoch"], r["seconds"], r["char_accuracy"], r["edge_accuracy_majority"], r["edge_accuracy_voted"],
                   r.get("edge_accuracy_joint", "-")] for r in hist]))
-    # 2. instantiation
+
+
+def instantiation_tables(args, grammar, models, test_ds, inst, decoder, cats) -> None:  # noqa: ANN001
+    import numpy as np
+
+    from grammarkit.tiling import validate
     from grammarkit_string_vae.categories import edge_labels
+    from grammarkit_string_vae.consistent import instantiate_consistent
+
+    em = models["bidirectional"][0]
 
     def backtrack(m, voting=None):  # noqa: ANN001, ANN202
         return lambda g, j: inst.instantiate(g, m.rankings(g, strings=8, seed=j, voting=voting), seed=j,
@@ -293,13 +321,13 @@ def main() -> int:
     print(f"\nNaive estimate (the paper's): a cycle of L parts with c configurations per edge closes with "
           f"probability (1/c)^L; here c = {n_cat:.1f} on average per type pair, so a 15-part cycle: "
           f"{(1 / n_cat) ** 15:.2e} (paper: 1/6^15 = {6.0 ** -15:.2e}).")
-    if args.skip_e2e:
-        return 0
-    # 3. end to end
+
+
+def end_to_end(args, grammar, models, full) -> None:  # noqa: ANN001
     vae = str(args.vae)
     if not vae.startswith("builtin:") and not Path(vae).exists():
         print(f"\n(end-to-end skipped: no string-VAE model {vae})")
-        return 0
+        return
     print(f"\n## End to end: valid 3D shapes per minute, {args.e2e_seconds:.0f} s each\n")
     largest = max(len(g) for g in full.graphs)
     paper_p, default_p = str(models["paper"][1]), str(models["bidirectional"][1])
@@ -329,7 +357,6 @@ def main() -> int:
     print(table(["back end", "valid shapes", "seconds", "shapes per minute", "mean parts", "load average after",
                  "vs graph sampler"], rows_))
     print(f"\nload average at the end: {' '.join(f'{x:.1f}' for x in os.getloadavg())}")
-    return 0
 
 
 if __name__ == "__main__":
