@@ -104,3 +104,28 @@ def test_placement_order_closes_the_shortest_cycle_first():
         assert x == -1 and not seen or x in seen and (min(x, y), max(x, y)) in g.edges
         seen.add(y)
     assert [y for y, _ in order[-2:]] == [7, 8]  # the tail, on no cycle, comes last
+
+
+def test_the_shipped_predictor_with_consistent_decoding_labels_the_examples(castle):
+    pytest.importorskip("torch")
+    from grammarkit_string_vae.edgemodel import load_edge_model
+    from grammarkit_string_vae.modelfile import WEIGHTS, ModelFileError
+
+    if not (WEIGHTS / "castle.edges").exists():
+        pytest.skip("no shipped weights in this checkout")
+    g, examples, _cats = castle
+    em = load_edge_model("builtin:castle", g)
+    assert em.meta["training"]["config"]["epochs"] == 40 and em.model.config.bidirectional  # the script's defaults
+    inst = Instantiator(g, em.categories)
+    dec = ConsistentDecoder(inst)
+    for asm, (graph, _truth) in zip(load_examples(g), examples):
+        frames = [local_frame(p).ravel().tolist() for p in asm.parts]
+        labels = edge_labels(graph, frames, em.categories, [variant_key(p) for p in asm.parts])
+        votes = {e: v for e, (_k, v) in em.predict(graph, strings=8, seed=0, voting="logprob").items()}
+        res = dec.decode(graph, votes)
+        assert res.consistent
+        assert all(res.categories[e] == labels[e] for e in graph.edges)  # every edge of the example right
+        built = instantiate_consistent(inst, dec, graph, votes)
+        assert built.ok and validate(g, built.assembly).ok
+    with pytest.raises(ModelFileError, match="no shipped .edges model"):
+        load_edge_model("builtin:nonesuch")

@@ -37,7 +37,8 @@ class StringVAEOptions(BaseModel):
                                        "points (default: 200 x n)")
     include_training: bool = Field(False, description="also yield graphs of the training set")
     categories: Optional[str] = Field(None, description="edge-category model (.edges, from `grammarkit train "
-                                      "edge-categories`): instantiate every graph in 3D and write it as a shape")
+                                      "edge-categories`, or builtin:castle for the shipped one): instantiate every "
+                                      "graph in 3D and write it as a shape")
     tries: int = Field(8, ge=1, description="instantiation: start edges tried per graph")
     votes: int = Field(8, ge=1, description="instantiation: strings per graph that vote on each edge's category")
     voting: Optional[Literal["majority", "logprob", "joint"]] = Field(
