@@ -27,9 +27,8 @@ end-to-end yield against the graph sampler.
 3. End-to-end: valid 3D shapes per minute from `derive --backend string-vae` (--vae, default the
    shipped builtin:castle; masked decoding, perturbation, with the categories): the paper's
    predictor with backtracking insertion (8 tries of 400 insertions), the default predictor with
-   backtracking (graphs larger than the largest training graph skipped), with the consistent
-   search, and with the consistent search and strings that close from the median training length
-   on (`length_quantile=0.5`), beside the graph sampler's new variants per minute on the same
+   backtracking (graphs larger than the largest training graph skipped) and with the consistent
+   search, beside the graph sampler's new variants per minute on the same
    example, for the same wall-clock budget, in the same run.
 
 Every instantiated shape is validated against the grammar (the instantiation refuses others);
@@ -134,8 +133,11 @@ def main() -> int:
     ap.add_argument("--fast-tries", type=int, default=8, help="backtracking rows: tries per graph")
     ap.add_argument("--fast-budget", type=int, default=400, help="backtracking rows: insertions per try")
     ap.add_argument("--skip-e2e", action="store_true")
-    ap.add_argument("--parts", default="accuracy,instantiation,e2e",
-                    help="comma-separated parts to run: accuracy, instantiation, e2e")
+    ap.add_argument("--parts", default="accuracy,instantiation,sampled,e2e",
+                    help="comma-separated parts to run: accuracy, instantiation, sampled, e2e")
+    ap.add_argument("--sampled-graphs", type=int, default=30, help="sampled part: VAE samples instantiated")
+    ap.add_argument("--sampler-seconds", type=float, default=None,
+                    help="end-to-end: the graph sampler's row (default: --e2e-seconds)")
     ap.add_argument("--e2e-rows", default="paper,backtracking,consistent,sampler",
                     help="comma-separated end-to-end rows to run")
     ap.add_argument("--inst-graphs", type=int, default=None, help="instantiate only the first N held-out graphs")
@@ -210,9 +212,52 @@ def main() -> int:
         accuracy_tables(args, grammar, models, test_ds, decoder, cats)
     if "instantiation" in parts:
         instantiation_tables(args, grammar, models, test_ds, inst, decoder, cats)
+    if "sampled" in parts:
+        sampled_table(args, grammar, models, inst, decoder)
     if "e2e" in parts:
         end_to_end(args, grammar, models, full)
     return 0
+
+
+def sampled_table(args, grammar, models, inst, decoder) -> None:  # noqa: ANN001
+    """The same VAE samples (perturbation, masked decoding) instantiated by each search: how many
+    are built and what a graph costs, the sampling included."""
+    import numpy as np
+
+    from grammarkit_string_vae.consistent import instantiate_consistent
+    from grammarkit_string_vae.modelfile import load_vae
+    from grammarkit_string_vae.sampling import Sampler, SamplingSettings
+
+    em = models["bidirectional"][0]
+    vae = load_vae(args.vae, grammar=grammar)
+    sampler = Sampler(vae, SamplingSettings(), seed=args.seed)
+    graphs = []
+    t0 = time.perf_counter()
+    while len(graphs) < args.sampled_graphs:
+        for s in sampler.run("perturb", 1):
+            if s.valid and len(graphs) < args.sampled_graphs:
+                graphs.append(s.decoded.graph)
+    sample_s = (time.perf_counter() - t0) / len(graphs)
+    rows = {"cycle-consistent search": [], "backtracking, 8 tries x 400 insertions": []}
+    for j, g in enumerate(graphs):
+        t = time.perf_counter()
+        votes = {e: v for e, (_k, v) in em.predict(g, strings=8, seed=j, voting="logprob").items()}
+        predict_s = time.perf_counter() - t
+        r = instantiate_consistent(inst, decoder, g, votes, tries=args.tries)
+        rows["cycle-consistent search"].append((r.ok, predict_s + r.seconds))
+        ranked = {e: [int(c) for c in np.argsort(-v, kind="stable") if v[c] > -1e8] for e, v in votes.items()}
+        b = inst.instantiate(g, ranked, seed=j, max_tries=args.tries)
+        rows["backtracking, 8 tries x 400 insertions"].append((b.ok, predict_s + b.seconds))
+    parts = [len(g) for g in graphs]
+    print(f"\n## {len(graphs)} VAE samples (perturbation; {statistics.mean(parts):.0f} parts on average, "
+          f"{min(parts)}-{max(parts)}), default predictor; sampling {sample_s:.2f} s per graph\n")
+    out = []
+    for name, rs in rows.items():
+        built = sum(ok for ok, _ in rs)
+        per = statistics.mean(sec for _, sec in rs)
+        out.append([name, f"{built}/{len(rs)}", per, 60.0 / (per + sample_s)])
+    print(table(["search", "built", "seconds per graph (prediction + search)",
+                 "graphs tried per minute (sampling included)"], out))
 
 
 def accuracy_tables(args, grammar, models, test_ds, decoder, cats) -> None:  # noqa: ANN001
@@ -328,7 +373,8 @@ def end_to_end(args, grammar, models, full) -> None:  # noqa: ANN001
     if not vae.startswith("builtin:") and not Path(vae).exists():
         print(f"\n(end-to-end skipped: no string-VAE model {vae})")
         return
-    print(f"\n## End to end: valid 3D shapes per minute, {args.e2e_seconds:.0f} s each\n")
+    print(f"\n## End to end: valid 3D shapes per minute, {args.e2e_seconds:.0f} s per string-vae row, "
+          f"{args.sampler_seconds or args.e2e_seconds:.0f} s for the graph sampler\n")
     largest = max(len(g) for g in full.graphs)
     paper_p, default_p = str(models["paper"][1]), str(models["bidirectional"][1])
     base = {"model": vae, "mode": "perturb"}
@@ -342,15 +388,17 @@ def end_to_end(args, grammar, models, full) -> None:  # noqa: ANN001
                           "budget": str(args.fast_budget), "max_parts": str(largest)}),
         "consistent": (f"string-vae: default predictor, cycle-consistent search (beam {args.beam})", "string-vae",
                        {**base, "categories": default_p, "search": "consistent", "beam": str(args.beam)}),
-        "consistent-median": ("string-vae: default predictor, cycle-consistent search, strings close from the "
-                              "median training length (length_quantile=0.5)", "string-vae",
-                              {**base, "categories": default_p, "search": "consistent", "beam": str(args.beam),
-                               "length_quantile": "0.5"}),
         "sampler": ("graph sampler (isomorphism dedupe)", "graph-sampler", {"dedupe": "isomorphism"}),
     }
     runs = [catalogue[k] for k in args.e2e_rows.split(",") if k in catalogue]
     rows_ = []
-    e2e_rows(args, grammar, rows_, runs)
+    e2e_rows(args, grammar, rows_, [r for r in runs if r[1] != "graph-sampler"])
+    if any(r[1] == "graph-sampler" for r in runs):
+        import copy
+
+        a2 = copy.copy(args)
+        a2.e2e_seconds = args.sampler_seconds or args.e2e_seconds
+        e2e_rows(a2, grammar, rows_, [r for r in runs if r[1] == "graph-sampler"])
     base_rate = rows_[-1][3] if runs and runs[-1][1] == "graph-sampler" else None
     for r in rows_:
         r.append(f"{r[3] / base_rate:.4f}x" if base_rate else "-")

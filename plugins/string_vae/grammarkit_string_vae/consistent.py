@@ -4,16 +4,17 @@ The predictor (predictor.py) gives every edge of a graph scores over its type pa
 (votes of several strings: summed log-probabilities). Choosing each edge's best category
 independently ignores what the categories mean: a category is a rigid placement, so around every
 cycle of the graph the placements must compose to the identity, and parts that the graph does not
-join must not touch. The graph (almost always without symmetries, see docs/string-vae.md) then
-fixes the categories; an LSTM has to learn this cycle reasoning from data, slowly.
+join must not touch. These constraints nearly always fix the categories (docs/string-vae.md,
+"Measured": the few castle graphs where they do not have two valid shapes); an LSTM has to learn
+this cycle reasoning from data, slowly.
 
 `ConsistentDecoder.decode` searches for the categories with the largest summed votes among those
 that *close geometrically*:
 
-- parts are placed one at a time in a fixed order that closes cycles as early as possible (next
-  is the unplaced part with the most placed neighbours; ties: the lowest index), each through
-  the edge to one placed neighbour (its parent) with one of the pair's categories: the parent's
-  canonical frame times the category's placement (categories.py);
+- parts are placed one at a time in an ear-decomposition order (`placement_order`: shortest
+  ears first, so every cycle closes as soon as possible), each through the edge to the part
+  before it on its ear (its parent) with one of the pair's categories: the parent's canonical
+  frame times the category's placement (categories.py);
 - every other edge to an already placed part is a cycle edge: its category is read off the
   geometry (`EdgeCategories.classify`), and a placement that is in no docking category of the
   pair is dropped (the cycle does not close);
@@ -21,20 +22,22 @@ that *close geometrically*:
   contact test, `grammarkit.tiling.contacts`, at the examples' tolerance; results are cached by
   the rounded relative placement, which repeats a great deal since every placement is a
   composition of a few dozen categories);
+- a placement farther from a placed part than the graph lets them be is dropped (`_reach`: the
+  shortest path between them, each edge weighted by its type pair's longest docking step, an
+  admissible bound), which stops a chain that turned the wrong way long before its ear closes;
 - a beam of the best `beam` partial placements (summed votes of their decided edges; every
   partial placement after k parts has decided the same edges, so their scores compare) is kept
-  after each part.
+  after each part; if it empties, the search runs once more with a beam `widen` times wider.
 
 Beam search (a hand-written search: the problem is a small constraint problem over rigid
 placements, which no library in our dependencies states) is not complete: when the votes rank
-the true category of an early edge too low it can fall out of the beam. A wider beam trades time
-for that. The result says whether a consistent labelling was found; when none was, the edges
-keep their voted categories and the reason names the part and the edge where the last
-placements failed.
+the true category of an early edge too low it can fall out of the beam. The result says whether
+a consistent labelling was found; when none was, the edges keep their voted categories and the
+reason names the part and the edge where the last placements failed.
 
-Every complete placement in the final beam is a candidate shape: `Instantiator.from_frames`
-builds it and checks it like any instantiation (watertight parts, the requested graph,
-`validate`), so the search doubles as an instantiation that needs no further search.
+Every complete placement in the final beam is a candidate shape: `Instantiator.build` makes it
+and checks it like any instantiation (the requested graph, `validate` at both tolerances), so
+the search doubles as an instantiation that needs no further search (`instantiate_consistent`).
 """
 from __future__ import annotations
 

@@ -33,8 +33,7 @@ def generate(request: Request) -> Iterator[Result]:
     settings = SamplingSettings(decoding=opts.decoding, temperature=opts.temperature,
                                 magnitude=opts.magnitude, steps=opts.steps,
                                 local_magnitude=opts.local_magnitude, points=opts.points,
-                                path_length=opts.path_length, batch=opts.batch,
-                                length_quantile=opts.length_quantile)
+                                path_length=opts.path_length, batch=opts.batch)
     sampler = Sampler(vae, settings, seed=request.seed)
     train = GraphSet()
     for g in sampler.train_graphs:

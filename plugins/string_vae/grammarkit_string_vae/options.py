@@ -29,9 +29,6 @@ class StringVAEOptions(BaseModel):
     local_magnitude: float = Field(0.1, gt=0, description="interpolate/path: offsets around each point")
     points: int = Field(8, ge=1, description="interpolate: points per segment")
     path_length: int = Field(32, ge=2, description="path: latent points per path (paper: 32)")
-    length_quantile: float = Field(0.9, gt=0, le=1, description="masked decoding: from the length this share "
-                                   "of the training strings stay within, strings close rather than open (smaller: "
-                                   "samples nearer the training graphs' size)")
     batch: int = Field(128, ge=1, description="latent points decoded together")
     max_decodes: Optional[int] = Field(None, ge=1, description="stop after decoding this many latent "
                                        "points (default: 200 x n)")

@@ -46,10 +46,6 @@ class SamplingSettings:
     points: int = 8  # interpolate: points per segment; path: points per path segment
     path_length: int = 32
     batch: int = 128  # seeds decoded together
-    # masked decoding closes rather than opens past the length this share of the training
-    # strings stay within (0.9: the model's default; smaller keeps samples nearer the training
-    # graphs' size)
-    length_quantile: float = 0.9
 
 
 @dataclass
@@ -84,16 +80,6 @@ class Sampler:
 
     # ---- helpers ---------------------------------------------------------------------------
     @property
-    def soft_end(self) -> int | None:
-        """The token count `settings.length_quantile` of the training strings stay within."""
-        q = self.settings.length_quantile
-        if abs(q - 0.9) < 1e-12 or not self.vae.train_strings:
-            return getattr(self.vae.model, "soft_end", None)
-        if not hasattr(self, "_lengths"):
-            self._lengths = sorted(len(self.vae.vocab.encode(t)) + 1 for t in self.vae.train_strings)
-        return self._lengths[int(min(max(q, 0.0), 1.0) * (len(self._lengths) - 1))]
-
-    @property
     def train_graphs(self) -> list[TypedGraph]:
         if self._train_graphs is None:
             self._train_graphs = [decode(s, self.vae.alphabet).graph for s in self.vae.train_strings]
@@ -103,8 +89,7 @@ class Sampler:
         self._calls += 1
         out = decode_latents(self.vae.model, torch.from_numpy(np.ascontiguousarray(z, dtype=np.float32)),
                              vocab=self.vae.vocab, rules=self.vae.rules, mode=self.settings.decoding,
-                             temperature=self.settings.temperature, seed=self.seed * 7919 + self._calls,
-                             soft_end=self.soft_end)
+                             temperature=self.settings.temperature, seed=self.seed * 7919 + self._calls)
         self.decoded_points += len(out)
         self.valid_points += sum(d.valid for d in out)
         return out
