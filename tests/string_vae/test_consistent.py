@@ -61,6 +61,9 @@ def test_the_true_categories_are_consistent_and_build_the_example(castle):
         built = instantiate_consistent(inst, dec, graph, votes)
         assert built.ok and validate(g, built.assembly).ok
         assert all(p.mesh.is_watertight for p in built.assembly.parts)
+        again = instantiate_consistent(inst, ConsistentDecoder(inst, beam=4), graph, votes)  # deterministic
+        assert all(np.array_equal(a.mesh.vertices, b.mesh.vertices)
+                   for a, b in zip(built.assembly.parts, again.assembly.parts))
 
 
 def test_consistent_decoding_recovers_the_categories_from_corrupted_votes(castle):
