@@ -103,3 +103,21 @@ def test_disconnected_graphs_match_brute_force_and_keep_other_components_out():
         a = op.pairs[0][0]
         comp = set(range(5)) if a < 5 else set(range(5, 10))
         assert set(op.copied) <= comp
+
+
+def test_operations_are_ordinary_frozen_values():
+    # find_operations builds its Operations without the dataclass constructor (for speed):
+    # they must compare, hash and refuse assignment like constructed ones
+    import dataclasses
+
+    from grammarkit_substructure.search import Operation
+
+    rng = np.random.default_rng(3)
+    g = random_ordered_graph(9, 2, rng, extra_edges=2)
+    ops = find_operations(g)
+    assert ops
+    for o in ops:
+        built = Operation(o.pairs, o.removed_side, o.copied_side, o.recursive, o.symmetry_size, o.violations)
+        assert o == built and hash(o) == hash(built) and repr(o) == repr(built)
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        ops[0].recursive = "grow"
