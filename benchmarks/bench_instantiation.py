@@ -2,7 +2,8 @@
 end-to-end yield against the graph sampler.
 
     python benchmarks/bench_instantiation.py [--example castle] [--work DIR] [--graphs 300]
-        [--train-seconds 300] [--test-graphs 60] [--e2e-seconds 120] [--quick]
+        [--train-seconds 300] [--test-graphs 40] [--e2e-seconds 120] [--quick]
+        [--default-model castle.edges] [--paper-model castle_paper.edges] [--skip-features]
 
 1. Edge categories and three LSTM predictors, trained on the example's dataset (the one
    bench_string_vae.py builds in --work, else a new one of --graphs graphs) for the same time
@@ -10,19 +11,25 @@ end-to-end yield against the graph sampler.
    bidirectional one on the letters) and a bidirectional one with graph features per
    character; accuracy on held-out graphs per character (no voting) and per
    edge with each voting over 8 strings of each graph: majority (the paper's), summed
-   log-probabilities, joint per part (the paper reports 90% validation accuracy; the target is
-   >= 97% with voting).
+   log-probabilities, joint per part, and the cycle-consistent decoding of the summed
+   log-probabilities (consistent.py, beyond the paper: categories whose placements close every
+   cycle without collisions) (the paper reports 90% validation accuracy; the target is >= 97%
+   with voting). Models given with --default-model / --paper-model / --features-model (e.g.
+   trained longer by plugins/string_vae/scripts/train_castle_edges.py, which holds out the same
+   graphs) are evaluated instead of training new ones; the default model's training history
+   gives its validation accuracy per epoch.
 2. Instantiation of held-out graphs (graphs the sampler made, so they can be built): success rate
-   and average tries by size (parts) and by cycle edges, with the predicted categories and, as the
-   naive baseline, with no prediction (pure Monte-Carlo edge insertion). The paper's estimate for
-   naive assembly of a 15-part cycle with 6 configurations per edge is 1/6^15.
-3. End-to-end: valid 3D shapes per minute from `derive --backend string-vae` (the model of
-   bench_string_vae.py, masked decoding, with the categories): the paper's predictor with the
-   search settings of 8 tries of 400 insertions, and the non-paper predictor that built most
-   held-out graphs in part 2 (
-   --fast-tries tries of --fast-budget insertions; graphs larger than the largest training
-   graph skipped before instantiation), beside the graph sampler's new variants per minute on the same
-   example, for the same wall-clock budget.
+   and average tries by size (parts) and by cycle edges, with the predicted categories
+   (backtracking insertion, the paper's; the consistent search; the consistent search and
+   backtracking when it fails) and, as the naive baseline, with no prediction (pure Monte-Carlo
+   edge insertion). The paper's estimate for naive assembly of a 15-part cycle with 6
+   configurations per edge is 1/6^15.
+3. End-to-end: valid 3D shapes per minute from `derive --backend string-vae` (--vae, default the
+   shipped builtin:castle; masked decoding, perturbation, with the categories): the paper's
+   predictor with backtracking insertion (8 tries of 400 insertions), the default predictor with
+   backtracking (graphs larger than the largest training graph skipped) and with the consistent
+   search, beside the graph sampler's new variants per minute on the same
+   example, for the same wall-clock budget, in the same run.
 
 Every instantiated shape is validated against the grammar (the instantiation refuses others);
 the script re-validates the written ones and checks that each part is watertight.
@@ -71,6 +78,35 @@ def bin_of(x: int, edges: list[int]) -> str:
     return f">{edges[-1]}"
 
 
+def e2e_rows(args, grammar, rows_out, runs) -> None:  # noqa: ANN001
+    from grammarkit.run import iter_results
+    from grammarkit.tiling import validate
+
+    for label, backend, opts in runs:
+        t0 = time.perf_counter()
+        made = 0
+        shapes = []
+        deadline = t0 + args.e2e_seconds
+        try:
+            # the run's own time budget ends it (a string-vae run yields only built shapes, so
+            # the loop cannot check the clock between failures)
+            for res in iter_results(grammar, backend=backend, n=100000, seed=args.seed, iterations=20, options=opts,
+                                    workers=1, timeout=args.e2e_seconds):
+                if res.model is not None:
+                    made += 1
+                    shapes.append(res.model)
+                if time.perf_counter() > deadline:
+                    break
+        except Exception as exc:  # noqa: BLE001 - the time budget ends the run: report what was made
+            print(f"  ({label}: {type(exc).__name__}: {str(exc)[:200]})")
+        secs = time.perf_counter() - t0
+        for shape in shapes:  # checked after the clock stops, for every back end alike
+            assert validate(grammar, shape).ok and all(p.mesh.is_watertight for p in shape.parts), label
+        parts = statistics.mean(len(sh.parts) for sh in shapes) if shapes else "-"
+        rows_out.append([label, made, secs, 60.0 * made / secs, parts, " ".join(f"{x:.1f}" for x in os.getloadavg())])
+        print(f"  {label}: {made} shapes in {secs:.0f} s", flush=True)
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--example", default="castle")
@@ -80,20 +116,33 @@ def main() -> int:
     ap.add_argument("--train-graphs", type=int, default=600, help="dataset graphs used to train the predictor")
     ap.add_argument("--train-seconds", type=float, default=300)
     ap.add_argument("--epochs", type=int, default=30)
-    ap.add_argument("--test-graphs", type=int, default=60)
+    ap.add_argument("--test-graphs", type=int, default=40)
     ap.add_argument("--tries", type=int, default=8)
+    ap.add_argument("--beam", type=int, default=16, help="the consistent search's beam")
     ap.add_argument("--e2e-seconds", type=float, default=120)
     ap.add_argument("--threads", type=int, default=1)
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--reuse", action="store_true", help="reuse the predictors saved in --work by an earlier run "
                     "(EXAMPLE_paper.edges, EXAMPLE_bidir.edges, EXAMPLE_features.edges)")
+    ap.add_argument("--default-model", type=Path, default=None, help="this project's predictor to evaluate "
+                    "(trained on graphs other than the first --test-graphs of the seed-0 permutation)")
+    ap.add_argument("--paper-model", type=Path, default=None, help="the paper's predictor to evaluate")
+    ap.add_argument("--features-model", type=Path, default=None, help="a predictor with graph features")
+    ap.add_argument("--skip-features", action="store_true", help="no graph-features predictor")
     ap.add_argument("--strings-per-graph", type=int, default=4)
-    ap.add_argument("--fast-tries", type=int, default=8, help="this project's end-to-end row: tries per graph")
-    ap.add_argument("--fast-budget", type=int, default=400, help="this project's end-to-end row: insertions per try")
+    ap.add_argument("--fast-tries", type=int, default=8, help="backtracking rows: tries per graph")
+    ap.add_argument("--fast-budget", type=int, default=400, help="backtracking rows: insertions per try")
     ap.add_argument("--skip-e2e", action="store_true")
+    ap.add_argument("--parts", default="accuracy,instantiation,sampled,e2e",
+                    help="comma-separated parts to run: accuracy, instantiation, sampled, e2e")
+    ap.add_argument("--sampled-graphs", type=int, default=30, help="sampled part: VAE samples instantiated")
+    ap.add_argument("--sampler-seconds", type=float, default=None,
+                    help="end-to-end: the graph sampler's row (default: --e2e-seconds)")
+    ap.add_argument("--e2e-rows", default="paper,backtracking,consistent,sampler",
+                    help="comma-separated end-to-end rows to run")
     ap.add_argument("--inst-graphs", type=int, default=None, help="instantiate only the first N held-out graphs")
-    ap.add_argument("--vae", type=Path, default=None, help="string-VAE model for the end-to-end row "
-                    "(default: WORK/EXAMPLE.vae from bench_string_vae.py)")
+    ap.add_argument("--vae", default="builtin:castle", help="string-VAE model for the end-to-end rows "
+                    "(default: the shipped builtin:castle)")
     ap.add_argument("--quick", action="store_true")
     args = ap.parse_args()
     if args.quick:
@@ -104,8 +153,10 @@ def main() -> int:
 
     from grammarkit.dsl import load
     from grammarkit.tiling import validate
+    from grammarkit_string_vae.consistent import ConsistentDecoder, instantiate_consistent
     from grammarkit_string_vae.dataset import Dataset
-    from grammarkit_string_vae.edgemodel import EdgeTrainConfig, evaluate, save_edge_model, train_edge_model, _examples
+    from grammarkit_string_vae.edgemodel import (EdgeTrainConfig, _examples, evaluate, load_edge_model,
+                                                 save_edge_model, train_edge_model)
     from grammarkit_string_vae.instantiate import Instantiator
 
     torch.set_num_threads(args.threads)
@@ -123,13 +174,13 @@ def main() -> int:
                                [full.frames[i] for i in ids], full.path, [full.variants[i] for i in ids])
     train_ds = pick(train_idx)
     models = {}
-    for name, kw, suffix in (("paper", dict(bidirectional=False, graph_features=False, voting="majority"), "_paper"),
-                             ("bidirectional", {}, "_bidir"),
-                             ("bidirectional + graph features", dict(graph_features=True), "_features")):
-        model_path = args.work / f"{args.example}{suffix}.edges"
-        if args.reuse and model_path.exists():
-            from grammarkit_string_vae.edgemodel import load_edge_model
-
+    specs = [("paper", dict(bidirectional=False, graph_features=False, voting="majority"), "_paper", args.paper_model),
+             ("bidirectional", {}, "_bidir", args.default_model)]
+    if not args.skip_features:
+        specs.append(("bidirectional + graph features", dict(graph_features=True), "_features", args.features_model))
+    for name, kw, suffix, given in specs:
+        model_path = given or args.work / f"{args.example}{suffix}.edges"
+        if given is not None or (args.reuse and model_path.exists()):
             em = load_edge_model(model_path, grammar)
             train_s = float(em.meta["training"]["history"][-1]["seconds"])
         else:
@@ -147,47 +198,150 @@ def main() -> int:
         models[name] = (em, model_path, train_s)
     em = models["bidirectional"][0]
     cats = em.categories
+    inst = Instantiator(grammar, cats)
+    decoder = ConsistentDecoder(inst, beam=args.beam)
     print(f"\ncategories: {len(cats)} ("
           + ", ".join(f"{a}-{b} {len(v)}" for (a, b), v in sorted(cats.by_pair.items()))
-          + f"); {len(train_idx)} training graphs, {args.strings_per_graph} strings each per epoch")
+          + f"); {len(test_idx)} held-out graphs")
+    parts = set(args.parts.split(","))
+    if args.skip_e2e:
+        parts.discard("e2e")
     # 1. accuracy on held-out graphs
     test_ds = pick(test_idx)
+    if "accuracy" in parts:
+        accuracy_tables(args, grammar, models, test_ds, decoder, cats)
+    if "instantiation" in parts:
+        instantiation_tables(args, grammar, models, test_ds, inst, decoder, cats)
+    if "sampled" in parts:
+        sampled_table(args, grammar, models, inst, decoder)
+    if "e2e" in parts:
+        end_to_end(args, grammar, models, full)
+    return 0
+
+
+def sampled_table(args, grammar, models, inst, decoder) -> None:  # noqa: ANN001
+    """The same VAE samples (perturbation, masked decoding) instantiated by each search: how many
+    are built and what a graph costs, the sampling included."""
+    import numpy as np
+
+    from grammarkit_string_vae.consistent import instantiate_consistent
+    from grammarkit_string_vae.modelfile import load_vae
+    from grammarkit_string_vae.sampling import Sampler, SamplingSettings
+
+    em = models["bidirectional"][0]
+    vae = load_vae(args.vae, grammar=grammar)
+    sampler = Sampler(vae, SamplingSettings(), seed=args.seed)
+    graphs = []
+    t0 = time.perf_counter()
+    while len(graphs) < args.sampled_graphs:
+        for s in sampler.run("perturb", 1):
+            if s.valid and len(graphs) < args.sampled_graphs:
+                graphs.append(s.decoded.graph)
+    sample_s = (time.perf_counter() - t0) / len(graphs)
+    rows = {"cycle-consistent search": [], "backtracking, 8 tries x 400 insertions": []}
+    for j, g in enumerate(graphs):
+        t = time.perf_counter()
+        votes = {e: v for e, (_k, v) in em.predict(g, strings=8, seed=j, voting="logprob").items()}
+        predict_s = time.perf_counter() - t
+        r = instantiate_consistent(inst, decoder, g, votes, tries=args.tries)
+        rows["cycle-consistent search"].append((r.ok, predict_s + r.seconds))
+        ranked = {e: [int(c) for c in np.argsort(-v, kind="stable") if v[c] > -1e8] for e, v in votes.items()}
+        b = inst.instantiate(g, ranked, seed=j, max_tries=args.tries)
+        rows["backtracking, 8 tries x 400 insertions"].append((b.ok, predict_s + b.seconds))
+    parts = [len(g) for g in graphs]
+    print(f"\n## {len(graphs)} VAE samples (perturbation; {statistics.mean(parts):.0f} parts on average, "
+          f"{min(parts)}-{max(parts)}), default predictor; sampling {sample_s:.2f} s per graph\n")
+    out = []
+    for name, rs in rows.items():
+        built = sum(ok for ok, _ in rs)
+        per = statistics.mean(sec for _, sec in rs)
+        out.append([name, f"{built}/{len(rs)}", per, 60.0 / (per + sample_s)])
+    print(table(["search", "built", "seconds per graph (prediction + search)",
+                 "graphs tried per minute (sampling included)"], out))
+
+
+def accuracy_tables(args, grammar, models, test_ds, decoder, cats) -> None:  # noqa: ANN001
+    from grammarkit_string_vae.consistent import ConsistentDecoder
+    from grammarkit_string_vae.edgemodel import _examples, evaluate
+    from grammarkit_string_vae.instantiate import Instantiator
+
+    em = models["bidirectional"][0]
     print("\n## Edge-category accuracy on held-out graphs\n")
     rows_ = []
     for name, (m, _p, secs) in models.items():
         cfg = m.model.config
         types = cfg.types if cfg.features else ()
         rows = _examples(test_ds, list(range(len(test_ds))), m.categories, m.vocab, 8, args.seed + 7, types)
-        acc = evaluate(m.model, rows, m.categories, len(m.categories), test_ds.graphs, m.configurations)
+        m_dec = decoder if m.categories.to_json() == cats.to_json() else \
+            ConsistentDecoder(Instantiator(grammar, m.categories), beam=args.beam)
+        acc = evaluate(m.model, rows, m.categories, len(m.categories), test_ds.graphs, m.configurations, m_dec)
         hist = m.meta["training"]["history"]
+        tr = m.meta["training"]
         rows_.append([f"{name}: {'bidirectional' if cfg.bidirectional else 'left-to-right'} LSTM, "
-                      f"{'letters + graph features' if cfg.features else 'letters'}", len(hist), f"{secs:.0f}",
-                      len(test_ds),
-                      acc["val_edges"], acc["char_accuracy"], acc["edge_accuracy_majority"], acc["edge_accuracy_voted"],
-                      acc.get("edge_accuracy_joint", "-")])
-    print(table(["predictor", "epochs", "training s", "graphs", "edges", "per character (no voting)",
-                 "voted: majority (paper)", "voted: log-prob sum", "voted: joint per part"], rows_))
+                      f"{'letters + graph features' if cfg.features else 'letters'}",
+                      f"{tr.get('train_graphs', '?')} graphs x {tr['config'].get('strings_per_graph', '?')} strings",
+                      len(hist), f"{secs:.0f}", acc["val_edges"], acc["char_accuracy"], acc["edge_accuracy_majority"],
+                      acc["edge_accuracy_voted"], acc.get("edge_accuracy_joint", "-"), acc["edge_accuracy_consistent"],
+                      f"{acc['consistent_graphs']:.3f} ({acc['consistent_seconds']:.2f} s)"])
+    print(table(["predictor", "training data", "epochs", "training s", "edges", "per character (no voting)",
+                 "voted: majority (paper)", "voted: log-prob sum", "voted: joint per part",
+                 "cycle-consistent (log-prob priors)", "graphs consistent (s per graph)"], rows_))
     print("\n(paper: 0.90 validation accuracy per character; target: >= 0.97 with voting)")
-    # 2. instantiation
-    from grammarkit_string_vae.categories import edge_labels
+    hist = em.meta["training"]["history"]
+    print(f"\nThe default predictor's validation accuracy by epoch ({em.meta['training'].get('val_graphs')} "
+          "validation graphs of its own split, votes over 8 strings):\n")
+    print(table(["epoch", "seconds", "per character", "majority", "log-prob sum", "joint"],
+                [[r["epoch"], r["seconds"], r["char_accuracy"], r["edge_accuracy_majority"], r["edge_accuracy_voted"],
+                  r.get("edge_accuracy_joint", "-")] for r in hist]))
 
-    inst = Instantiator(grammar, cats)
-    results = {f"predicted ({name}, {m.voting} votes)": [] for name, (m, _p, _s) in models.items()}
-    results.update({"naive (no categories)": [], "true categories": []})
+
+def instantiation_tables(args, grammar, models, test_ds, inst, decoder, cats) -> None:  # noqa: ANN001
+    import numpy as np
+
+    from grammarkit.tiling import validate
+    from grammarkit_string_vae.categories import edge_labels
+    from grammarkit_string_vae.consistent import instantiate_consistent
+
+    em = models["bidirectional"][0]
+
+    def backtrack(m, voting=None):  # noqa: ANN001, ANN202
+        return lambda g, j: inst.instantiate(g, m.rankings(g, strings=8, seed=j, voting=voting), seed=j,
+                                             max_tries=args.tries)
+
+    def consistent(m, then_backtrack=False):  # noqa: ANN001, ANN202
+        def run(g, j):  # noqa: ANN001, ANN202
+            votes = {e: v for e, (_k, v) in m.predict(g, strings=8, seed=j, voting="logprob").items()}
+            r = instantiate_consistent(inst, decoder, g, votes, tries=args.tries)
+            if r.ok or not then_backtrack:
+                return r
+            ranked = {e: [int(c) for c in np.argsort(-v, kind="stable") if v[c] > -1e8] for e, v in votes.items()}
+            b = inst.instantiate(g, ranked, seed=j, max_tries=args.tries)
+            b.seconds += r.seconds
+            return b
+        return run
+
+    methods = {}
+    for name, (m, _p, _s) in models.items():
+        if m.categories.to_json() != cats.to_json():
+            continue
+        methods[f"predicted ({name}, {m.voting} votes), backtracking (paper's search)"] = backtrack(m)
+    methods["predicted (bidirectional), cycle-consistent search"] = consistent(em)
+    methods["predicted (bidirectional), cycle-consistent, then backtracking"] = consistent(em, True)
+    methods["naive (no categories)"] = lambda g, j: inst.instantiate(g, {}, seed=j, max_tries=args.tries)
+    results = {k: [] for k in list(methods) + ["true categories"]}
     n_inst = len(test_ds) if args.inst_graphs is None else min(args.inst_graphs, len(test_ds))
     for j, g in enumerate(test_ds.graphs[:n_inst]):
         labels = edge_labels(g, test_ds.frames[j], cats, test_ds.variants[j])
         truth = {(u, v): labels[(u, v)] for u, v in g.edges}
-        sources = [(f"predicted ({name}, {m.voting} votes)", m.rankings(g, strings=8, seed=j))
-                   for name, (m, _p, _s) in models.items()]
-        for name, p in sources + [("naive (no categories)", {}), ("true categories", truth)]:
-            r = inst.instantiate(g, p, seed=j, max_tries=args.tries)
+        for name, fn in list(methods.items()) + [("true categories",
+                                                   lambda g, j: inst.instantiate(g, truth, seed=j, max_tries=args.tries))]:
+            r = fn(g, j)
             if r.ok:
                 assert validate(grammar, r.assembly).ok and all(pt.mesh.is_watertight for pt in r.assembly.parts)
             results[name].append((len(g), g.cycle_rank, r.ok, r.tries, r.monte_carlo, r.seconds))
     print(f"\n## Instantiation of {n_inst} held-out graphs (at most {args.tries} tries each)\n")
     head = ["categories", "graphs", "success", "mean tries (successes)",
-            "edges not by the first predicted category (successes, mean)", "seconds (mean)"]
+            "edges not at the first predicted category (successes, mean)", "seconds per graph (mean)"]
     rows_ = []
     for name, rs in results.items():
         ok = [r for r in rs if r[2]]
@@ -212,59 +366,45 @@ def main() -> int:
     print(f"\nNaive estimate (the paper's): a cycle of L parts with c configurations per edge closes with "
           f"probability (1/c)^L; here c = {n_cat:.1f} on average per type pair, so a 15-part cycle: "
           f"{(1 / n_cat) ** 15:.2e} (paper: 1/6^15 = {6.0 ** -15:.2e}).")
-    if args.skip_e2e:
-        return 0
-    # 3. end to end
-    vae = args.vae or args.work / f"{args.example}.vae"
-    if not vae.exists():
-        print("\n(end-to-end skipped: run bench_string_vae.py first to train the string VAE in --work)")
-        return 0
-    from grammarkit.run import iter_results
 
-    print(f"\n## End to end: valid 3D shapes per minute, {args.e2e_seconds:.0f} s each\n")
-    rows_ = []
+
+def end_to_end(args, grammar, models, full) -> None:  # noqa: ANN001
+    vae = str(args.vae)
+    if not vae.startswith("builtin:") and not Path(vae).exists():
+        print(f"\n(end-to-end skipped: no string-VAE model {vae})")
+        return
+    print(f"\n## End to end: valid 3D shapes per minute, {args.e2e_seconds:.0f} s per string-vae row, "
+          f"{args.sampler_seconds or args.e2e_seconds:.0f} s for the graph sampler\n")
     largest = max(len(g) for g in full.graphs)
-    # the end-to-end row of this project uses the non-paper predictor that built the most
-    # held-out graphs above (ties: the first)
-    rates = {name: sum(r[2] for r in results[f"predicted ({name}, {m.voting} votes)"])
-             for name, (m, _p, _s) in models.items() if name != "paper"}
-    best = max(rates, key=rates.get)
-    print(f"(this project's end-to-end row uses the {best} predictor: {rates[best]} of {n_inst} held-out graphs built)")
-    runs = (("string-vae: paper's predictor, 8 tries x 400 insertions", "string-vae",
-             {"model": str(vae), "categories": str(models["paper"][1]), "mode": "perturb", "tries": str(args.tries)}),
-            (f"string-vae: {best} predictor, {models[best][0].voting} votes, {args.fast_tries} tries x "
-             f"{args.fast_budget} insertions, graphs over {largest} parts skipped", "string-vae",
-             {"model": str(vae), "categories": str(models[best][1]), "mode": "perturb",
-              "tries": str(args.fast_tries), "budget": str(args.fast_budget), "max_parts": str(largest)}),
-            ("graph sampler (isomorphism dedupe)", "graph-sampler", {"dedupe": "isomorphism"}))
-    for label, backend, opts in runs:
-        t0 = time.perf_counter()
-        made = 0
-        shapes = []
-        deadline = t0 + args.e2e_seconds
-        try:
-            # the run's own time budget ends it (a string-vae run yields only built shapes, so
-            # the loop cannot check the clock between failures)
-            for res in iter_results(grammar, backend=backend, n=100000, seed=args.seed, iterations=20, options=opts,
-                                    workers=1, timeout=args.e2e_seconds):
-                if res.model is not None:
-                    made += 1
-                    shapes.append(res.model)
-                if time.perf_counter() > deadline:
-                    break
-        except Exception as exc:  # noqa: BLE001 - the time budget ends the run: report what was made
-            print(f"  ({label}: {type(exc).__name__}: {str(exc)[:200]})")
-        secs = time.perf_counter() - t0
-        for shape in shapes:  # checked after the clock stops, for every back end alike
-            assert validate(grammar, shape).ok and all(p.mesh.is_watertight for p in shape.parts), label
-        rows_.append([label, made, secs, 60.0 * made / secs])
-        print(f"  {label}: {made} shapes in {secs:.0f} s", flush=True)
-    base = rows_[-1][3] or 1e-9
+    paper_p, default_p = str(models["paper"][1]), str(models["bidirectional"][1])
+    base = {"model": vae, "mode": "perturb"}
+    catalogue = {
+        "paper": ("string-vae: paper's predictor (majority votes), backtracking, "
+                  f"{args.tries} tries x 400 insertions", "string-vae",
+                  {**base, "categories": paper_p, "search": "backtracking", "tries": str(args.tries)}),
+        "backtracking": (f"string-vae: default predictor (log-prob votes), backtracking, {args.fast_tries} tries x "
+                         f"{args.fast_budget} insertions, graphs over {largest} parts skipped", "string-vae",
+                         {**base, "categories": default_p, "search": "backtracking", "tries": str(args.fast_tries),
+                          "budget": str(args.fast_budget), "max_parts": str(largest)}),
+        "consistent": (f"string-vae: default predictor, cycle-consistent search (beam {args.beam})", "string-vae",
+                       {**base, "categories": default_p, "search": "consistent", "beam": str(args.beam)}),
+        "sampler": ("graph sampler (isomorphism dedupe)", "graph-sampler", {"dedupe": "isomorphism"}),
+    }
+    runs = [catalogue[k] for k in args.e2e_rows.split(",") if k in catalogue]
+    rows_ = []
+    e2e_rows(args, grammar, rows_, [r for r in runs if r[1] != "graph-sampler"])
+    if any(r[1] == "graph-sampler" for r in runs):
+        import copy
+
+        a2 = copy.copy(args)
+        a2.e2e_seconds = args.sampler_seconds or args.e2e_seconds
+        e2e_rows(a2, grammar, rows_, [r for r in runs if r[1] == "graph-sampler"])
+    base_rate = rows_[-1][3] if runs and runs[-1][1] == "graph-sampler" else None
     for r in rows_:
-        r.append(f"{r[3] / base:.2f}x")
-    print(table(["back end", "valid shapes", "seconds", "shapes per minute", "vs graph sampler"], rows_))
+        r.append(f"{r[3] / base_rate:.4f}x" if base_rate else "-")
+    print(table(["back end", "valid shapes", "seconds", "shapes per minute", "mean parts", "load average after",
+                 "vs graph sampler"], rows_))
     print(f"\nload average at the end: {' '.join(f'{x:.1f}' for x in os.getloadavg())}")
-    return 0
 
 
 if __name__ == "__main__":

@@ -192,5 +192,5 @@ def test_the_shipped_castle_weights_load_for_the_castle_grammar_and_decode_valid
     z = torch.randn(16, vae.model.config.latent, generator=torch.Generator().manual_seed(3))
     out = decode_latents(vae.model, z, vocab=vae.vocab, rules=vae.rules, mode="masked")
     assert all(d.valid for d in out)
-    with pytest.raises(ModelFileError, match="no shipped model"):
+    with pytest.raises(ModelFileError, match="no shipped .vae model"):
         load_vae("builtin:nonesuch")

@@ -446,9 +446,15 @@ def _edge_model(path: Path, grammar):  # noqa: ANN001, ANN202
 @click.option("--votes", default=8, show_default=True, type=click.IntRange(1, 1000))
 @click.option("--voting", type=click.Choice(["majority", "logprob", "joint"]), default=None,
               help="how the strings' predictions are combined (default: the model's)")
+@click.option("--search", type=click.Choice(["consistent", "backtracking", "consistent+backtracking"]),
+              default="consistent+backtracking", show_default=True,
+              help="consistent: beam search for categories that close every cycle (beyond the paper); "
+              "backtracking: the paper's insertion with Monte-Carlo fallback")
+@click.option("--beam", default=16, show_default=True, type=click.IntRange(1, 100_000),
+              help="consistent search: placements kept per part")
 @click.option("--seed", default=0, show_default=True, type=int)
 def instantiate_command(text: str, grammar_file: Path, model_file: Path, out: Path, fmt: str, tries: int, votes: int,
-                        voting: str | None, seed: int) -> None:
+                        voting: str | None, search: str, beam: int, seed: int) -> None:
     """Turn one shape STRING into a 3D shape, or say why it could not.
 
     \b
@@ -469,16 +475,22 @@ def instantiate_command(text: str, grammar_file: Path, model_file: Path, out: Pa
     _decode_and_check(text, em.alphabet, TopologyRules.from_grammar(grammar))
     from .strings import decode
 
+    from types import SimpleNamespace
+
+    from .consistent import ConsistentDecoder
+    from .generate import instantiate_graph
+
     graph = decode(text, em.alphabet).graph
-    predicted = em.rankings(graph, strings=votes, seed=seed, voting=voting)
-    result = Instantiator(grammar, em.categories).instantiate(graph, predicted, seed=seed, max_tries=tries)
+    inst = Instantiator(grammar, em.categories)
+    opts = SimpleNamespace(voting=voting, search=search, votes=votes, tries=tries)
+    result, _ = instantiate_graph(em, inst, ConsistentDecoder(inst, beam=beam), graph, opts, seed, None)
     if not result.ok:
-        raise GrammarkitError(f"could not instantiate the string in {result.tries} tries: {result.reason}")
+        raise GrammarkitError(f"could not instantiate the string ({search} search, {result.tries} "
+                              f"tr{'y' if result.tries == 1 else 'ies'}): {result.reason}")
     result.assembly.name = out.stem
     write_assembly(result.assembly, out)
-    click.echo(f"wrote {out}: {len(graph)} parts; {result.tries} tr{'y' if result.tries == 1 else 'ies'}, "
-               f"{result.insertions} insertions, {result.monte_carlo} edge(s) placed by Monte-Carlo insertion "
-               f"instead of the predicted category")
+    click.echo(f"wrote {out}: {len(graph)} parts; {search} search, {result.tries} tr{'y' if result.tries == 1 else 'ies'}, "
+               f"{result.insertions} placements tested, {result.monte_carlo} edge(s) not at their best voted category")
 
 
 def _decode_and_check(text: str, alphabet, rules) -> None:  # noqa: ANN001

@@ -243,11 +243,16 @@ def _length_batches(rows, size: int, rng) -> list:  # noqa: ANN001
     return [batches[i] for i in rng.permutation(len(batches))]
 
 
-def evaluate(model, rows, cats: EdgeCategories, C: int, graphs=None, configurations=None) -> dict:  # noqa: ANN001
+def evaluate(model, rows, cats: EdgeCategories, C: int, graphs=None, configurations=None,  # noqa: ANN001
+             decoder=None) -> dict:  # noqa: ANN001
     """Validation accuracy per character (no voting) and per edge, voting over each graph's
     strings (`rows` holds several strings per graph): `edge_accuracy_majority` (the paper's
     voting), `edge_accuracy_voted` (summed log-probabilities) and, with `graphs` (indexable by
-    the rows' graph index) and `configurations`, `edge_accuracy_joint`."""
+    the rows' graph index) and `configurations`, `edge_accuracy_joint`; with `graphs` and a
+    `decoder` (consistent.ConsistentDecoder), `edge_accuracy_consistent`: the cycle-consistent
+    decoding of the summed log-probabilities (a graph for which it finds no consistent
+    labelling keeps its voted categories), `consistent_graphs` the share of graphs it found one
+    for and `consistent_seconds` its time per graph."""
     import torch
 
     from .predictor import IGNORE, _batch, assign_jointly, flip, vote
@@ -296,6 +301,20 @@ def evaluate(model, rows, cats: EdgeCategories, C: int, graphs=None, configurati
             choice = assign_jointly(graphs[g], vs, cats, configurations)
             right_j += sum(int(choice[e] == truth[(g, e)]) for e in vs)
         out["edge_accuracy_joint"] = right_j / n
+    if graphs is not None and decoder is not None:
+        by_graph = {}
+        for (g, e), v in votes.items():
+            by_graph.setdefault(g, {})[e] = v
+        right_c = found = 0
+        secs = 0.0
+        for g, vs in by_graph.items():
+            res = decoder.decode(graphs[g], vs)
+            found += int(res.consistent)
+            secs += res.seconds
+            right_c += sum(int(res.categories.get(e) == truth[(g, e)]) for e in vs)
+        out["edge_accuracy_consistent"] = right_c / n
+        out["consistent_graphs"] = found / max(len(by_graph), 1)
+        out["consistent_seconds"] = secs / max(len(by_graph), 1)
     return out
 
 
@@ -323,15 +342,17 @@ def save_edge_model(em: EdgeModel, path: str | Path) -> Path:
 
 
 def load_edge_model(path: str | Path, grammar: Any = None) -> EdgeModel:
-    """Load an `.edges` file; with `grammar`, refuse one trained for another grammar."""
+    """Load an `.edges` file (or `builtin:NAME`, a shipped one); with `grammar`, refuse one
+    trained for another grammar."""
     from safetensors import SafetensorError
     from safetensors.torch import load_file
 
     from grammarkit.run import grammar_hash
 
+    from .modelfile import resolve
     from .predictor import CategoryLSTM, PredictorConfig
 
-    path = Path(path)
+    path = resolve(path, ".edges")
     if not path.exists():
         raise ModelFileError(f"{path}: no such model file")
     if path.is_dir():

@@ -10,6 +10,8 @@ from __future__ import annotations
 
 import re
 import time
+
+import numpy as np
 from typing import Iterator
 
 from grammarkit.errors import GrammarkitError
@@ -43,8 +45,11 @@ def generate(request: Request) -> Iterator[Result]:
         from .edgemodel import load_edge_model
         from .instantiate import Instantiator
 
+        from .consistent import ConsistentDecoder
+
         em = load_edge_model(opts.categories, request.grammar)
         inst = Instantiator(request.grammar, em.categories, budget=opts.budget)
+        decoder = ConsistentDecoder(inst, beam=opts.beam)
     failures: dict[str, int] = {}
     inst_stats = {"instantiated": 0, "failed": 0, "tries": 0, "monte_carlo": 0, "seconds": 0.0}
     advance = request.progress("string-vae", request.n)
@@ -72,8 +77,7 @@ def generate(request: Request) -> Iterator[Result]:
             extra_inst: dict = {}
             if inst is not None:
                 gseed = int(request.seed) * 1_000_003 + sampler.decoded_points
-                predicted = em.rankings(g, strings=opts.votes, seed=gseed, voting=opts.voting)
-                res = inst.instantiate(g, predicted, seed=gseed, max_tries=opts.tries, deadline=request.deadline)
+                res, predicted = instantiate_graph(em, inst, decoder, g, opts, gseed, request.deadline)
                 inst_stats["tries"] += res.tries
                 inst_stats["seconds"] += res.seconds
                 if not res.ok:
@@ -116,6 +120,29 @@ def generate(request: Request) -> Iterator[Result]:
                               f"(limit {limit}: --option max-decodes=N); skipped {skipped}"
                               + (f"; {inst_stats['failed']} could not be instantiated ({failures})" if inst else ""))
     return stats
+
+
+def instantiate_graph(em, inst, decoder, g, opts, seed: int, deadline: float | None):  # noqa: ANN001, ANN201
+    """Instantiate graph `g` as `opts.search` says: (Instantiation, {edge: ranking of its
+    categories, the voted one first})."""
+    from .consistent import instantiate_consistent
+
+    voting = opts.voting or em.voting
+    if opts.search == "backtracking":
+        predicted = em.rankings(g, strings=opts.votes, seed=seed, voting=voting)
+        return inst.instantiate(g, predicted, seed=seed, max_tries=opts.tries, deadline=deadline), predicted
+    # the consistent search's priors are the summed log-probabilities, whatever the model's voting
+    pred = em.predict(g, strings=opts.votes, seed=seed, voting="logprob")
+    votes = {e: v for e, (_k, v) in pred.items()}
+    predicted = {e: [int(c) for c in np.argsort(-v, kind="stable") if v[c] > -1e8] for e, v in votes.items()}
+    res = instantiate_consistent(inst, decoder, g, votes, tries=opts.tries, deadline=deadline)
+    if res.ok or opts.search == "consistent":
+        return res, predicted
+    # the beam can lose the right labelling: search again by backtracking over the votes
+    back = inst.instantiate(g, predicted, seed=seed, max_tries=opts.tries, deadline=deadline)
+    back.insertions += res.insertions
+    back.seconds += res.seconds
+    return back, predicted
 
 
 def token_categories(text: str, alphabet, cats, used: dict) -> list:  # noqa: ANN001

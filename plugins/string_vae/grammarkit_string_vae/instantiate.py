@@ -323,6 +323,14 @@ class Instantiator:
             out.append((k, self.cats.placement(k, tx, ty), vy))
         return out
 
+    def build(self, graph: TypedGraph, frames, variants=None):  # noqa: ANN001, ANN201
+        """(assembly, None) for parts placed at `frames` (per node; e.g. a complete placement of
+        the consistent decoder) when the shape passes the final check (the requested graph,
+        `validate` at both tolerances), else (None, the problem)."""
+        asm = self._assembly(graph, frames, variants)
+        problem = self._final_check(graph, asm)
+        return (None, problem) if problem is not None else (asm, None)
+
     def _cycle_misfit(self, graph, y, Fy, vy, placed_nbrs, frames, variant, parent):  # noqa: ANN001, ANN201
         T = graph.types
         for w in placed_nbrs:

@@ -131,17 +131,19 @@ def _header(path: Path, expect: str = FORMAT) -> dict:
 WEIGHTS = Path(__file__).resolve().parent / "weights"
 
 
-def resolve(path: str | Path) -> Path:
-    """A model path; `builtin:NAME` names a file shipped in the package's weights folder
-    (`builtin:castle` -> weights/castle.vae, made by scripts/train_castle_weights.py)."""
+def resolve(path: str | Path, suffix: str = ".vae") -> Path:
+    """A model path; `builtin:NAME` names a file shipped in the package's weights folder, of the
+    kind `suffix` says (`builtin:castle` -> weights/castle.vae, made by
+    scripts/train_castle_weights.py; for edge-category models weights/castle.edges, made by
+    scripts/train_castle_edges.py)."""
     text = str(path)
     if text.startswith("builtin:"):
         name = text[len("builtin:"):]
-        found = sorted(WEIGHTS.glob(f"{name}.*")) if name and "/" not in name else []
-        if not found:
-            shipped = ", ".join(sorted(p.stem for p in WEIGHTS.glob("*.vae"))) or "none"
-            raise ModelFileError(f"{text}: no shipped model of that name (shipped: {shipped})")
-        return found[0]
+        found = WEIGHTS / f"{name}{suffix}"
+        if not name or "/" in name or not found.is_file():
+            shipped = ", ".join(sorted(p.stem for p in WEIGHTS.glob(f"*{suffix}"))) or "none"
+            raise ModelFileError(f"{text}: no shipped {suffix} model of that name (shipped: {shipped})")
+        return found
     return Path(path)
 
 

@@ -34,7 +34,8 @@ class StringVAEOptions(BaseModel):
                                        "points (default: 200 x n)")
     include_training: bool = Field(False, description="also yield graphs of the training set")
     categories: Optional[str] = Field(None, description="edge-category model (.edges, from `grammarkit train "
-                                      "edge-categories`): instantiate every graph in 3D and write it as a shape")
+                                      "edge-categories`, or builtin:castle for the shipped one): instantiate every "
+                                      "graph in 3D and write it as a shape")
     tries: int = Field(8, ge=1, description="instantiation: start edges tried per graph")
     votes: int = Field(8, ge=1, description="instantiation: strings per graph that vote on each edge's category")
     voting: Optional[Literal["majority", "logprob", "joint"]] = Field(
@@ -43,5 +44,12 @@ class StringVAEOptions(BaseModel):
         "the category model's own")
     budget: int = Field(400, ge=1, description="instantiation: part insertions per try (backtracking included); "
                         "smaller fails faster on graphs that cannot be built")
+    search: Literal["consistent", "backtracking", "consistent+backtracking"] = Field(
+        "consistent", description="instantiation: consistent (a beam search over the summed log-probability "
+        "votes for categories that close every cycle without collisions; a graph it finds none for is "
+        "skipped at once), backtracking (the paper's insertion with Monte-Carlo fallback, `tries` start "
+        "edges of `budget` insertions), or the consistent search first and backtracking when it fails")
+    beam: int = Field(16, ge=1, description="consistent search: placements kept per part (8 times as many "
+                      "once more when the beam empties)")
     max_parts: Optional[int] = Field(None, ge=1, description="skip sampled graphs with more parts than this "
                                      "before instantiating them (default: no limit)")
