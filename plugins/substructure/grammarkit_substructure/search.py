@@ -389,6 +389,18 @@ def _grow(D: OrderedGraph, H: OrderedGraph, a: int, b: int, rot: int, q: int) ->
     return out
 
 
+def _node_classes(D: OrderedGraph, H: OrderedGraph) -> tuple[list[int], list[int], dict]:
+    """Class ids of (type, degree), shared by both graphs: the donor's per node, the host's per
+    node, and the host's nodes by class (a seed pairs only nodes of one class)."""
+    classes: dict = {}
+    cd = [classes.setdefault((D.types[v], len(D.nbrs[v])), len(classes)) for v in range(len(D))]
+    ch = [classes.setdefault((H.types[v], len(H.nbrs[v])), len(classes)) for v in range(len(H))]
+    by_class: dict = {}
+    for b in range(len(H)):
+        by_class.setdefault(ch[b], []).append(b)
+    return cd, ch, by_class
+
+
 def _walk_q0(D: OrderedGraph, H: OrderedGraph, same: bool, progress: Callable[[int], None] | None):
     """The closed symmetries (q = 0), each once, in seed order: yields (a, b, rot, grown) where
     grown is None for the one-pair symmetry {a -> b} (rotation rot) and (f, f^-1, rotations)
@@ -398,12 +410,7 @@ def _walk_q0(D: OrderedGraph, H: OrderedGraph, same: bool, progress: Callable[[i
     Most seeds give one-pair symmetries (no neighbour pair across the seed is compatible);
     they are recognised by comparing the neighbours' classes around a and b under the
     rotation (tuples precomputed per node and rotation), without a walk."""
-    classes: dict = {}
-    cd = [classes.setdefault((D.types[v], len(D.nbrs[v])), len(classes)) for v in range(len(D))]
-    ch = [classes.setdefault((H.types[v], len(H.nbrs[v])), len(classes)) for v in range(len(H))]
-    by_class: dict = {}
-    for b in range(len(H)):
-        by_class.setdefault(ch[b], []).append(b)
+    cd, ch, by_class = _node_classes(D, H)
     nh = len(H)
     kk = max([len(r) for r in D.nbrs] + [len(r) for r in H.nbrs] + [1])
     # classes of the neighbours of each donor node by position; of each host node by position
@@ -488,12 +495,7 @@ def _symmetries_q(D: OrderedGraph, H: OrderedGraph, same: bool, q: int,
     """The closed symmetries with up to q > 0 violations: every seed is grown (`_grow`
     branches, so the hash of walked states does not apply), duplicates dropped by key."""
     found: dict = {}
-    classes: dict = {}
-    cd = [classes.setdefault((D.types[v], len(D.nbrs[v])), len(classes)) for v in range(len(D))]
-    ch = [classes.setdefault((H.types[v], len(H.nbrs[v])), len(classes)) for v in range(len(H))]
-    by_class: dict = {}
-    for b in range(len(H)):
-        by_class.setdefault(ch[b], []).append(b)
+    cd, ch, by_class = _node_classes(D, H)
     for a in range(len(D)):
         if progress is not None:
             progress(1)
