@@ -771,7 +771,7 @@ class Translator:
                              counting=rctx.counting)
                 out.extend(self.split_entries(entry.children[0], frame, rctx, ctx))
                 continue
-            if entry.data in ("bare_entry", "merged_entry"):
+            if entry.data in ("bare_entry", "bare_name_entry", "merged_entry"):
                 raise Untranslatable("split:entry", "a split entry without a size", span)
             mode, key_tree = _hoist_size(entry.children[0].children[0])
             key = translate_expr(key_tree, ctx)
@@ -785,7 +785,8 @@ class Translator:
         for entry in block.children:
             span = self._span(entry)
             if entry.data not in ("entry", "merged_entry"):
-                self._count_block(Tree("block", [entry]), frame, rctx) if entry.data != "bare_entry" else None
+                self._count_block(Tree("block", [entry]), frame, rctx) if entry.data not in (
+                    "bare_entry", "bare_name_entry") else None
                 self._record("selector", "?", "dropped", span, feature="comp:entry",
                              message="a comp entry without a selector", counting=rctx.counting)
                 continue
@@ -1356,6 +1357,53 @@ def _h_inner_rectangle(t, args, block, star, frame, rctx, ctx, span, out):
     return [OpCall(name="innerRectangle", args=(Arg(value=Ref(name=mode)),), block=tuple(entries), span=span)], None
 
 
+_SCATTER_MEANS = ("center", "front", "back", "left", "right", "top", "bottom")
+
+
+def _h_scatter(t, args, block, star, frame, rctx, ctx, span, out):
+    """`scatter(domain, n, uniform|gaussian [, mean, stddev]) { Rule }` -> `{ all: Rule }`."""
+    _need(args, 3, 5, "scatter", span)
+    domain, dist = _axis_name(args[0]), _axis_name(args[2])
+    if domain not in ("surface", "volume", "scope"):
+        raise Untranslatable("scatter:domain", f"scatter domain {domain!r}", span)
+    if dist not in ("uniform", "gaussian"):
+        raise Untranslatable("scatter:distribution", f"scatter distribution {dist!r}", span)
+    entries = [e for e in (block.children if block is not None else ()) if isinstance(e, Tree)]
+    if len(entries) != 1 or entries[0].data not in ("bare_entry", "bare_name_entry"):
+        raise Untranslatable("scatter:block", "scatter needs a block of one rule call { Rule }", span)
+    e = entries[0]
+    item = Tree("call" if e.data == "bare_entry" else "name", e.children)
+    # CGA turns a point's y (its up axis) to the surface normal, grammarkit its z: CGA's y-up
+    # frame (Y); in a volume or the scope the points keep the shape's axes and frame
+    body = t._body([item], "Y" if domain == "surface" else frame, rctx) or [Terminal(name=rctx.gk, span=span)]
+    call_args = [Arg(value=Ref(name=domain)), Arg(value=translate_expr(args[1], ctx)), Arg(value=Ref(name=dist))]
+    approx = None
+    if len(args) >= 4:
+        mean = _axis_name(args[3])
+        if mean not in _SCATTER_MEANS:
+            raise Untranslatable("scatter:mean", f"scatter mean {mean!r}", span)
+        # CGA's scope sides in grammarkit's: frame Y maps CGA's +y (top) to +z and CGA's +z
+        # (front) to -y, so the names agree; in frame Z (axes as they are) CGA's front is +z
+        if frame != "Y":
+            mean = {"front": "top", "back": "bottom", "top": "back", "bottom": "front"}.get(mean, mean)
+        call_args.append(Arg(value=Ref(name=mean)))
+    if len(args) == 5:
+        sd = args[4]
+        if isinstance(sd, Tree) and sd.data == "rel":
+            call_args.append(Arg(value=translate_expr(sd.children[0], ctx)))
+        else:  # an absolute stddev (metres): relative to the scope's largest size
+            def size(a: str) -> Tree:
+                return Tree("ref", [Token("NAME", f"scope.s{a}")])
+
+            largest = Tree("func_call", [Token("NAME", "max"), Tree("args", [size("x"), Tree(
+                "func_call", [Token("NAME", "max"), Tree("args", [size("y"), size("z")])])])])
+            call_args.append(Arg(value=translate_expr(Tree("binop", [sd, Token("SLASH", "/"), largest]), ctx)))
+            approx = ("scatter:stddev", "an absolute stddev is made relative to the scope's largest "
+                      "size (grammarkit's stddev is relative, per axis)")
+    return [OpCall(name="scatter", args=tuple(call_args), block=(Branch(key=Ref(name="all"), body=Seq(
+        items=tuple(body)), span=span),), span=span)], approx
+
+
 # -- texturing (grammarkit/split/texturing.py) -----------------------------------------------------
 # A CGA axis letter of setupProjection -> (grammarkit letter, reversed). World axes are y-up in
 # CGA and z-up in grammarkit, as the lot's scope (frame Y); a face's scope is the identity.
@@ -1452,7 +1500,7 @@ _HANDLERS = {
     "setback": _h_setback("setback"), "setbackPerEdge": _h_setback("setbackPerEdge"),
     "setbackToArea": _h_setback("setbackToArea"), "shapeL": _h_shape_op("shapeL", 2),
     "shapeU": _h_shape_op("shapeU", 3), "shapeO": _h_shape_op("shapeO", 4),
-    "innerRectangle": _h_inner_rectangle, "label": _h_label,
+    "innerRectangle": _h_inner_rectangle, "label": _h_label, "scatter": _h_scatter,
 }
 # Operations CGA writes without parentheses.
 _BARE_OPS = {"reverseNormals", "cleanupGeometry", "deleteHoles", "resetGeometry", "resetMaterial",

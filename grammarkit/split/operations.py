@@ -126,6 +126,17 @@ _SPECS: tuple[OperationSpec, ...] = (
                                            choices=("scope", "edge")),),
                   block="selectors", selectors=("shape", "remainder"),
                   doc="The largest rectangle in a face (aligned to the scope or to an edge), and the rest."),
+    # scatter (grammarkit/split/scatter.py; docs/operations.md "Scatter"); the choices are the
+    # same lists as grammarkit.split.scatter's (kept here so that `grammarkit check` stays light)
+    OperationSpec("scatter", (Param("domain", "axis", choices=("surface", "volume", "scope")), Param("count"),
+                              Param("distribution", "axis", choices=("uniform", "gaussian")),
+                              Param("mean", "axis", required=False, default="center",
+                                    choices=("center", "front", "back", "left", "right", "top", "bottom")),
+                              Param("stddev", required=False, default=0.16,
+                                    doc="times the scope's size on each axis (CGA's '0.16)")),
+                  block="selectors", selectors=("all",),
+                  doc="Random point shapes (zero-size scopes) on the surface, in the volume or in the "
+                      "scope of the shape, uniform or gaussian; `{ all: Rule }` derives each point."),
     OperationSpec("label", (Param("name", "string"),),
                   doc="Make the shape (as it is now) an occluder with this label for inside(), "
                       "overlaps() and touches() of shapes derived later."),

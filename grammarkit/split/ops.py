@@ -31,6 +31,7 @@ from .lots import (
     op_inner_rectangle, op_setback, op_setback_per_edge, op_setback_to_area, op_shape_l, op_shape_o, op_shape_u,
 )
 from .occlusion import op_label
+from .scatter import op_scatter
 from .texturing import (
     moved, op_delete_uv, op_project_uv, op_rotate_uv, op_scale_uv, op_setup_projection, op_texture, op_translate_uv,
     set_material,
@@ -609,7 +610,7 @@ BUILTIN_APPLY = {
     "deleteUV": op_delete_uv,
     "setback": op_setback, "setbackPerEdge": op_setback_per_edge, "setbackToArea": op_setback_to_area,
     "shapeL": op_shape_l, "shapeU": op_shape_u, "shapeO": op_shape_o, "innerRectangle": op_inner_rectangle,
-    "label": op_label,
+    "label": op_label, "scatter": op_scatter,
 }
 
 
