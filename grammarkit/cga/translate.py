@@ -47,7 +47,7 @@ _UI_ANNOTATIONS = {"@Order", "@Group", "@Description", "@Hidden", "@Color", "@Di
 # CGA operations grammarkit has no counterpart for yet. They are dropped with a warning whose
 # feature is `op:<name>`; listed here only to word the message.
 _TEXTURING = {"tileUV", "normalizeUV", "copyUV", "insertAlongUV", "setNormals", "softenNormals"}
-_METADATA = {"print"}
+_METADATA: set[str] = set()  # (print is translated: grammarkit has print())
 
 
 @dataclass
@@ -1215,6 +1215,11 @@ def _h_report(t, args, block, star, frame, rctx, ctx, span, out):
     return [OpCall(name="report", args=(Arg(value=key), Arg(value=value)), span=span)], None
 
 
+def _h_print(t, args, block, star, frame, rctx, ctx, span, out):
+    _need(args, 1, 1, "print", span)
+    return [OpCall(name="print", args=(Arg(value=translate_expr(args[0], ctx)),), span=span)], None
+
+
 def _h_reverse_normals(t, args, block, star, frame, rctx, ctx, span, out):
     _need(args, 0, 0, "reverseNormals", span)
     return [OpCall(name="reverseNormals", span=span)], None
@@ -1493,7 +1498,7 @@ _HANDLERS = {
     "s": _h_s, "t": _h_t, "r": _h_r, "center": _h_center, "color": _h_color, "set": _h_set,
     "i": _h_i, **{name: _h_primitive(name) for name in _PRIMITIVE_OPS},
     "alignScopeToGeometry": _h_align_scope_to_geometry, "alignScopeToAxes": _h_align_scope_to_axes,
-    "rotateScope": _h_rotate_scope, "report": _h_report, "reverseNormals": _h_reverse_normals,
+    "rotateScope": _h_rotate_scope, "report": _h_report, "print": _h_print, "reverseNormals": _h_reverse_normals,
     "setupProjection": _h_setup_projection, "projectUV": _uv_op("projectUV", 1, 1),
     "texture": _h_texture, "translateUV": _uv_op("translateUV", 3, 3), "scaleUV": _uv_op("scaleUV", 3, 3),
     "rotateUV": _uv_op("rotateUV", 2, 2), "deleteUV": _uv_op("deleteUV", 1, 1),

@@ -105,6 +105,9 @@ _SPECS: tuple[OperationSpec, ...] = (
                   doc="Whether i() clips inserts by the trim planes of comp(f) side faces (CGA's trim.vertical)."),
     OperationSpec("report", (Param("key", "string"), Param("value", "any")),
                   doc="Collect a value under a report key (Model.reports; the model's metadata)."),
+    OperationSpec("print", (Param("value", "any"),),
+                  doc="A message of the derivation (CGA's print): `Rule: value` on Model.messages, "
+                      "printed by `grammarkit derive`; the shape is unchanged."),
     OperationSpec("set", (Param("attr", "name"), Param("value", "any")),
                   doc="Change an attr for this shape and everything derived from it (CGA's set); "
                       "`set(material.opacity, 0.5)` and the other CGA material attributes too."),
