@@ -46,7 +46,7 @@ _UI_ANNOTATIONS = {"@Order", "@Group", "@Description", "@Hidden", "@Color", "@Di
 
 # CGA operations grammarkit has no counterpart for yet. They are dropped with a warning whose
 # feature is `op:<name>`; listed here only to word the message.
-_TEXTURING = {"tileUV", "normalizeUV", "copyUV", "insertAlongUV", "setNormals", "softenNormals"}
+_TEXTURING = {"copyUV", "insertAlongUV", "setNormals", "softenNormals"}
 _METADATA: set[str] = set()  # (print is translated: grammarkit has print())
 
 
@@ -695,7 +695,7 @@ class Translator:
         if handler is None:
             if name in _TEXTURING:
                 why = ("grammarkit's texturing has no such operation (it has setupProjection, projectUV, "
-                       "translateUV, scaleUV, rotateUV, deleteUV, texture)")
+                       "translateUV, scaleUV, rotateUV, deleteUV, tileUV, normalizeUV, texture)")
             elif name in _METADATA:
                 why = "prints are not collected (report() is)"
             elif name[:1].isupper():
@@ -1469,6 +1469,33 @@ def _uv_op(gk: str, lo: int, hi: int):
     return handler
 
 
+def _h_tile_uv(t, args, block, star, frame, rctx, ctx, span, out):
+    """`tileUV(k, w, h)`; `~w` and `'w` are taken over the scope's x (u) and y (v) sizes, as
+    setupProjection's are (CGA measures the uv extent of the geometry: the same for a
+    projection along the scope's axes)."""
+    _need(args, 3, 3, "tileUV", span)
+    sizes = [_texture_size(a, f"scope.s{c}", ctx) for a, c in zip(args[1:], "xy")]
+    approx = None
+    if any(isinstance(a, Tree) and a.data in ("floating", "rel") for a in args[1:]):
+        approx = ("tileUV:relative", "~ and ' tile sizes are measured over the scope's x and y sizes "
+                  "(CGA: over the uv extent of the geometry)")
+    return [OpCall(name="tileUV", args=(Arg(value=translate_expr(args[0], ctx)), *(Arg(value=v) for v in sizes)),
+                   span=span)], approx
+
+
+def _h_normalize_uv(t, args, block, star, frame, rctx, ctx, span, out):
+    _need(args, 3, 3, "normalizeUV", span)
+    which, mode = _axis_name(args[1]), _axis_name(args[2])
+    if which not in ("uv", "u", "v") or mode not in ("separatePerFace", "collectiveAllFaces"):
+        raise Untranslatable("normalizeUV:args", f"normalizeUV(.., {which}, {mode})", span)
+    approx = None
+    if mode == "separatePerFace":
+        approx = ("normalizeUV:separatePerFace", "separatePerFace normalises over the whole shape (exact "
+                  "for a face; a volume's faces together)")
+    return [OpCall(name="normalizeUV", args=(Arg(value=translate_expr(args[0], ctx)), Arg(value=Ref(name=which)),
+                                             Arg(value=Ref(name=mode))), span=span)], approx
+
+
 def _file_name(t: Any, value: Any) -> bool:
     """Whether a translated value is a file name grammarkit can use: a string, or an attr or
     const whose CGA value is a string literal."""
@@ -1502,6 +1529,7 @@ _HANDLERS = {
     "setupProjection": _h_setup_projection, "projectUV": _uv_op("projectUV", 1, 1),
     "texture": _h_texture, "translateUV": _uv_op("translateUV", 3, 3), "scaleUV": _uv_op("scaleUV", 3, 3),
     "rotateUV": _uv_op("rotateUV", 2, 2), "deleteUV": _uv_op("deleteUV", 1, 1),
+    "tileUV": _h_tile_uv, "normalizeUV": _h_normalize_uv,
     "setback": _h_setback("setback"), "setbackPerEdge": _h_setback("setbackPerEdge"),
     "setbackToArea": _h_setback("setbackToArea"), "shapeL": _h_shape_op("shapeL", 2),
     "shapeU": _h_shape_op("shapeU", 3), "shapeO": _h_shape_op("shapeO", 4),

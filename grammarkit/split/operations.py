@@ -161,6 +161,12 @@ _SPECS: tuple[OperationSpec, ...] = (
     OperationSpec("rotateUV", (Param("uvset"), Param("angle")),
                   doc="Turn the texture coordinates of a uv set about the uv origin (degrees)."),
     OperationSpec("deleteUV", (Param("uvset"),), doc="Remove the texture coordinates of a uv set."),
+    OperationSpec("tileUV", (Param("uvset"), Param("width"), Param("height")),
+                  doc="Rescale the texture coordinates so a texture tile spans width x height world "
+                      "units (negative: mirrored; 0: the axis is left as it is)."),
+    OperationSpec("normalizeUV", (Param("uvset"), Param("axes", "axis", choices=("uv", "u", "v")),
+                                  Param("mode", "axis", choices=("separatePerFace", "collectiveAllFaces"))),
+                  doc="Shift and scale the texture coordinates to span [0, 1] over the shape."),
 )
 
 

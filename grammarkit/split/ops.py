@@ -34,8 +34,8 @@ from .occlusion import op_label
 from .scatter import op_scatter
 from .strings import cga_str
 from .texturing import (
-    moved, op_delete_uv, op_project_uv, op_rotate_uv, op_scale_uv, op_setup_projection, op_texture, op_translate_uv,
-    set_material,
+    moved, op_delete_uv, op_normalize_uv, op_project_uv, op_rotate_uv, op_scale_uv, op_setup_projection, op_texture,
+    op_tile_uv, op_translate_uv, set_material,
 )
 
 Manifold = manifold3d.Manifold
@@ -618,7 +618,7 @@ BUILTIN_APPLY = {
     "trim": op_trim,
     "setupProjection": op_setup_projection, "projectUV": op_project_uv, "texture": op_texture,
     "translateUV": op_translate_uv, "scaleUV": op_scale_uv, "rotateUV": op_rotate_uv,
-    "deleteUV": op_delete_uv,
+    "deleteUV": op_delete_uv, "tileUV": op_tile_uv, "normalizeUV": op_normalize_uv,
     "setback": op_setback, "setbackPerEdge": op_setback_per_edge, "setbackToArea": op_setback_to_area,
     "shapeL": op_shape_l, "shapeU": op_shape_u, "shapeO": op_shape_o, "innerRectangle": op_inner_rectangle,
     "label": op_label, "scatter": op_scatter, "print": op_print,
