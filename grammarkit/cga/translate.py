@@ -1220,6 +1220,11 @@ def _h_print(t, args, block, star, frame, rctx, ctx, span, out):
     return [OpCall(name="print", args=(Arg(value=translate_expr(args[0], ctx)),), span=span)], None
 
 
+def _h_convexify(t, args, block, star, frame, rctx, ctx, span, out):
+    _need(args, 0, 1, "convexify", span)
+    return [OpCall(name="convexify", args=tuple(Arg(value=translate_expr(a, ctx)) for a in args), span=span)], None
+
+
 def _h_reverse_normals(t, args, block, star, frame, rctx, ctx, span, out):
     _need(args, 0, 0, "reverseNormals", span)
     return [OpCall(name="reverseNormals", span=span)], None
@@ -1525,7 +1530,7 @@ _HANDLERS = {
     "s": _h_s, "t": _h_t, "r": _h_r, "center": _h_center, "color": _h_color, "set": _h_set,
     "i": _h_i, **{name: _h_primitive(name) for name in _PRIMITIVE_OPS},
     "alignScopeToGeometry": _h_align_scope_to_geometry, "alignScopeToAxes": _h_align_scope_to_axes,
-    "rotateScope": _h_rotate_scope, "report": _h_report, "print": _h_print, "reverseNormals": _h_reverse_normals,
+    "rotateScope": _h_rotate_scope, "report": _h_report, "print": _h_print, "convexify": _h_convexify, "reverseNormals": _h_reverse_normals,
     "setupProjection": _h_setup_projection, "projectUV": _uv_op("projectUV", 1, 1),
     "texture": _h_texture, "translateUV": _uv_op("translateUV", 3, 3), "scaleUV": _uv_op("scaleUV", 3, 3),
     "rotateUV": _uv_op("rotateUV", 2, 2), "deleteUV": _uv_op("deleteUV", 1, 1),

@@ -140,6 +140,10 @@ _SPECS: tuple[OperationSpec, ...] = (
                   block="selectors", selectors=("all",),
                   doc="Random point shapes (zero-size scopes) on the surface, in the volume or in the "
                       "scope of the shape, uniform or gaussian; `{ all: Rule }` derives each point."),
+    OperationSpec("convexify", (Param("max_length", required=False, default=0.0,
+                                      doc="keep only split lines shorter than this (0: all)"),),
+                  doc="Split a face's geometry into convex faces (Hertel-Mehlhorn); comp(f) hands "
+                      "them out one by one."),
     OperationSpec("label", (Param("name", "string"),),
                   doc="Make the shape (as it is now) an occluder with this label for inside(), "
                       "overlaps() and touches() of shapes derived later."),

@@ -32,6 +32,7 @@ from .lots import (
 )
 from .occlusion import op_label
 from .scatter import op_scatter
+from .convexify import op_convexify
 from .strings import cga_str
 from .texturing import (
     moved, op_delete_uv, op_normalize_uv, op_project_uv, op_rotate_uv, op_scale_uv, op_setup_projection, op_texture,
@@ -622,6 +623,7 @@ BUILTIN_APPLY = {
     "setback": op_setback, "setbackPerEdge": op_setback_per_edge, "setbackToArea": op_setback_to_area,
     "shapeL": op_shape_l, "shapeU": op_shape_u, "shapeO": op_shape_o, "innerRectangle": op_inner_rectangle,
     "label": op_label, "scatter": op_scatter, "print": op_print,
+    "convexify": op_convexify,
 }
 
 
