@@ -210,5 +210,7 @@ class OperationContext(Protocol):
 
     def report(self, key: str, value: Any) -> None: ...  # a value for Model.reports (CGA's report())
 
+    def message(self, text: str) -> None: ...  # a message on Model.messages (CGA's print())
+
 
 Apply = Callable[[OperationContext, ShapeView, list, "tuple[BlockSlot, ...] | None"], Any]

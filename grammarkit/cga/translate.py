@@ -46,8 +46,8 @@ _UI_ANNOTATIONS = {"@Order", "@Group", "@Description", "@Hidden", "@Color", "@Di
 
 # CGA operations grammarkit has no counterpart for yet. They are dropped with a warning whose
 # feature is `op:<name>`; listed here only to word the message.
-_TEXTURING = {"tileUV", "normalizeUV", "copyUV", "insertAlongUV", "setNormals", "softenNormals"}
-_METADATA = {"print"}
+_TEXTURING = {"copyUV", "insertAlongUV", "setNormals", "softenNormals"}
+_METADATA: set[str] = set()  # (print is translated: grammarkit has print())
 
 
 @dataclass
@@ -695,7 +695,7 @@ class Translator:
         if handler is None:
             if name in _TEXTURING:
                 why = ("grammarkit's texturing has no such operation (it has setupProjection, projectUV, "
-                       "translateUV, scaleUV, rotateUV, deleteUV, texture)")
+                       "translateUV, scaleUV, rotateUV, deleteUV, tileUV, normalizeUV, texture)")
             elif name in _METADATA:
                 why = "prints are not collected (report() is)"
             elif name[:1].isupper():
@@ -771,7 +771,7 @@ class Translator:
                              counting=rctx.counting)
                 out.extend(self.split_entries(entry.children[0], frame, rctx, ctx))
                 continue
-            if entry.data in ("bare_entry", "merged_entry"):
+            if entry.data in ("bare_entry", "bare_name_entry", "merged_entry"):
                 raise Untranslatable("split:entry", "a split entry without a size", span)
             mode, key_tree = _hoist_size(entry.children[0].children[0])
             key = translate_expr(key_tree, ctx)
@@ -785,7 +785,8 @@ class Translator:
         for entry in block.children:
             span = self._span(entry)
             if entry.data not in ("entry", "merged_entry"):
-                self._count_block(Tree("block", [entry]), frame, rctx) if entry.data != "bare_entry" else None
+                self._count_block(Tree("block", [entry]), frame, rctx) if entry.data not in (
+                    "bare_entry", "bare_name_entry") else None
                 self._record("selector", "?", "dropped", span, feature="comp:entry",
                              message="a comp entry without a selector", counting=rctx.counting)
                 continue
@@ -1214,6 +1215,16 @@ def _h_report(t, args, block, star, frame, rctx, ctx, span, out):
     return [OpCall(name="report", args=(Arg(value=key), Arg(value=value)), span=span)], None
 
 
+def _h_print(t, args, block, star, frame, rctx, ctx, span, out):
+    _need(args, 1, 1, "print", span)
+    return [OpCall(name="print", args=(Arg(value=translate_expr(args[0], ctx)),), span=span)], None
+
+
+def _h_convexify(t, args, block, star, frame, rctx, ctx, span, out):
+    _need(args, 0, 1, "convexify", span)
+    return [OpCall(name="convexify", args=tuple(Arg(value=translate_expr(a, ctx)) for a in args), span=span)], None
+
+
 def _h_reverse_normals(t, args, block, star, frame, rctx, ctx, span, out):
     _need(args, 0, 0, "reverseNormals", span)
     return [OpCall(name="reverseNormals", span=span)], None
@@ -1356,6 +1367,53 @@ def _h_inner_rectangle(t, args, block, star, frame, rctx, ctx, span, out):
     return [OpCall(name="innerRectangle", args=(Arg(value=Ref(name=mode)),), block=tuple(entries), span=span)], None
 
 
+_SCATTER_MEANS = ("center", "front", "back", "left", "right", "top", "bottom")
+
+
+def _h_scatter(t, args, block, star, frame, rctx, ctx, span, out):
+    """`scatter(domain, n, uniform|gaussian [, mean, stddev]) { Rule }` -> `{ all: Rule }`."""
+    _need(args, 3, 5, "scatter", span)
+    domain, dist = _axis_name(args[0]), _axis_name(args[2])
+    if domain not in ("surface", "volume", "scope"):
+        raise Untranslatable("scatter:domain", f"scatter domain {domain!r}", span)
+    if dist not in ("uniform", "gaussian"):
+        raise Untranslatable("scatter:distribution", f"scatter distribution {dist!r}", span)
+    entries = [e for e in (block.children if block is not None else ()) if isinstance(e, Tree)]
+    if len(entries) != 1 or entries[0].data not in ("bare_entry", "bare_name_entry"):
+        raise Untranslatable("scatter:block", "scatter needs a block of one rule call { Rule }", span)
+    e = entries[0]
+    item = Tree("call" if e.data == "bare_entry" else "name", e.children)
+    # CGA turns a point's y (its up axis) to the surface normal, grammarkit its z: CGA's y-up
+    # frame (Y); in a volume or the scope the points keep the shape's axes and frame
+    body = t._body([item], "Y" if domain == "surface" else frame, rctx) or [Terminal(name=rctx.gk, span=span)]
+    call_args = [Arg(value=Ref(name=domain)), Arg(value=translate_expr(args[1], ctx)), Arg(value=Ref(name=dist))]
+    approx = None
+    if len(args) >= 4:
+        mean = _axis_name(args[3])
+        if mean not in _SCATTER_MEANS:
+            raise Untranslatable("scatter:mean", f"scatter mean {mean!r}", span)
+        # CGA's scope sides in grammarkit's: frame Y maps CGA's +y (top) to +z and CGA's +z
+        # (front) to -y, so the names agree; in frame Z (axes as they are) CGA's front is +z
+        if frame != "Y":
+            mean = {"front": "top", "back": "bottom", "top": "back", "bottom": "front"}.get(mean, mean)
+        call_args.append(Arg(value=Ref(name=mean)))
+    if len(args) == 5:
+        sd = args[4]
+        if isinstance(sd, Tree) and sd.data == "rel":
+            call_args.append(Arg(value=translate_expr(sd.children[0], ctx)))
+        else:  # an absolute stddev (metres): relative to the scope's largest size
+            def size(a: str) -> Tree:
+                return Tree("ref", [Token("NAME", f"scope.s{a}")])
+
+            largest = Tree("func_call", [Token("NAME", "max"), Tree("args", [size("x"), Tree(
+                "func_call", [Token("NAME", "max"), Tree("args", [size("y"), size("z")])])])])
+            call_args.append(Arg(value=translate_expr(Tree("binop", [sd, Token("SLASH", "/"), largest]), ctx)))
+            approx = ("scatter:stddev", "an absolute stddev is made relative to the scope's largest "
+                      "size (grammarkit's stddev is relative, per axis)")
+    return [OpCall(name="scatter", args=tuple(call_args), block=(Branch(key=Ref(name="all"), body=Seq(
+        items=tuple(body)), span=span),), span=span)], approx
+
+
 # -- texturing (grammarkit/split/texturing.py) -----------------------------------------------------
 # A CGA axis letter of setupProjection -> (grammarkit letter, reversed). World axes are y-up in
 # CGA and z-up in grammarkit, as the lot's scope (frame Y); a face's scope is the identity.
@@ -1416,6 +1474,33 @@ def _uv_op(gk: str, lo: int, hi: int):
     return handler
 
 
+def _h_tile_uv(t, args, block, star, frame, rctx, ctx, span, out):
+    """`tileUV(k, w, h)`; `~w` and `'w` are taken over the scope's x (u) and y (v) sizes, as
+    setupProjection's are (CGA measures the uv extent of the geometry: the same for a
+    projection along the scope's axes)."""
+    _need(args, 3, 3, "tileUV", span)
+    sizes = [_texture_size(a, f"scope.s{c}", ctx) for a, c in zip(args[1:], "xy")]
+    approx = None
+    if any(isinstance(a, Tree) and a.data in ("floating", "rel") for a in args[1:]):
+        approx = ("tileUV:relative", "~ and ' tile sizes are measured over the scope's x and y sizes "
+                  "(CGA: over the uv extent of the geometry)")
+    return [OpCall(name="tileUV", args=(Arg(value=translate_expr(args[0], ctx)), *(Arg(value=v) for v in sizes)),
+                   span=span)], approx
+
+
+def _h_normalize_uv(t, args, block, star, frame, rctx, ctx, span, out):
+    _need(args, 3, 3, "normalizeUV", span)
+    which, mode = _axis_name(args[1]), _axis_name(args[2])
+    if which not in ("uv", "u", "v") or mode not in ("separatePerFace", "collectiveAllFaces"):
+        raise Untranslatable("normalizeUV:args", f"normalizeUV(.., {which}, {mode})", span)
+    approx = None
+    if mode == "separatePerFace":
+        approx = ("normalizeUV:separatePerFace", "separatePerFace normalises over the whole shape (exact "
+                  "for a face; a volume's faces together)")
+    return [OpCall(name="normalizeUV", args=(Arg(value=translate_expr(args[0], ctx)), Arg(value=Ref(name=which)),
+                                             Arg(value=Ref(name=mode))), span=span)], approx
+
+
 def _file_name(t: Any, value: Any) -> bool:
     """Whether a translated value is a file name grammarkit can use: a string, or an attr or
     const whose CGA value is a string literal."""
@@ -1445,14 +1530,15 @@ _HANDLERS = {
     "s": _h_s, "t": _h_t, "r": _h_r, "center": _h_center, "color": _h_color, "set": _h_set,
     "i": _h_i, **{name: _h_primitive(name) for name in _PRIMITIVE_OPS},
     "alignScopeToGeometry": _h_align_scope_to_geometry, "alignScopeToAxes": _h_align_scope_to_axes,
-    "rotateScope": _h_rotate_scope, "report": _h_report, "reverseNormals": _h_reverse_normals,
+    "rotateScope": _h_rotate_scope, "report": _h_report, "print": _h_print, "convexify": _h_convexify, "reverseNormals": _h_reverse_normals,
     "setupProjection": _h_setup_projection, "projectUV": _uv_op("projectUV", 1, 1),
     "texture": _h_texture, "translateUV": _uv_op("translateUV", 3, 3), "scaleUV": _uv_op("scaleUV", 3, 3),
     "rotateUV": _uv_op("rotateUV", 2, 2), "deleteUV": _uv_op("deleteUV", 1, 1),
+    "tileUV": _h_tile_uv, "normalizeUV": _h_normalize_uv,
     "setback": _h_setback("setback"), "setbackPerEdge": _h_setback("setbackPerEdge"),
     "setbackToArea": _h_setback("setbackToArea"), "shapeL": _h_shape_op("shapeL", 2),
     "shapeU": _h_shape_op("shapeU", 3), "shapeO": _h_shape_op("shapeO", 4),
-    "innerRectangle": _h_inner_rectangle, "label": _h_label,
+    "innerRectangle": _h_inner_rectangle, "label": _h_label, "scatter": _h_scatter,
 }
 # Operations CGA writes without parentheses.
 _BARE_OPS = {"reverseNormals", "cleanupGeometry", "deleteHoles", "resetGeometry", "resetMaterial",

@@ -205,6 +205,8 @@ def _run_single(grammar: Any, file: Path, out: Path, seed: int, attrs: dict[str,
     write_files(files)  # one transaction: all of them, or none replaced
     for w in model.warnings:
         console.print(f"[yellow]warning:[/] {w}", highlight=False)
+    for msg in getattr(model, "messages", ()):  # CGA's print() (split grammars), on stderr
+        console.print(f"print: {msg}", highlight=False, markup=False)
     click.echo(f"wrote {out} ({fmt}): {model.triangle_count} triangles, {len(model.parts)} terminals, "
                f"{model.shape_count} shapes" + (f"; preview {preview}" if preview else "")
                + (f"; tree {tree}" if tree else ""))

@@ -32,6 +32,7 @@ from __future__ import annotations
 import math
 from typing import Any
 
+import manifold3d
 import numpy as np
 
 from ..geometry import footprints as fp
@@ -211,6 +212,29 @@ def _rect_or_poly(poly: Any, sx: float, sy: float) -> Any:
     return poly
 
 
+def _face_pieces(s: Shape) -> list[Shape]:
+    """A face's faces: itself, or, when its geometry is several outer contours and no holes
+    (what convexify() makes), each contour as a face of its own (CGA's comp(f) of a
+    multi-face shape)."""
+    poly = s.poly
+    if poly is None or len(poly) < 2:
+        return [s.copy()]
+
+    def signed(c: Any) -> float:
+        return 0.5 * sum(c[i][0] * c[(i + 1) % len(c)][1] - c[(i + 1) % len(c)][0] * c[i][1] for i in range(len(c)))
+
+    if any(signed(c) <= 0 for c in poly):
+        return [s.copy()]
+    from .lots import _fitted
+
+    out = []
+    for c in poly:
+        f = _fitted(s, manifold3d.CrossSection([[list(p) for p in c]], manifold3d.FillRule.Positive))
+        if f is not None:
+            out.append(f)
+    return out
+
+
 def op_comp(ctx: Any, s: Shape, args: Any, block: Any) -> list:
     mode = str(args[0])
     if mode in ("e", "v"):  # edges and vertices (grammarkit/split/comp_edges.py)
@@ -225,7 +249,7 @@ def op_comp(ctx: Any, s: Shape, args: Any, block: Any) -> list:
     if mode != "f":
         raise ValueError(f"comp({mode}) is not supported")
     if s.kind == FACE:
-        parts = [(frozenset(("top", "all", "horizontal")), s.copy())]
+        parts = [(frozenset(("top", "all", "horizontal")), f) for f in _face_pieces(s)]
     elif s.solid is not None:
         parts = _mesh_faces(s)
     else:

@@ -41,6 +41,10 @@ WELD = 1e-3
 CUT_WELD = 0.5 * WELD
 
 
+# print() messages kept per derivation (more are counted in Model.messages' last line)
+MAX_MESSAGES = 10_000
+
+
 @dataclass(frozen=True)
 class Limits:
     """Resource guards; exceeding one ends the derivation with a LimitError naming the rule."""
@@ -122,6 +126,9 @@ class Derivation:
         self.warned: set[str] = set()
         # report(key, value) calls in derivation order: key -> values (CGA's reports)
         self.reports: dict[str, list] = {}
+        # print(value) calls in derivation order (CGA's print: Model.messages, `grammarkit derive`)
+        self.messages: list[str] = []
+        self.messages_dropped = 0
         self.est_tris = 0
         # occluders for inside()/overlaps()/touches() (grammarkit/split/occlusion.py): kept only
         # when the grammar asks such queries (terminals are registered as they are made)
@@ -440,6 +447,15 @@ class OperationContext:
     def report(self, key: str, value: Any) -> None:
         """Record a value under a report key (CGA's report(); summed up in `Model.reports`)."""
         self._derivation.reports.setdefault(key, []).append(value)
+
+    def message(self, text: str) -> None:
+        """A message of the derivation (CGA's print()): kept in order on `Model.messages`; past
+        MAX_MESSAGES they are counted, not kept (a print in a loop over thousands of shapes)."""
+        d = self._derivation
+        if len(d.messages) < MAX_MESSAGES:
+            d.messages.append(text)
+        else:
+            d.messages_dropped += 1
 
     def warn(self, message: str) -> None:
         """A warning of the derivation (listed on the model and by the CLI); a message already

@@ -305,6 +305,15 @@ class Model:
         self.warnings = warnings
         self.bindings = bindings
 
+    @property
+    def messages(self) -> list[str]:
+        """CGA's print(value) messages in derivation order, each `Rule: value` (the rule that
+        printed it); past 10,000 the rest are counted in a last line."""
+        out = list(self._ctx.messages)
+        if self._ctx.messages_dropped:
+            out.append(f"... {self._ctx.messages_dropped} more messages not kept")
+        return out
+
     @cached_property
     def reports(self) -> dict[str, dict]:
         """CGA's reports: per key of `report(key, value)`, the number of values `n`, and for
@@ -530,6 +539,7 @@ class Model:
             "grammar": self.name, "seed": self.seed, "attrs": self.attrs, "bindings": self.bindings,
             "shape_count": self.shape_count, "terminal_count": len(self._ctx.leaves),
             "triangles": self.triangle_count, "warnings": self.warnings, "reports": self.reports,
+            "messages": self.messages,
             "nodes": [n.to_dict() for n in self._tree_nodes],
         }
 

@@ -105,6 +105,9 @@ _SPECS: tuple[OperationSpec, ...] = (
                   doc="Whether i() clips inserts by the trim planes of comp(f) side faces (CGA's trim.vertical)."),
     OperationSpec("report", (Param("key", "string"), Param("value", "any")),
                   doc="Collect a value under a report key (Model.reports; the model's metadata)."),
+    OperationSpec("print", (Param("value", "any"),),
+                  doc="A message of the derivation (CGA's print): `Rule: value` on Model.messages, "
+                      "printed by `grammarkit derive`; the shape is unchanged."),
     OperationSpec("set", (Param("attr", "name"), Param("value", "any")),
                   doc="Change an attr for this shape and everything derived from it (CGA's set); "
                       "`set(material.opacity, 0.5)` and the other CGA material attributes too."),
@@ -126,6 +129,21 @@ _SPECS: tuple[OperationSpec, ...] = (
                                            choices=("scope", "edge")),),
                   block="selectors", selectors=("shape", "remainder"),
                   doc="The largest rectangle in a face (aligned to the scope or to an edge), and the rest."),
+    # scatter (grammarkit/split/scatter.py; docs/operations.md "Scatter"); the choices are the
+    # same lists as grammarkit.split.scatter's (kept here so that `grammarkit check` stays light)
+    OperationSpec("scatter", (Param("domain", "axis", choices=("surface", "volume", "scope")), Param("count"),
+                              Param("distribution", "axis", choices=("uniform", "gaussian")),
+                              Param("mean", "axis", required=False, default="center",
+                                    choices=("center", "front", "back", "left", "right", "top", "bottom")),
+                              Param("stddev", required=False, default=0.16,
+                                    doc="times the scope's size on each axis (CGA's '0.16)")),
+                  block="selectors", selectors=("all",),
+                  doc="Random point shapes (zero-size scopes) on the surface, in the volume or in the "
+                      "scope of the shape, uniform or gaussian; `{ all: Rule }` derives each point."),
+    OperationSpec("convexify", (Param("max_length", required=False, default=0.0,
+                                      doc="keep only split lines shorter than this (0: all)"),),
+                  doc="Split a face's geometry into convex faces (Hertel-Mehlhorn); comp(f) hands "
+                      "them out one by one."),
     OperationSpec("label", (Param("name", "string"),),
                   doc="Make the shape (as it is now) an occluder with this label for inside(), "
                       "overlaps() and touches() of shapes derived later."),
@@ -147,6 +165,12 @@ _SPECS: tuple[OperationSpec, ...] = (
     OperationSpec("rotateUV", (Param("uvset"), Param("angle")),
                   doc="Turn the texture coordinates of a uv set about the uv origin (degrees)."),
     OperationSpec("deleteUV", (Param("uvset"),), doc="Remove the texture coordinates of a uv set."),
+    OperationSpec("tileUV", (Param("uvset"), Param("width"), Param("height")),
+                  doc="Rescale the texture coordinates so a texture tile spans width x height world "
+                      "units (negative: mirrored; 0: the axis is left as it is)."),
+    OperationSpec("normalizeUV", (Param("uvset"), Param("axes", "axis", choices=("uv", "u", "v")),
+                                  Param("mode", "axis", choices=("separatePerFace", "collectiveAllFaces"))),
+                  doc="Shift and scale the texture coordinates to span [0, 1] over the shape."),
 )
 
 

@@ -31,9 +31,12 @@ from .lots import (
     op_inner_rectangle, op_setback, op_setback_per_edge, op_setback_to_area, op_shape_l, op_shape_o, op_shape_u,
 )
 from .occlusion import op_label
+from .scatter import op_scatter
+from .convexify import op_convexify
+from .strings import cga_str
 from .texturing import (
-    moved, op_delete_uv, op_project_uv, op_rotate_uv, op_scale_uv, op_setup_projection, op_texture, op_translate_uv,
-    set_material,
+    moved, op_delete_uv, op_normalize_uv, op_project_uv, op_rotate_uv, op_scale_uv, op_setup_projection, op_texture,
+    op_tile_uv, op_translate_uv, set_material,
 )
 
 Manifold = manifold3d.Manifold
@@ -594,6 +597,16 @@ def op_report(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
     return s
 
 
+def op_print(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
+    """CGA's `print(value)`: a message of the derivation (Model.messages, printed by `grammarkit
+    derive`), `Rule: value` with the value as CGA's str() writes it; the shape is unchanged."""
+    value = args[0]
+    if isinstance(value, tuple):
+        raise ValueError("print(): the value must be a number, a string or a boolean")
+    ctx.message(f"{s.rule_name}: {cga_str(value)}")
+    return s
+
+
 BUILTIN_APPLY = {
     "footprint": op_footprint, "extrude": op_extrude, "taper": op_taper, "recess": op_recess,
     "comp": op_comp, "split": op_split, "offset": op_offset,
@@ -606,10 +619,11 @@ BUILTIN_APPLY = {
     "trim": op_trim,
     "setupProjection": op_setup_projection, "projectUV": op_project_uv, "texture": op_texture,
     "translateUV": op_translate_uv, "scaleUV": op_scale_uv, "rotateUV": op_rotate_uv,
-    "deleteUV": op_delete_uv,
+    "deleteUV": op_delete_uv, "tileUV": op_tile_uv, "normalizeUV": op_normalize_uv,
     "setback": op_setback, "setbackPerEdge": op_setback_per_edge, "setbackToArea": op_setback_to_area,
     "shapeL": op_shape_l, "shapeU": op_shape_u, "shapeO": op_shape_o, "innerRectangle": op_inner_rectangle,
-    "label": op_label,
+    "label": op_label, "scatter": op_scatter, "print": op_print,
+    "convexify": op_convexify,
 }
 
 

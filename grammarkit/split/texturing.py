@@ -25,8 +25,9 @@ from typing import Any
 
 from .shape import Shape
 
-__all__ = ["AXES", "MATERIAL_KEYS", "Texturing", "moved", "op_delete_uv", "op_project_uv", "op_rotate_uv",
-           "op_scale_uv", "op_setup_projection", "op_texture", "op_translate_uv", "set_material"]
+__all__ = ["AXES", "MATERIAL_KEYS", "Texturing", "moved", "op_delete_uv", "op_normalize_uv", "op_project_uv",
+           "op_rotate_uv", "op_scale_uv", "op_setup_projection", "op_texture", "op_tile_uv", "op_translate_uv",
+           "set_material"]
 
 # setupProjection's axes selectors: the origin (scope or world) and the axes taken as u and v
 AXES = tuple(f"{o}.{a}{b}" for o in ("scope", "world") for a, b in
@@ -278,3 +279,76 @@ def moved(s: Shape, o: tuple, ax: tuple, f: tuple = (1.0, 1.0, 1.0)) -> None:
             rows.append((*lin, row[3] + sum(row[r] * t[r] for r in range(3))))
         uv.append((k, tuple(rows)))
     s.tex = st.replace(uv=tuple(uv))
+
+
+def _world_points(s: Shape) -> list[tuple]:
+    """The vertices of the shape's geometry in world coordinates (a face's outline, a volume's
+    mesh or its footprint prism)."""
+    if s.kind == "F":
+        return [s.world(x, y, 0.0) for c in s.contours() for x, y in c]
+    from ..geometry.surfaces import SurfaceMesh
+
+    if isinstance(s.solid, SurfaceMesh):
+        return [s.world(*map(float, v)) for v in s.solid.V]
+    if s.solid is not None:
+        import numpy as np
+
+        V = np.asarray(s.solid.to_mesh().vert_properties, dtype=float)[:, :3]
+        return [s.world(*map(float, v)) for v in V]
+    return [s.world(x, y, z) for c in s.contours() for x, y in c for z in (0.0, s.sz[2])]
+
+
+def _uv_range(s: Shape, m: Mat) -> tuple[tuple[float, float], tuple[float, float]]:
+    """(min, max) of u and of v over the shape's geometry under the uv map `m`."""
+    pts = _world_points(s)
+    if not pts:
+        return (0.0, 0.0), (0.0, 0.0)
+    out = []
+    for row in m:
+        vals = [row[0] * p[0] + row[1] * p[1] + row[2] * p[2] + row[3] for p in pts]
+        out.append((min(vals), max(vals)))
+    return out[0], out[1]
+
+
+def op_tile_uv(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
+    """`tileUV(uvset, w, h)`: rescale the texture coordinates so that one texture tile spans
+    `w` x `h` world units along u and v (negative: mirrored; 0: that axis is left as it is).
+    The uv map is affine, so a world unit along the surface is 1 / |grad u| uv units: u is
+    scaled by 1 / (w |grad u|) about u = 0 (CGA keeps the uv origin)."""
+    k = _uv_set(args[0], "tileUV()")
+    w = _finite(args[1], "tileUV(): the texture width")
+    h = _finite(args[2], "tileUV(): the texture height")
+    m = _state(s).get_uv(k)
+    if m is None:
+        raise ValueError(f"tileUV(): the shape has no texture coordinates in uv set {k} (projectUV({k}) first)")
+    f = []
+    for row, size in zip(m, (w, h)):
+        grad = math.sqrt(row[0] ** 2 + row[1] ** 2 + row[2] ** 2)
+        f.append(1.0 if abs(size) < 1e-12 or grad < 1e-15 else 1.0 / (size * grad))
+    return _uv_affine(s, k, "tileUV()", ((f[0], 0.0, 0.0), (0.0, f[1], 0.0)))
+
+
+NORMALIZE_AXES = ("uv", "u", "v")
+NORMALIZE_MODES = ("separatePerFace", "collectiveAllFaces")
+
+
+def op_normalize_uv(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
+    """`normalizeUV(uvset, uv|u|v, separatePerFace|collectiveAllFaces)`: shift and scale the
+    texture coordinates so they span [0, 1] over the shape's geometry along u and/or v. A
+    shape's UVs are one affine map, so both modes normalise over the whole shape (exact for a
+    face, which is one face; on a volume `separatePerFace` is read as `collectiveAllFaces`)."""
+    k = _uv_set(args[0], "normalizeUV()")
+    which, mode = str(args[1]), str(args[2])
+    if which not in NORMALIZE_AXES:
+        raise ValueError(f"normalizeUV(): the axes must be one of {', '.join(NORMALIZE_AXES)}, got {which!r}")
+    if mode not in NORMALIZE_MODES:
+        raise ValueError(f"normalizeUV(): the mode must be one of {', '.join(NORMALIZE_MODES)}, got {mode!r}")
+    m = _state(s).get_uv(k)
+    if m is None:
+        raise ValueError(f"normalizeUV(): the shape has no texture coordinates in uv set {k} "
+                         f"(projectUV({k}) first)")
+    a = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]
+    for i, (lo, hi) in enumerate(_uv_range(s, m)):
+        if "uv"[i] in which and hi - lo > 1e-12:
+            a[i][i], a[i][2] = 1.0 / (hi - lo), -lo / (hi - lo)
+    return _uv_affine(s, k, "normalizeUV()", (tuple(a[0]), tuple(a[1])))

@@ -20,15 +20,15 @@ def run(*args):
 
 def test_import_writes_a_checked_grammar_and_a_report(tmp_path):
     src = tmp_path / "b.cga"
-    src.write_text('attr H = 9\nLot --> extrude(H) tileUV(0, 2, 2) comp(f) { top: R. | side: F. }\n')
+    src.write_text('attr H = 9\nLot --> extrude(H) copyUV(1, 0) comp(f) { top: R. | side: F. }\n')
     out, rep = tmp_path / "b.grammar", tmp_path / "r.json"
     res = run("import-cga", src, "-o", out, "--report", rep)
     assert res.exit_code == 0, res.stderr
-    assert f"{src}:2:20: warning: not translated: tileUV()" in res.stderr
+    assert f"{src}:2:20: warning: not translated: copyUV()" in res.stderr
     assert "wrote" in res.stderr
     assert grammarkit.check(out) == []
     data = json.loads(rep.read_text())
-    assert data["constructs"]["dropped"] == 1 and data["missing_features"] == {"op:tileUV": 1}
+    assert data["constructs"]["dropped"] == 1 and data["missing_features"] == {"op:copyUV": 1}
     assert data["checks"] is True
 
 

@@ -30,7 +30,7 @@ def test_python_examples_run(capsys):
     finally:
         os.chdir(old)
     out = capsys.readouterr().out
-    assert "True 3 1" in out and "<string>:1:21: warning: not translated: tileUV()" in out
+    assert "True 3 1" in out and "<string>:1:21: warning: not translated: copyUV()" in out
 
 
 def test_shell_examples_run(tmp_path):

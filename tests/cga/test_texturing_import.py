@@ -69,9 +69,9 @@ def test_uv_operations_and_materials_translate():
 
 def test_what_is_not_translated_says_why():
     r = imported("attr t = fileRandom(\"a/*.jpg\")\n"
-                 "Lot --> setupProjection(0, scope.xy, 1, 1, 0, 0, 1) texture(t) tileUV(0, 2, 2) X.\n")
+                 "Lot --> setupProjection(0, scope.xy, 1, 1, 0, 0, 1) texture(t) copyUV(1, 0) X.\n")
     features = {c.feature for c in r.report.constructs if c.status != "translated"}
-    assert {"setupProjection:uwFactor", "texture:expression", "op:tileUV"} <= features
+    assert {"setupProjection:uwFactor", "texture:expression", "op:copyUV"} <= features
     # approximated, kept (CGA's scope.xy on the lot is grammarkit's scope.xz: x and up)
     assert "setupProjection(0, scope.xz, 1, 1)" in line(r, "Lot")
 

@@ -174,21 +174,21 @@ def test_block_before_more_items_keeps_the_shape():
 
 
 def test_untranslatable_constructs_warn_with_location_and_feature():
-    text = ("Lot -->\n  tileUV(0, 2, 2)\n  extrude(geometry.angle(zenith) * 0.1)\n"
-            "  print(\"h\")\n  X.\n")
+    text = ("Lot -->\n  copyUV(1, 0)\n  extrude(geometry.angle(zenith) * 0.1)\n"
+            "  setNormals(hard)\n  X.\n")
     result = translate_cga(text, filename="w.cga")
     assert result.ok
     warnings = [d for d in result.diagnostics if d.severity == "warning"]
     assert [(d.span.line, d.span.column) for d in warnings] == [(2, 3), (3, 3), (4, 3)]
     assert {c.feature for c in result.report.constructs if c.status != "translated"} == {
-        "op:tileUV", "fn:geometry.angle", "op:print"}
+        "op:copyUV", "fn:geometry.angle", "op:setNormals"}
     formatted = warnings[0].format(text)
-    assert formatted.startswith("w.cga:2:3: warning: not translated: tileUV()")
+    assert formatted.startswith("w.cga:2:3: warning: not translated: copyUV()")
     assert "    ^" in formatted
 
 
 def test_counts_are_consistent():
-    r = imported("attr a = 1\nLot --> extrude(3) print(1) X.\n")
+    r = imported("attr a = 1\nLot --> extrude(3) setNormals(hard) X.\n")
     rep = r.report
     assert rep.total == rep.translated + rep.warned
     assert rep.to_json()["constructs"]["dropped"] == 1
