@@ -106,24 +106,29 @@ def _shape(s: Shape, o: np.ndarray, ex: np.ndarray, ey: np.ndarray, ez: np.ndarr
     return c
 
 
+def _outline_segments(faces: list):  # noqa: ANN202
+    """(face index, start, end) of every segment of the faces' outlines, in outline order."""
+    for fi, (_n, loops) in enumerate(faces):
+        for loop in loops:
+            k = len(loop)
+            for i in range(k):
+                yield fi, loop[i], loop[(i + 1) % k]
+
+
 def edge_components(s: Shape) -> list[tuple[set[str], Shape]]:
     """The shape's edges: (selector names, edge shape), in the order of the faces' outlines."""
     faces = _faces(s)
     edges: dict[tuple, dict] = {}
     order: list[tuple] = []
-    for fi, (n, loops) in enumerate(faces):
-        for loop in loops:
-            k = len(loop)
-            for i in range(k):
-                p, q = loop[i], loop[(i + 1) % k]
-                if np.linalg.norm(q - p) < 1e-9:
-                    continue
-                key = tuple(sorted((_key(p), _key(q))))
-                e = edges.get(key)
-                if e is None:
-                    e = edges[key] = {"p": p, "q": q, "faces": []}
-                    order.append(key)
-                e["faces"].append(fi)
+    for fi, p, q in _outline_segments(faces):
+        if np.linalg.norm(q - p) < 1e-9:
+            continue
+        key = tuple(sorted((_key(p), _key(q))))
+        e = edges.get(key)
+        if e is None:
+            e = edges[key] = {"p": p, "q": q, "faces": []}
+            order.append(key)
+        e["faces"].append(fi)
     centre = {fi: np.mean(np.concatenate(loops), axis=0) for fi, (_n, loops) in enumerate(faces)}
     out = []
     for key in order:
@@ -167,18 +172,14 @@ def vertex_components(s: Shape) -> list[tuple[set[str], Shape]]:
     faces = _faces(s)
     verts: dict[tuple, dict] = {}
     order: list[tuple] = []
-    for fi, (n, loops) in enumerate(faces):
-        for loop in loops:
-            k = len(loop)
-            for i in range(k):
-                p, q = loop[i], loop[(i + 1) % k]
-                key = _key(p)
-                v = verts.get(key)
-                if v is None:
-                    v = verts[key] = {"p": p, "faces": [], "first": q - p}
-                    order.append(key)
-                if fi not in v["faces"]:
-                    v["faces"].append(fi)
+    for fi, p, q in _outline_segments(faces):
+        key = _key(p)
+        v = verts.get(key)
+        if v is None:
+            v = verts[key] = {"p": p, "faces": [], "first": q - p}
+            order.append(key)
+        if fi not in v["faces"]:
+            v["faces"].append(fi)
     border = {k for k, b in _border_vertices(faces).items() if b}
     out = []
     for key in order:
