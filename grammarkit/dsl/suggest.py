@@ -20,7 +20,7 @@ def _closest_first(name: str, known: frozenset[str]) -> tuple[str, ...]:
     return tuple(close + [k for k in ordered if k not in close])
 
 
-def known_hint(kind: str, name: str, known: Iterable[str], limit: int = 40) -> str | None:
+def known_hint(kind: str, name: str, known: Iterable[str], limit: int = 100) -> str | None:
     """`did you mean 'best'? known KIND: a, b, c` (the prefix only when one is close)."""
     ordered = closest_first(name, known)
     if not ordered:
