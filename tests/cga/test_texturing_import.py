@@ -7,18 +7,7 @@ import numpy as np
 
 import grammarkit
 from grammarkit.cga import translate_cga
-
-LOT = [(0.0, 0.0), (20.0, 0.0), (20.0, 16.0), (0.0, 16.0)]
-
-
-def imported(text: str, **kw):
-    result = translate_cga(text, filename="t.cga", **kw)
-    assert result.ok, [d.format(text) for d in result.diagnostics]
-    return result
-
-
-def line(result, rule: str) -> str:
-    return next(ln for ln in result.text.splitlines() if ln.startswith(rule + " -->"))
+from _cga_helpers import imported, line, LOT  # noqa: E402  (tests/cga/conftest.py)
 
 
 def test_face_projection_sizes_floating_and_relative():

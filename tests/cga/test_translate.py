@@ -5,15 +5,8 @@ import pytest
 
 import grammarkit
 from grammarkit.cga import import_cga, translate_cga
+from _cga_helpers import LOT, imported  # noqa: E402  (tests/cga/conftest.py)
 from grammarkit.ir import Attr, Branch, Case, Choice, Const, Num, OpCall, Push, Ref, Repeat, Rule, Successor
-
-LOT = [(0.0, 0.0), (20.0, 0.0), (20.0, 16.0), (0.0, 16.0)]
-
-
-def imported(text: str, **kw):
-    result = translate_cga(text, filename="t.cga", **kw)
-    assert result.ok, [d.format(text) for d in result.diagnostics]
-    return result
 
 
 def rule(result, name: str) -> Rule:
