@@ -4,8 +4,10 @@ machine that lacks them, and FAIL under CI (environment variable CI set), so CI 
 by skipping them."""
 from __future__ import annotations
 
+import json
 import os
 import shutil
+import subprocess
 from pathlib import Path
 
 import pytest
@@ -34,3 +36,14 @@ def package_or_skip(name: str) -> Path:
     if not (path / "package.json").is_file():
         missing(f"the npm package {name!r}")
     return path
+
+
+def validate_gltf(files: list[Path]) -> dict[str, dict]:
+    """Khronos' glTF validator (tests/js/validate.mjs) on `files`: its report per file name."""
+    node = node_or_skip()
+    package_or_skip("gltf-validator")
+    proc = subprocess.run([node, str(JS_DIR / "validate.mjs"), *map(str, files)], capture_output=True,
+                          text=True, timeout=300, cwd=JS_DIR)
+    assert proc.returncode == 0, proc.stderr
+    reports = [json.loads(line) for line in proc.stdout.splitlines() if line.strip()]
+    return {r["file"]: r for r in reports}
