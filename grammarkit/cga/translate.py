@@ -1545,4 +1545,10 @@ _BARE_OPS = {"reverseNormals", "cleanupGeometry", "deleteHoles", "resetGeometry"
              "convexify", "innerRectangle", "alignScopeToAxes", "alignScopeToGeometry",
              "primitiveCube", "primitiveQuad", "primitiveDisk", "setPivot", "trim"}
 
+# lot, roof and face-edge operations (translate_lot_ops.py); imported last because its
+# handlers use this module's helpers
+from .translate_lot_ops import LOT_HANDLERS  # noqa: E402
+
+_HANDLERS.update(LOT_HANDLERS)
+
 __all__ = ["Translator"]
