@@ -4,9 +4,133 @@ ctx, span, out) -> (items, block_out)`).
 
 translate.py merges `LOT_HANDLERS` into its handler table after its own entries, so an entry
 here replaces translate.py's handler of the same CGA operation.
+
+- `roofGable`, `roofHip`, `roofShed` with all of CGA's forms: `byAngle`/`byHeight`, the two
+  overhangs of the gable, `even` and the edge index (grammarkit/split/ops.py).
+- `comp(fe)` (face edges; grammarkit/split/comp_edges.py); other comp modes go to
+  translate.py's handler.
+- `splitArea(axis) { area: A | ~area: B }*` (grammarkit/split/area_split.py).
+- `envelope(direction, maxHeight, ...)` (grammarkit/split/envelope.py).
 """
 from __future__ import annotations
 
 from typing import Any, Callable
 
-LOT_HANDLERS: dict[str, Callable[..., Any]] = {}
+from lark import Tree
+
+from ..ir import Arg, Binary, Bool, Call, Num, OpCall, Ref
+from .expressions import Untranslatable, translate_expr
+
+
+def _name(tree: Any) -> str | None:
+    if isinstance(tree, Tree) and tree.data == "ref":
+        return tree.children[0].value
+    return None
+
+
+def _need(args: list, lo: int, hi: int, name: str, span: Any) -> None:
+    if not lo <= len(args) <= hi:
+        raise Untranslatable(f"op:{name}/{len(args)}", f"{name}() with {len(args)} arguments is not supported", span)
+
+
+# -- roofs -------------------------------------------------------------------------------------
+def _on_roof(overhang: Any, angle: Any) -> Any:
+    """CGA measures a roof's overhang on the roof plane; grammarkit's is horizontal: o cos(a)."""
+    if isinstance(overhang, Num) and overhang.value == 0:
+        return overhang
+    if isinstance(overhang, Num) and isinstance(angle, Num):
+        import math
+
+        return Num(value=overhang.value * math.cos(math.radians(angle.value)))
+    return Binary(op="*", left=overhang, right=Call(func="cos", args=(angle,)))
+
+
+def _roof_value(gk: str, args: list, ctx: Any, span: Any) -> tuple[Any, str, list]:
+    """(angle or height, value type, the remaining CGA arguments)."""
+    kind = _name(args[0]) if args else None
+    if kind in ("byAngle", "byHeight"):
+        if len(args) < 2:
+            raise Untranslatable(f"op:{gk}", f"{gk}({kind}) without a value", span)
+        return translate_expr(args[1], ctx), kind, args[2:]
+    if not args:
+        raise Untranslatable(f"op:{gk}", f"{gk}() without an angle", span)
+    return translate_expr(args[0], ctx), "byAngle", args[1:]
+
+
+def _even(tree: Any, ctx: Any, notes: list) -> None:
+    """grammarkit's gable and hip planes are planar, with horizontal ridges: CGA's `even`
+    (horizontal gable edges at the price of non-planar faces) is the same on rectangles only."""
+    value = translate_expr(tree, ctx)
+    if not (isinstance(value, Bool) and value.value is False):
+        notes.append("even=true is made with planar roof faces (the same on rectangular footprints)")
+
+
+def _overhang(value: Any, vt: str, angle: Any, notes: list) -> Any:
+    if vt == "byAngle":
+        return _on_roof(value, angle)
+    if not (isinstance(value, Num) and value.value == 0):
+        notes.append("with byHeight the overhang is taken as horizontal (CGA measures it on the roof)")
+    return value
+
+
+def _index_arg(tree: Any, ctx: Any, notes: list, gk: str) -> Arg | None:
+    try:
+        return Arg(name="index", value=translate_expr(tree, ctx))
+    except Untranslatable as exc:
+        notes.append(f"the edge index is not translated ({exc.message})")
+        return None
+
+
+def _roof_call(gk: str, value: Any, vt: str, named: list, span: Any, notes: list):
+    call_args: list = [Arg(value=value), *named]
+    if vt == "byHeight":
+        call_args.append(Arg(name="value_type", value=Ref(name="byHeight")))
+    call = OpCall(name=gk, args=tuple(call_args), span=span)
+    return [call], ((f"{gk}:options", "; ".join(notes)) if notes else None)
+
+
+def _h_roof_gable(t, args, block, star, frame, rctx, ctx, span, out):
+    """roofGable(angle, overhangX, overhangY, even, index) / (byHeight, h, overhangX, overhangY, even)."""
+    value, vt, rest = _roof_value("roofGable", args, ctx, span)
+    _need(rest, 0, 4 if _name(args[0]) not in ("byAngle", "byHeight") else 3, "roofGable", span)
+    notes: list = []
+    named: list = []
+    if len(rest) >= 1:
+        named.append(Arg(name="overhang", value=_overhang(translate_expr(rest[0], ctx), vt, value, notes)))
+    if len(rest) >= 2:
+        named.append(Arg(name="overhang_y", value=_overhang(translate_expr(rest[1], ctx), vt, value, notes)))
+    if len(rest) >= 3:
+        _even(rest[2], ctx, notes)
+    if len(rest) >= 4:
+        a = _index_arg(rest[3], ctx, notes, "roofGable")
+        if a is not None:
+            named.append(a)
+    return _roof_call("roofGable", value, vt, named, span, notes)
+
+
+def _h_roof_hip(t, args, block, star, frame, rctx, ctx, span, out):
+    """roofHip(angle, overhang, even) / roofHip(byHeight, h, overhang, even)."""
+    value, vt, rest = _roof_value("roofHip", args, ctx, span)
+    _need(rest, 0, 2, "roofHip", span)
+    notes: list = []
+    named: list = []
+    if len(rest) >= 1:
+        named.append(Arg(name="overhang", value=_overhang(translate_expr(rest[0], ctx), vt, value, notes)))
+    if len(rest) >= 2:
+        _even(rest[1], ctx, notes)
+    return _roof_call("roofHip", value, vt, named, span, notes)
+
+
+def _h_roof_shed(t, args, block, star, frame, rctx, ctx, span, out):
+    """roofShed(angle, index) / roofShed(byHeight, h, index): the low edge is edge `index`
+    (CGA's default: edge 0)."""
+    value, vt, rest = _roof_value("roofShed", args, ctx, span)
+    _need(rest, 0, 1, "roofShed", span)
+    notes: list = []
+    index = _index_arg(rest[0], ctx, notes, "roofShed") if rest else Arg(name="index", value=Num(value=0.0))
+    return _roof_call("roofShed", value, vt, [index] if index is not None else [], span, notes)
+
+
+LOT_HANDLERS: dict[str, Callable[..., Any]] = {
+    "roofGable": _h_roof_gable, "roofHip": _h_roof_hip, "roofShed": _h_roof_shed,
+}

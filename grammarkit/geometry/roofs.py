@@ -33,7 +33,7 @@ from .footprints import Polygon, bbox, convex_cover, cross_section, is_convex, p
 
 Manifold = manifold3d.Manifold
 
-__all__ = ["gable", "hip", "mansard", "pyramid", "shed", "overhung"]
+__all__ = ["edge_direction", "gable", "hip", "mansard", "pyramid", "shed", "overhung"]
 
 # Trimming a prism by a plane through one of its bottom edges (every roof with an overhang:
 # the eave planes start at z = 0) leaves zero-area sliver triangles and duplicated vertices
@@ -179,34 +179,109 @@ def hip(poly: Polygon, angle: float, overhang: float = 0.0) -> Manifold:
     return _clean(Manifold.batch_boolean(pieces, manifold3d.OpType.Add), lift)
 
 
-def gable(poly: Polygon, angle: float, overhang: float = 0.0, ridge: str = "x") -> Manifold:
-    """Two planes meeting in a ridge parallel to local `ridge` over the bounding-box middle."""
-    return _pitched(poly, angle, overhang, ridge, both_sides=True)
+def gable(poly: Polygon, angle: float, overhang: float = 0.0, ridge: str = "x", *,
+          overhang_y: float | None = None, index: int | None = None) -> Manifold:
+    """Two planes meeting in a horizontal ridge over the middle of the footprint.
+
+    The ridge runs along local `ridge` ("x" or "y"), or, when `index` is given, along edge
+    `index` of the footprint (CGA's indexed gable). `overhang` grows the footprint across the
+    ridge (CGA's overhangX, at the eaves) and `overhang_y` along it (CGA's overhangY, at the
+    gable ends); without `overhang_y` the footprint grows by `overhang` all round.
+    """
+    return _pitched(poly, angle, overhang, _direction(poly, ridge, index), both_sides=True,
+                    overhang_y=overhang_y)
 
 
-def shed(poly: Polygon, angle: float, overhang: float = 0.0, ridge: str = "x") -> Manifold:
-    """One plane rising from the low side (min y for ridge x, min x for ridge y)."""
-    return _pitched(poly, angle, overhang, ridge, both_sides=False)
+def shed(poly: Polygon, angle: float, overhang: float = 0.0, ridge: str = "x", *,
+         index: int | None = None) -> Manifold:
+    """One plane rising from the low side: min y for ridge x, min x for ridge y, or, when
+    `index` is given, from edge `index` of the footprint towards the inside (CGA's roofShed)."""
+    return _pitched(poly, angle, overhang, _direction(poly, ridge, index), both_sides=False,
+                    overhang_y=None)
 
 
-def _pitched(poly: Polygon, angle: float, overhang: float, ridge: str, *, both_sides: bool) -> Manifold:
-    """Planes rising at `angle` from the low edge(s) across `ridge`: the footprint extruded above
-    the highest point, then trimmed under each plane (one plane: shed; two: gable)."""
+def edge_direction(poly: Polygon, index: int) -> tuple[float, float]:
+    """The unit direction of edge `index` (modulo the number of edges) of a polygon; a
+    zero-length edge takes the next edge that has a length."""
+    n = len(poly)
+    for k in range(n):
+        i = (int(index) + k) % n
+        (ax, ay), (bx, by) = poly[i], poly[(i + 1) % n]
+        ln = math.hypot(bx - ax, by - ay)
+        if ln > 1e-12:
+            return (bx - ax) / ln, (by - ay) / ln
+    raise ValueError("the footprint has no edge of non-zero length")
+
+
+def _direction(poly: Polygon, ridge: str, index: int | None) -> tuple[float, float, int | None]:
+    """(ux, uy, edge): the ridge's direction u (the planes rise along v = u turned 90 degrees
+    counter-clockwise, the inward normal of a counter-clockwise edge along u)."""
+    if index is not None:
+        ux, uy = edge_direction(poly, index)
+        return ux, uy, int(index) % len(poly)
+    return (1.0, 0.0, None) if ridge == "x" else (0.0, -1.0, None)
+
+
+def _turned(poly: Polygon, ux: float, uy: float, back: bool = False) -> Polygon:
+    """The polygon in the frame (u, v = (-uy, ux)) (or back from it)."""
+    if back:
+        return [(x * ux - y * uy, x * uy + y * ux) for x, y in poly]
+    return [(x * ux + y * uy, -x * uy + y * ux) for x, y in poly]
+
+
+def _grow_axes(poly: Polygon, along_x: float, along_y: float) -> list[Polygon]:
+    """The polygon grown (or, negative, shrunk) by `along_x` along x and by `along_y` along y:
+    the Minkowski sum with the segment [-d, d] on each axis in turn (exact: the polygon plus
+    every edge swept along the segment), or the erosion by it (the polygon intersected with
+    its two shifted copies; exact for convex footprints, which CGA's indexed roofs require)."""
+    cs = cross_section(poly)
+    for d, (dx, dy) in ((along_x, (1.0, 0.0)), (along_y, (0.0, 1.0))):
+        if abs(d) < 1e-12 or cs.is_empty():
+            continue
+        if d < 0:
+            e = -d
+            cs = cs ^ cs.translate((dx * e, dy * e)) ^ cs.translate((-dx * e, -dy * e))
+            continue
+        swept = [cs]
+        for ring in cs.to_polygons():
+            pts = ring.tolist()
+            for i in range(len(pts)):
+                (ax, ay), (bx, by) = pts[i], pts[(i + 1) % len(pts)]
+                quad = [(ax - dx * d, ay - dy * d), (ax + dx * d, ay + dy * d),
+                        (bx + dx * d, by + dy * d), (bx - dx * d, by - dy * d)]
+                hull = manifold3d.CrossSection.hull_points(quad)
+                if not hull.is_empty():
+                    swept.append(hull)
+        cs = manifold3d.CrossSection.batch_boolean(swept, manifold3d.OpType.Add)
+    return polygons_of(cs, 1e-9) if not cs.is_empty() else []
+
+
+def _pitched(poly: Polygon, angle: float, overhang: float, direction: tuple, *, both_sides: bool,
+             overhang_y: float | None) -> Manifold:
+    """Planes rising at `angle` across the ridge direction u: from both extreme lines of the
+    footprint along v (gable) or from the low one (shed). The footprint is extruded above the highest point, then trimmed under each plane."""
     t = _check_angle(angle)
     lift = _fascia(overhang)
+    ux, uy, _edge = direction
+    vx, vy = -uy, ux
+    if overhang_y is None:
+        pieces = overhung(poly, overhang)
+    else:
+        # grow in the ridge's frame: overhang across the ridge (v), overhang_y along it (u)
+        pieces = [_turned(p, ux, uy, back=True) for p in _grow_axes(_turned(poly, ux, uy), overhang_y, overhang)]
+        if not pieces:
+            raise ValueError(f"the overhangs ({overhang:g}, {overhang_y:g}) leave no roof")
     parts = []
-    for p in overhung(poly, overhang):
-        x0, y0, x1, y1 = bbox(p)
-        span = (y1 - y0) if ridge == "x" else (x1 - x0)
+    for p in pieces:
+        # the low line is the footprint's extreme along v: for a convex footprint and an
+        # indexed shed, the line of the indexed edge itself (v is its inward normal)
+        vs = [vx * x + vy * y for x, y in p]
+        v0, v1 = min(vs), max(vs)
+        span = v1 - v0
         solid = Manifold.extrude(cross_section(p), t * span * (0.5 if both_sides else 1.0) + 1.0 + lift)
-        if ridge == "x":
-            solid = _keep_below(solid, 0.0, 1.0, y0, t, lift)
-            if both_sides:
-                solid = _keep_below(solid, 0.0, -1.0, -y1, t, lift)
-        else:
-            solid = _keep_below(solid, 1.0, 0.0, x0, t, lift)
-            if both_sides:
-                solid = _keep_below(solid, -1.0, 0.0, -x1, t, lift)
+        solid = _keep_below(solid, vx, vy, v0, t, lift)
+        if both_sides:
+            solid = _keep_below(solid, -vx, -vy, -v1, t, lift)
         parts.append(solid)
     return _clean(parts[0] if len(parts) == 1 else Manifold.batch_boolean(parts, manifold3d.OpType.Add), lift)
 

@@ -370,14 +370,55 @@ def _ridge(v: Any) -> str:
     return v
 
 
+def _index(v: Any) -> int | None:
+    """An edge index argument: None (not given) or an integer (CGA's float index, floored;
+    taken modulo the number of edges by the roof)."""
+    if v is None:
+        return None
+    return int(math.floor(_num(v, "edge index")))
+
+
+def _value_type(v: Any) -> str:
+    v = str(v)
+    if v not in ("byAngle", "byHeight"):
+        raise ValueError(f"value_type must be byAngle or byHeight, got {v!r}")
+    return v
+
+
+def _pitch(value: float, value_type: str, build: Any, p: Any) -> float:
+    """The roof angle: `value` itself (byAngle), or (byHeight) the angle whose roof over `p`
+    is `value` high. Every roof here is linear in tan(angle) (height = tan(angle) x the
+    horizontal run from the eave to the top), so the run is measured on the 45-degree roof."""
+    if value_type == "byAngle":
+        return value
+    if value <= 0:
+        raise ValueError(f"roof height must be > 0, got {value:g}")
+    x0, y0, z0, x1, y1, z1 = build(p, 45.0).bounding_box()
+    run = z1 - z0
+    if not math.isfinite(run) or run <= EPS:
+        raise ValueError("the footprint is too small for a roof")
+    angle = math.degrees(math.atan(value / run))
+    if angle > 89.0:
+        raise ValueError(f"a roof {value:g} high over a run of {run:g} is steeper than 89 degrees")
+    return angle
+
+
 def op_roof_gable(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
-    angle, over, ridge = _num(args[0], "angle"), _num(args[1], "overhang"), _ridge(args[2])
-    return _roof(s, lambda p: roofs.gable(p, angle, over, ridge), "roofGable")
+    value, over, ridge = _num(args[0], "angle"), _num(args[1], "overhang"), _ridge(args[2])
+    over_y = None if args[3] is None else _num(args[3], "overhang_y")
+    index, vt = _index(args[4]), _value_type(args[5])
+
+    def build(p: Any, angle: float) -> Any:
+        return roofs.gable(p, angle, over, ridge, overhang_y=over_y, index=index)
+    return _roof(s, lambda p: build(p, _pitch(value, vt, build, p)), "roofGable")
 
 
 def op_roof_hip(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
-    angle, over = _num(args[0], "angle"), _num(args[1], "overhang")
-    return _roof(s, lambda p: roofs.hip(p, angle, over), "roofHip")
+    value, over, vt = _num(args[0], "angle"), _num(args[1], "overhang"), _value_type(args[2])
+
+    def build(p: Any, angle: float) -> Any:
+        return roofs.hip(p, angle, over)
+    return _roof(s, lambda p: build(p, _pitch(value, vt, build, p)), "roofHip")
 
 
 def op_roof_pyramid(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
@@ -386,8 +427,12 @@ def op_roof_pyramid(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
 
 
 def op_roof_shed(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
-    angle, over, ridge = _num(args[0], "angle"), _num(args[1], "overhang"), _ridge(args[2])
-    return _roof(s, lambda p: roofs.shed(p, angle, over, ridge), "roofShed")
+    value, over, ridge = _num(args[0], "angle"), _num(args[1], "overhang"), _ridge(args[2])
+    index, vt = _index(args[3]), _value_type(args[4])
+
+    def build(p: Any, angle: float) -> Any:
+        return roofs.shed(p, angle, over, ridge, index=index)
+    return _roof(s, lambda p: build(p, _pitch(value, vt, build, p)), "roofShed")
 
 
 def op_roof_mansard(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
