@@ -131,6 +131,21 @@ def _h_roof_shed(t, args, block, star, frame, rctx, ctx, span, out):
     return _roof_call("roofShed", value, vt, [index] if index is not None else [], span, notes)
 
 
+# -- comp(fe) ----------------------------------------------------------------------------------
+def _h_comp(t, args, block, star, frame, rctx, ctx, span, out):
+    """`comp(fe) { ... }`: face edges, with comp(e)'s selectors; other modes: translate.py."""
+    if not (args and _name(args[0]) == "fe" and len(args) == 1):
+        from .translate import _h_comp as base
+
+        return base(t, args, block, star, frame, rctx, ctx, span, out)
+    if block is None:
+        raise Untranslatable("op:comp", "comp() without a block", span)
+    entries = t.comp_entries(block, frame, rctx, "components")
+    if not entries:
+        raise Untranslatable("comp:no-selector", "none of its selectors is supported", span)
+    return [OpCall(name="comp", args=(Arg(value=Ref(name="fe")),), block=tuple(entries), span=span)], None
+
+
 LOT_HANDLERS: dict[str, Callable[..., Any]] = {
-    "roofGable": _h_roof_gable, "roofHip": _h_roof_hip, "roofShed": _h_roof_shed,
+    "roofGable": _h_roof_gable, "roofHip": _h_roof_hip, "roofShed": _h_roof_shed, "comp": _h_comp,
 }

@@ -40,7 +40,7 @@ from ..geometry.planar import planar_faces
 from ..geometry.surfaces import SurfaceMesh
 from .shape import FACE, VOLUME, Shape
 
-__all__ = ["op_comp"]
+__all__ = ["faces_of", "op_comp"]
 
 _SIN1 = math.sin(math.radians(1.0))
 _COS45 = math.cos(math.radians(45.0))
@@ -235,12 +235,22 @@ def _face_pieces(s: Shape) -> list[Shape]:
     return out
 
 
+def faces_of(s: Shape) -> list[tuple[frozenset, Shape]]:
+    """comp(f)'s faces of a shape, in comp(f)'s order: (selector names, face shape)."""
+    if s.kind == FACE:
+        return [(frozenset(("top", "all", "horizontal")), f) for f in _face_pieces(s)]
+    if s.solid is not None:
+        return _mesh_faces(s)
+    return _box_faces(s)
+
+
 def op_comp(ctx: Any, s: Shape, args: Any, block: Any) -> list:
     mode = str(args[0])
-    if mode in ("e", "v"):  # edges and vertices (grammarkit/split/comp_edges.py)
-        from .comp_edges import op_comp_edges, op_comp_vertices
+    if mode in ("e", "fe", "v"):  # edges, face edges, vertices (grammarkit/split/comp_edges.py)
+        from .comp_edges import op_comp_edges, op_comp_face_edges, op_comp_vertices
 
-        out = (op_comp_edges if mode == "e" else op_comp_vertices)(ctx, s, args, block)
+        fn = {"e": op_comp_edges, "fe": op_comp_face_edges, "v": op_comp_vertices}[mode]
+        out = fn(ctx, s, args, block)
         for slot in block:
             if slot.sel == "volume":
                 out.append((s.copy(), slot, 0, 1))
@@ -248,12 +258,7 @@ def op_comp(ctx: Any, s: Shape, args: Any, block: Any) -> list:
         return out
     if mode != "f":
         raise ValueError(f"comp({mode}) is not supported")
-    if s.kind == FACE:
-        parts = [(frozenset(("top", "all", "horizontal")), f) for f in _face_pieces(s)]
-    elif s.solid is not None:
-        parts = _mesh_faces(s)
-    else:
-        parts = _box_faces(s)
+    parts = faces_of(s)
     total = len(parts)
     out = []
     for idx, (sel, face) in enumerate(parts):

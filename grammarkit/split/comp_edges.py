@@ -1,4 +1,5 @@
-"""`comp(e)` and `comp(v)`: a shape's edges and vertices as shapes of their own (CGA).
+"""`comp(e)`, `comp(fe)` and `comp(v)`: a shape's edges, face edges and vertices as shapes of
+their own (CGA).
 
 The edges are those of the shape's planar faces (a face's outline; a volume's feature edges,
 where two planar faces meet: a box has 12, a gable roof's ridge is one): each becomes a shape
@@ -8,6 +9,12 @@ the outlines) is a shape of size 0 at the point, y its normal (the mean of its f
 its first edge. A component's scope can then be given a size (`s()`), centred on the component
 (`center()` in the branch refers to the component's scope) and filled (`i()`), as CGA rules do
 with pipes along edges.
+
+`comp(fe)` (face edges) hands out each edge of each face separately, as CGA does: an edge two
+faces share comes once per face, with y the normal of that face (so a box's top face gives
+four edges whose y-normal is up, and the side faces' edges look sideways); its index is its
+position in face order, edge order within each face (the face's outline from its first
+point; a lot's edges in the lot's order).
 
 Selectors (a component goes to the first branch that selects it), classified by the y-normal
 in the shape's scope like `comp(f)`'s faces but with CGA's angle ranges for components:
@@ -31,7 +38,8 @@ from ..geometry.planar import planar_faces
 from ..geometry.surfaces import SurfaceMesh
 from .shape import FACE, Shape
 
-__all__ = ["EDGE_SELECTORS", "edge_components", "op_comp_edges", "op_comp_vertices", "vertex_components"]
+__all__ = ["EDGE_SELECTORS", "edge_components", "face_edge_components", "op_comp_edges", "op_comp_face_edges",
+           "op_comp_vertices", "vertex_components"]
 
 EDGE_SELECTORS = ("front", "back", "left", "right", "top", "bottom", "side", "vertical", "horizontal", "aslant",
                   "nutant", "border", "inside", "eave", "ridge", "hip", "valley", "all")
@@ -147,6 +155,51 @@ def edge_components(s: Shape) -> list[tuple[set[str], Shape]]:
     return out
 
 
+def face_edge_components(s: Shape) -> list[tuple[set[str], Shape]]:
+    """CGA's `comp(fe)`: every edge of every face, once per face (an edge two faces share
+    comes twice). The faces are comp(f)'s, in comp(f)'s order (a box: bottom, top, then the
+    sides), each face's edges in its outline's order: x along the edge in the outline's
+    direction, y the face's normal (the component's y-normal, classified as for comp(e)),
+    z = x × y (pointing out of the face). `border`/`inside` and the roof names are those of
+    the edge itself (as comp(e) names it)."""
+    from .comp import faces_of
+
+    M = np.asarray(s.ax, dtype=np.float64)  # rows: scope axes in world coordinates
+    so = np.asarray(s.o, dtype=np.float64)
+
+    def local(w: np.ndarray) -> np.ndarray:  # a world point -> the shape's scope coordinates
+        return M @ (w - so)
+
+    faces = []  # (normal, [(p, q) in scope coordinates], centre) per comp(f) face
+    for _sel, f in faces_of(s):
+        normal = M @ np.asarray(f.ax[2], dtype=np.float64)
+        segs = []
+        for ring in f.contours():
+            pts = [local(np.asarray(f.world(x, y, 0.0))) for x, y in ring]
+            segs.extend((pts[i], pts[(i + 1) % len(pts)]) for i in range(len(pts)))
+        if segs:
+            faces.append((normal, segs, np.mean([p for p, _q in segs], axis=0)))
+    count: dict[tuple, list[int]] = {}
+    for fi, (_n, segs, _c) in enumerate(faces):
+        for p, q in segs:
+            if np.linalg.norm(q - p) >= 1e-9:
+                count.setdefault(tuple(sorted((_key(p), _key(q)))), []).append(fi)
+    out = []
+    for fi, (normal, segs, _c) in enumerate(faces):
+        for p, q in segs:
+            length = float(np.linalg.norm(q - p))
+            if length < 1e-9:
+                continue
+            ex, ey, ez = _frame(q - p, normal)
+            names = _names(ey)
+            fs = count[tuple(sorted((_key(p), _key(q))))]
+            names.add("border" if len(fs) == 1 else "inside")
+            if len(fs) == 2:
+                names |= _roof_names(q - p, [faces[f][0] for f in fs], [faces[f][2] for f in fs], (p + q) / 2)
+            out.append((names, _shape(s, p, ex, ey, ez, length)))
+    return out
+
+
 def _roof_names(d: np.ndarray, normals: list[np.ndarray], centres: list[np.ndarray], mid: np.ndarray) -> set[str]:
     """eave / ridge / hip / valley of an edge between two faces (scope z up)."""
     n1, n2 = normals
@@ -228,6 +281,10 @@ def _dispatch(parts: list[tuple[set[str], Shape]], block: Any) -> list:
 
 def op_comp_edges(ctx: Any, s: Shape, args: Any, block: Any) -> list:
     return _dispatch(edge_components(s), block)
+
+
+def op_comp_face_edges(ctx: Any, s: Shape, args: Any, block: Any) -> list:
+    return _dispatch(face_edge_components(s), block)
 
 
 def op_comp_vertices(ctx: Any, s: Shape, args: Any, block: Any) -> list:

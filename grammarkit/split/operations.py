@@ -51,9 +51,9 @@ _SPECS: tuple[OperationSpec, ...] = (
     OperationSpec("extrude", (Param("height"),), doc="Extrude a face along its normal into a volume."),
     OperationSpec("taper", (Param("height"), Param("top_scale", required=False, default=0.0)),
                   doc="Extrude a face, scaling the top about the centroid (0: to a point)."),
-    OperationSpec("comp", (Param("mode", "axis", choices=("f", "e", "v")),), block="selectors",
+    OperationSpec("comp", (Param("mode", "axis", choices=("f", "e", "fe", "v")),), block="selectors",
                   selectors=COMP_SELECTORS,
-                  doc="Decompose a shape into its faces (f), edges (e) or vertices (v) (the shape is "
+                  doc="Decompose a shape into its faces (f), edges (e), face edges (fe) or vertices (v) (the shape is "
                       "consumed unless `volume:` keeps it); selectors by orientation, `all`, an index, "
                       "`volume`; for edges also `border`, `inside`, `eave`, `ridge`, `hip`, `valley`."),
     OperationSpec("split", (Param("axis", "axis", choices=AXES),), block="sizes",
