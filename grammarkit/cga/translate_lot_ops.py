@@ -18,7 +18,7 @@ from typing import Any, Callable
 
 from lark import Tree
 
-from ..ir import Arg, Binary, Bool, Call, Num, OpCall, Ref
+from ..ir import Arg, Binary, Bool, Call, Num, OpCall, Ref, Repeat
 from .expressions import Untranslatable, translate_expr
 
 
@@ -146,6 +146,38 @@ def _h_comp(t, args, block, star, frame, rctx, ctx, span, out):
     return [OpCall(name="comp", args=(Arg(value=Ref(name="fe")),), block=tuple(entries), span=span)], None
 
 
+# -- splitArea -----------------------------------------------------------------------------------
+def _h_split_area(t, args, block, star, frame, rctx, ctx, span, out):
+    """`splitArea(axis[, adjustMode]) { area: A | ... }*`: split's entries, in area units; the
+    axis mapped per frame as split's (CGA's z on a lot is grammarkit's y, parts reversed)."""
+    from . import frames
+    from .translate import _reversed
+
+    if block is None:
+        raise Untranslatable("op:splitArea", "splitArea() without a block", span)
+    _need(args, 1, 2, "splitArea", span)
+    a = _name(args[0])
+    if a not in ("x", "y", "z"):
+        raise Untranslatable("splitArea:axis", f"splitArea axis {a!r}", span)
+    gk_axis, reverse = frames.axis(frame, a)
+    if gk_axis == "z":
+        raise Untranslatable("splitArea:axis", f"splitArea({a}) across the face (its normal)", span)
+    call_args: list = [Arg(value=Ref(name=gk_axis))]
+    if len(args) == 2:
+        mode = _name(args[1])
+        if mode not in ("adjust", "noAdjust"):
+            raise Untranslatable("splitArea:adjust", f"splitArea adjust mode {mode!r}", span)
+        if mode == "noAdjust":
+            call_args.append(Arg(name="adjust_mode", value=Ref(name=mode)))
+    items = t.split_entries(block, frame, rctx, ctx)
+    if star:
+        items = [Repeat(items=tuple(items), span=span)]
+    if reverse:
+        items = _reversed(items)
+    return [OpCall(name="splitArea", args=tuple(call_args), block=tuple(items), span=span)], None
+
+
 LOT_HANDLERS: dict[str, Callable[..., Any]] = {
     "roofGable": _h_roof_gable, "roofHip": _h_roof_hip, "roofShed": _h_roof_shed, "comp": _h_comp,
+    "splitArea": _h_split_area,
 }

@@ -146,6 +146,15 @@ _SPECS: tuple[OperationSpec, ...] = (
                                            choices=("scope", "edge")),),
                   block="selectors", selectors=("shape", "remainder"),
                   doc="The largest rectangle in a face (aligned to the scope or to an edge), and the rest."),
+    # CGA's splitArea and envelope (grammarkit/split/area_split.py, envelope.py)
+    OperationSpec("splitArea", (Param("axis", "axis", choices=("x", "y")),
+                                Param("adjust_mode", "axis", required=False, default="adjust",
+                                      choices=("adjust", "noAdjust"),
+                                      doc="adjust: each part's scope fits its geometry; noAdjust: the "
+                                          "parts' scopes tile the parent's")),
+                  block="sizes",
+                  doc="Split a face along an axis into parts of the given areas (absolute, 'relative, "
+                      "~floating, repeat groups: split's sizes, in area units)."),
     # scatter (grammarkit/split/scatter.py; docs/operations.md "Scatter"); the choices are the
     # same lists as grammarkit.split.scatter's (kept here so that `grammarkit check` stays light)
     OperationSpec("scatter", (Param("domain", "axis", choices=("surface", "volume", "scope")), Param("count"),
