@@ -177,7 +177,33 @@ def _h_split_area(t, args, block, star, frame, rctx, ctx, span, out):
     return [OpCall(name="splitArea", args=tuple(call_args), block=tuple(items), span=span)], None
 
 
+# -- envelope ------------------------------------------------------------------------------------
+def _h_envelope(t, args, block, star, frame, rctx, ctx, span, out):
+    """envelope(direction, maxHeight, frontBase, frontAngle [, backBase, backAngle [, sideBase,
+    sideAngle | , rightBase, rightAngle, leftBase, leftAngle]]); street.* sides are the lot's
+    front/back/right/left (grammarkit lots have no street attributes, as CGA's fallback)."""
+    if len(args) not in (4, 6, 8, 10):
+        raise Untranslatable(f"envelope:{len(args)}", "envelope() with per-edge arrays (or this "
+                             "number of arguments) is not supported", span)
+    if frame != "Y":
+        raise Untranslatable("envelope:face", "envelope() on a face of a volume", span)
+    direction = _name(args[0])
+    if direction not in ("normal", "world.up"):
+        raise Untranslatable("envelope:direction", f"envelope direction {direction!r}", span)
+    vals = [translate_expr(a, ctx) for a in args[1:]]
+    max_height, rest = vals[0], vals[1:]
+    if len(rest) == 6:  # front, back, side (both right and left)
+        rest = rest + rest[4:6]
+    names = ("front_base", "front_angle", "back_base", "back_angle", "right_base", "right_angle",
+             "left_base", "left_angle")
+    call_args = [Arg(value=Ref(name="normal" if direction == "normal" else "worldUp")), Arg(value=max_height)]
+    call_args += [Arg(name=n, value=v) for n, v in zip(names, rest)]
+    return [OpCall(name="envelope", args=tuple(call_args), span=span)], (
+        "envelope:street", "street.front/back/left/right are the lot's front/back/left/right edges "
+        "(grammarkit lots have no street attributes)")
+
+
 LOT_HANDLERS: dict[str, Callable[..., Any]] = {
     "roofGable": _h_roof_gable, "roofHip": _h_roof_hip, "roofShed": _h_roof_shed, "comp": _h_comp,
-    "splitArea": _h_split_area,
+    "splitArea": _h_split_area, "envelope": _h_envelope,
 }

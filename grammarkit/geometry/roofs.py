@@ -320,3 +320,10 @@ def mansard(poly: Polygon, angle: float, height: float, top_angle: float = 15.0,
         for q in polygons_of(cross_section(p).offset(-run, manifold3d.JoinType.Miter, 2.0), 1e-6):
             parts.append(hip(q, top_angle).translate((0.0, 0.0, height - MANSARD_OVERLAP)))
     return _clean(parts[0] if len(parts) == 1 else Manifold.batch_boolean(parts, manifold3d.OpType.Add))
+
+
+def keep_below_plane(solid: Manifold, nx: float, ny: float, c: float, slope: float, base: float = 0.0) -> Manifold:
+    """The part of `solid` under the plane that starts at height `base` on the line
+    {p: (nx, ny) . p = c} and rises at `slope` (rise over run) towards +(nx, ny): what a
+    roof plane or a zoning envelope's slanted side keeps (grammarkit/split/envelope.py)."""
+    return _keep_below(solid, nx, ny, c, slope, base)

@@ -155,6 +155,16 @@ _SPECS: tuple[OperationSpec, ...] = (
                   block="sizes",
                   doc="Split a face along an axis into parts of the given areas (absolute, 'relative, "
                       "~floating, repeat groups: split's sizes, in area units)."),
+    OperationSpec("envelope", (Param("direction", "axis", choices=("normal", "worldUp")), Param("max_height"),
+                               Param("front_base"), Param("front_angle"),
+                               Param("back_base", required=False, default=0.0),
+                               Param("back_angle", required=False, default=90.0),
+                               Param("right_base", required=False, default=0.0),
+                               Param("right_angle", required=False, default=90.0),
+                               Param("left_base", required=False, default=0.0),
+                               Param("left_angle", required=False, default=90.0)),
+                  doc="The zoning envelope of a face: extruded to max_height, each side vertical up to "
+                      "its base height, then leaning inwards at its angle (degrees; 90: vertical)."),
     # scatter (grammarkit/split/scatter.py; docs/operations.md "Scatter"); the choices are the
     # same lists as grammarkit.split.scatter's (kept here so that `grammarkit check` stays light)
     OperationSpec("scatter", (Param("domain", "axis", choices=("surface", "volume", "scope")), Param("count"),
