@@ -1210,6 +1210,8 @@ def _h_align_scope_to_geometry(t, args, block, star, frame, rctx, ctx, span, out
     return [OpCall(name="alignScopeToGeometry", args=call_args, span=span)], None
 
 
+_MAKES_VOLUME = {"extrude", "i", "taper", "roofGable", "roofHip", "roofPyramid", "roofShed", "roofMansard"}
+
 # CGA alignScopeToAxes(axis) -> (grammarkit axis, the CGA frames it is exact in). Afterwards
 # the CGA scope is y-up with its z towards the world's +z (south), which is frame Y: CGA's
 # world.y (up) is grammarkit's z with x projected in both systems; world.z (south) is
@@ -1226,6 +1228,14 @@ def _h_align_scope_to_axes(t, args, block, star, frame, rctx, ctx, span, out):
     if args and name is None:
         raise Untranslatable("alignScopeToAxes:axis", "alignScopeToAxes() of a computed axis", span)
     mapped = _ALIGN_AXES.get(name)
+    if frame == "Z" and not (out and isinstance(out[-1], OpCall) and out[-1].name in _MAKES_VOLUME):
+        # a face of frame Z may be a facade (vertical: CGA's y up keeps it in its plane, which
+        # grammarkit's z up does not) or a top (horizontal: the other way round); the importer
+        # cannot tell them apart, so only a shape just made a volume (a balcony extruded from
+        # a facade) is translated
+        raise Untranslatable("alignScopeToAxes:face", "alignScopeToAxes() on a face of a volume "
+                             "(a vertical face would leave its scope plane in grammarkit's y-up frame); "
+                             "on a volume made in the same rule it is translated", span)
     if mapped is None or frame not in mapped[1]:
         raise Untranslatable("alignScopeToAxes:axis", f"alignScopeToAxes({name})"
                              + (" on a face's frame (CGA's z projected is not grammarkit's)" if mapped else ""),

@@ -48,9 +48,12 @@ def test_align_scope_to_axes_y_on_a_balcony_volume_switches_to_the_lot_frame():
 def test_align_scope_to_axes_variants_and_what_is_refused():
     r = imported("Lot --> alignScopeToAxes(world.xyz) alignScopeToAxes(world.z) alignScopeToAxes(world.x) X.\n")
     assert line(r, "Lot") == 'Lot --> alignScopeToAxes() alignScopeToAxes("y") alignScopeToAxes("x") X.'
-    r = translate_cga("Lot --> extrude(3) comp(f) { front: alignScopeToAxes(x) A. }\n", filename="t.cga")
+    r = translate_cga("Lot --> extrude(3) comp(f) { front: extrude(1) alignScopeToAxes(x) A. }\n", filename="t.cga")
     assert warned(r) == ["alignScopeToAxes:axis"]
-    assert r.diagnostics[0].span.line == 1 and r.diagnostics[0].span.column == 37
+    assert r.diagnostics[0].span.line == 1 and r.diagnostics[0].span.column == 48
+    # on a face of frame Z (facade or top: the importer cannot tell) it is reported
+    r = translate_cga("Lot --> extrude(3) comp(f) { front: alignScopeToAxes(y) A. }\n", filename="t.cga")
+    assert warned(r) == ["alignScopeToAxes:face"]
     r = translate_cga("Lot --> alignScopeToAxes(object.y) A.\n", filename="t.cga")
     assert warned(r) == ["alignScopeToAxes:axis"]
 
