@@ -1172,18 +1172,26 @@ def _literal_number(tree: Any) -> float | None:
     return None
 
 
+_FACE_SELECTORS = {"world.lowest": "lowest", "largest": "largest", "any": "any"}
+
+
 def _h_align_scope_to_geometry(t, args, block, star, frame, rctx, ctx, span, out):
-    """alignScopeToGeometry(upAxis, faceIndex, edgeIndex | longest): x along the edge; the up
-    axis says which CGA frame the shape is in afterwards (yUp: the normal is CGA's y)."""
+    """alignScopeToGeometry(upAxis, faceIndex | world.lowest | largest | any, edgeIndex |
+    longest | world.lowest): z along the face's normal and x along the edge (grammarkit's
+    alignScopeToGeometry(edge, face)); the up axis says which CGA frame the shape is in
+    afterwards (yUp: the normal is CGA's y, frame Y; zUp: its z, frame Z)."""
     _need(args, 2, 3, "alignScopeToGeometry", span)
     up = _axis_name(args[0])
     if up not in ("yUp", "zUp"):
         raise Untranslatable("alignScopeToGeometry:up", f"up axis {up!r}", span)
-    approx = None
-    face = args[1]
-    if _literal_number(face) != 0:
-        approx = ("alignScopeToGeometry:face", "the face index is read as face 0 (the shape's "
-                  "outline)")
+    face_name = _axis_name(args[1])
+    face: Any
+    if face_name in _FACE_SELECTORS:
+        face = Str(value=_FACE_SELECTORS[face_name])
+    elif face_name is not None and "." in face_name:
+        raise Untranslatable("alignScopeToGeometry:face", f"face selector {face_name!r}", span)
+    else:
+        face = translate_expr(args[1], ctx)
     edge: Any = Num(value=0)
     if len(args) == 3:
         if _axis_name(args[2]) == "longest":
@@ -1195,18 +1203,46 @@ def _h_align_scope_to_geometry(t, args, block, star, frame, rctx, ctx, span, out
                                  f"{_axis_name(args[2])!r}", span)
         else:
             edge = translate_expr(args[2], ctx)
+    if isinstance(face, Str) and face.value == "any" and not isinstance(edge, Str):
+        raise Untranslatable("alignScopeToGeometry:face", "face selector any with an edge index", span)
     t.frame_change = "Y" if up == "yUp" else "Z"
-    return [OpCall(name="alignScopeToGeometry", args=(Arg(value=edge),), span=span)], approx
+    call_args = (Arg(value=edge),) if isinstance(face, Num) and face.value == 0 else (Arg(value=edge), Arg(value=face))
+    return [OpCall(name="alignScopeToGeometry", args=call_args, span=span)], None
+
+
+_MAKES_VOLUME = {"extrude", "i", "taper", "roofGable", "roofHip", "roofPyramid", "roofShed", "roofMansard"}
+
+# CGA alignScopeToAxes(axis) -> (grammarkit axis, the CGA frames it is exact in). Afterwards
+# the CGA scope is y-up with its z towards the world's +z (south), which is frame Y: CGA's
+# world.y (up) is grammarkit's z with x projected in both systems; world.z (south) is
+# grammarkit's -y, x projected; world.x is x with CGA's z projected, which is grammarkit's -y
+# only in frame Y.
+_ALIGN_AXES = {None: ("xyz", "YZ"), "world.xyz": ("xyz", "YZ"), "xyz": ("xyz", "YZ"),
+               "y": ("z", "YZ"), "world.y": ("z", "YZ"), "z": ("y", "YZ"), "world.z": ("y", "YZ"),
+               "x": ("x", "Y"), "world.x": ("x", "Y")}
 
 
 def _h_align_scope_to_axes(t, args, block, star, frame, rctx, ctx, span, out):
     _need(args, 0, 1, "alignScopeToAxes", span)
-    if args and _axis_name(args[0]) != "y":
-        raise Untranslatable("alignScopeToAxes:axis", f"alignScopeToAxes({_axis_name(args[0])})", span)
-    if frame != "Y":
+    name = _axis_name(args[0]) if args else None
+    if args and name is None:
+        raise Untranslatable("alignScopeToAxes:axis", "alignScopeToAxes() of a computed axis", span)
+    mapped = _ALIGN_AXES.get(name)
+    if frame == "Z" and not (out and isinstance(out[-1], OpCall) and out[-1].name in _MAKES_VOLUME):
+        # a face of frame Z may be a facade (vertical: CGA's y up keeps it in its plane, which
+        # grammarkit's z up does not) or a top (horizontal: the other way round); the importer
+        # cannot tell them apart, so only a shape just made a volume (a balcony extruded from
+        # a facade) is translated
         raise Untranslatable("alignScopeToAxes:face", "alignScopeToAxes() on a face of a volume "
-                             "(grammarkit turns only scopes whose up axis is vertical)", span)
-    return [OpCall(name="alignScopeToAxes", span=span)], None
+                             "(a vertical face would leave its scope plane in grammarkit's y-up frame); "
+                             "on a volume made in the same rule it is translated", span)
+    if mapped is None or frame not in mapped[1]:
+        raise Untranslatable("alignScopeToAxes:axis", f"alignScopeToAxes({name})"
+                             + (" on a face's frame (CGA's z projected is not grammarkit's)" if mapped else ""),
+                             span)
+    t.frame_change = "Y"
+    call_args = () if mapped[0] == "xyz" else (Arg(value=Str(value=mapped[0])),)
+    return [OpCall(name="alignScopeToAxes", args=call_args, span=span)], None
 
 
 def _h_report(t, args, block, star, frame, rctx, ctx, span, out):
@@ -1231,17 +1267,58 @@ def _h_reverse_normals(t, args, block, star, frame, rctx, ctx, span, out):
 
 
 def _h_rotate_scope(t, args, block, star, frame, rctx, ctx, span, out):
+    """rotateScope(x, y, z): the scope turned about its axes, x first (as r()); in frame Y,
+    CGA's y is grammarkit's z and its z grammarkit's -y (the steps of _h_r)."""
     _need(args, 3, 3, "rotateScope", span)
-    # the axis normal to the face: CGA's y in frame Y, its z in frame Z (grammarkit's z both)
-    about = 1 if frame == "Y" else 2
-    others = [a for k, a in enumerate(args) if k != about]
-    if any(_literal_number(a) != 0 for a in others):
-        raise Untranslatable("rotateScope:axes", "rotateScope() about an axis in the face plane",
-                             span)
-    angle = translate_expr(args[about], ctx)
+    rx, ry, rz = (translate_expr(a, ctx) for a in args)
+    if frame == "Z":
+        return [OpCall(name="rotateScope", args=(Arg(value=rx), Arg(value=ry), Arg(value=rz)), span=span)], None
     zero = Num(value=0)
-    return [OpCall(name="rotateScope", args=(Arg(value=zero), Arg(value=zero), Arg(value=angle)),
-                   span=span)], None
+    steps = []
+    for gk_axis, value in (("x", rx), ("z", ry), ("y", rz)):
+        if isinstance(value, Num) and value.value == 0:
+            continue
+        if gk_axis == "y":
+            value = Num(value=-value.value) if isinstance(value, Num) else Unary(op="-", operand=value)
+        vec = [zero, zero, zero]
+        vec["xyz".index(gk_axis)] = value
+        steps.append(OpCall(name="rotateScope", args=tuple(Arg(value=v) for v in vec), span=span))
+    return steps, None
+
+
+def _flag_args(args: list, frame: str, ctx: Any) -> list:
+    """mirror flags (x, y, z) in CGA's axes -> grammarkit's axes (frame Y: y and z swap)."""
+    flags = [translate_expr(a, ctx) for a in args]
+    return flags if frame == "Z" else [flags[0], flags[2], flags[1]]
+
+
+def _h_mirror_scope(t, args, block, star, frame, rctx, ctx, span, out):
+    _need(args, 3, 3, "mirrorScope", span)
+    flags = _flag_args(args, frame, ctx)
+    if all(isinstance(f, Bool) for f in flags) and sum(f.value for f in flags) % 2:
+        raise Untranslatable("mirrorScope:handedness", "reversing one or three scope axes makes a "
+                             "left-handed scope, which grammarkit's shapes cannot carry", span)
+    return [OpCall(name="mirrorScope", args=tuple(Arg(value=f) for f in flags), span=span)], None
+
+
+def _h_mirror(t, args, block, star, frame, rctx, ctx, span, out):
+    _need(args, 3, 3, "mirror", span)
+    flags = _flag_args(args, frame, ctx)
+    return [OpCall(name="mirrorGeometry", args=tuple(Arg(value=f) for f in flags), span=span)], None
+
+
+def _h_set_pivot(t, args, block, star, frame, rctx, ctx, span, out):
+    """setPivot(axes, corner): CGA's pivot is the frame that r() and rotateScope() turn about
+    and that scope.r / convert(pivot) read. grammarkit turns about the scope's own axes and has
+    no pivot, and CGA's r() turns about the scope origin whatever the pivot's corner: so
+    setPivot(xyz, n) (the pivot's axes along the scope's) changes nothing; other orientations
+    would change the axes of later rotations, which is approximated."""
+    _need(args, 2, 2, "setPivot", span)
+    orientation = _axis_name(args[0])
+    if orientation == "xyz":
+        return [], None
+    return [], ("setPivot:orientation", f"setPivot({orientation}, ...): later rotations turn about "
+                "the scope's axes, not the pivot's")
 
 
 # CGA's built-in assets and primitive operations -> grammarkit's built-in primitives
@@ -1530,7 +1607,8 @@ _HANDLERS = {
     "s": _h_s, "t": _h_t, "r": _h_r, "center": _h_center, "color": _h_color, "set": _h_set,
     "i": _h_i, **{name: _h_primitive(name) for name in _PRIMITIVE_OPS},
     "alignScopeToGeometry": _h_align_scope_to_geometry, "alignScopeToAxes": _h_align_scope_to_axes,
-    "rotateScope": _h_rotate_scope, "report": _h_report, "print": _h_print, "convexify": _h_convexify, "reverseNormals": _h_reverse_normals,
+    "rotateScope": _h_rotate_scope, "mirrorScope": _h_mirror_scope, "mirror": _h_mirror,
+    "setPivot": _h_set_pivot, "report": _h_report, "print": _h_print, "convexify": _h_convexify, "reverseNormals": _h_reverse_normals,
     "setupProjection": _h_setup_projection, "projectUV": _uv_op("projectUV", 1, 1),
     "texture": _h_texture, "translateUV": _uv_op("translateUV", 3, 3), "scaleUV": _uv_op("scaleUV", 3, 3),
     "rotateUV": _uv_op("rotateUV", 2, 2), "deleteUV": _uv_op("deleteUV", 1, 1),

@@ -109,15 +109,25 @@ _SPECS: tuple[OperationSpec, ...] = (
                   doc="Insert a mesh file fitted to the scope (`fit=scale`: scaled to it)."),
     OperationSpec("color", (Param("value", "color"),), doc="Tag the shape with a colour (#rrggbb)."),
     OperationSpec("material", (Param("name", "string"),), doc="Tag the shape with a material name."),
-    OperationSpec("alignScopeToGeometry", (Param("edge", "any", required=False, default=0),),
-                  doc="Turn the scope about z so x runs along an edge of the outline (an index, "
-                      "or \"longest\"); the geometry stays."),
-    OperationSpec("alignScopeToAxes", (),
-                  doc="Turn the scope about its (vertical) z so x runs along the world x axis."),
+    OperationSpec("alignScopeToGeometry", (Param("edge", "any", required=False, default=0),
+                                           Param("face", "any", required=False, default=0)),
+                  doc="Turn the scope so z is the normal of a face of the geometry (face: an index, "
+                      "\"largest\", \"lowest\", \"any\"; a face shape: itself) and x runs along "
+                      "an edge of it (an index, \"longest\", \"lowest\"); the geometry stays."),
+    OperationSpec("alignScopeToAxes", (Param("axis", "any", required=False, default="xyz"),),
+                  doc="Turn the scope so its axes (\"xyz\", the default) or one of them (\"x\", "
+                      "\"y\", \"z\") are parallel to the world's; the geometry stays."),
     OperationSpec("reverseNormals", (),
                   doc="Turn a face (or an open mesh) to look the other way; a closed volume keeps its outside."),
     OperationSpec("rotateScope", (Param("x"), Param("y"), Param("z")),
-                  doc="Turn the scope (not the geometry) about its z axis by z degrees."),
+                  doc="Turn the scope (not the geometry) by x, y, z degrees about its own axes, x "
+                      "first; the scope becomes the geometry's bounding box in the turned axes."),
+    OperationSpec("mirrorScope", (Param("x", "any"), Param("y", "any"), Param("z", "any")),
+                  doc="Reverse the flagged scope axes (two of them: scopes stay right-handed), the "
+                      "origin moved to the other side; the geometry stays."),
+    OperationSpec("mirrorGeometry", (Param("x", "any"), Param("y", "any"), Param("z", "any")),
+                  doc="Reflect the geometry across the scope's mid-planes along the flagged axes "
+                      "(CGA's mirror); the scope stays (a solid stays watertight)."),
     OperationSpec("trim", (Param("enabled", "any"),),
                   doc="Whether i() clips inserts by the trim planes of comp(f) side faces (CGA's trim.vertical)."),
     OperationSpec("report", (Param("key", "string"), Param("value", "any")),

@@ -664,6 +664,7 @@ BUILTIN_APPLY = {
     "color": op_color, "material": op_material, "set": op_set,
     "alignScopeToGeometry": op_align_scope_to_geometry, "alignScopeToAxes": op_align_scope_to_axes,
     "rotateScope": op_rotate_scope, "report": op_report, "reverseNormals": op_reverse_normals,
+    **__import__("grammarkit.split.scope_ops", fromlist=["SCOPE_APPLY"]).SCOPE_APPLY,  # mirrorScope, mirrorGeometry
     "trim": op_trim,
     "setupProjection": op_setup_projection, "projectUV": op_project_uv, "texture": op_texture,
     "translateUV": op_translate_uv, "scaleUV": op_scale_uv, "rotateUV": op_rotate_uv,

@@ -419,10 +419,14 @@ def test_scope_operations_turn_the_scope_not_the_geometry(G):
     assert m.parts[0].size[:2] == pytest.approx((4, 10)) and ok(m).watertight
 
 
-def test_rotate_scope_about_x_or_y_is_refused(G):
+def test_rotate_scope_about_x_turns_the_scope_out_of_the_face(G):
+    # rotateScope turns about any axis now (tests/split/test_scope_ops_engine.py); a bad
+    # argument is still a located error
+    m = derive(G("Lot --> footprint(rect(10, 4)) rotateScope(90, 0, 0) A."))
+    assert m.parts[0].axes[1] == pytest.approx((0, 0, 1)) and m.parts[0].size == pytest.approx((10, 0, 4))
     with pytest.raises(DerivationError) as e:
-        derive(G("Lot --> footprint(rect(10, 4)) rotateScope(90, 0, 0) A."))
-    assert "about its z axis only" in str(e.value) and e.value.span.line == 1
+        derive(G('Lot --> footprint(rect(10, 4)) mirrorScope(true, false, false) A.'))
+    assert "left-handed" in str(e.value) and e.value.span.line == 1
 
 
 def test_reports_are_collected_into_the_model_metadata(G, tmp_path):
