@@ -25,7 +25,10 @@ from ..geometry import roofs
 from ..geometry.solids import insert_fitted, taper as taper_solid
 from .assets import builtin_asset, load_asset, load_asset_mesh
 from .engine import rotation
-from .scope_ops import op_align_scope_to_axes, op_align_scope_to_geometry, op_reverse_normals, op_rotate_scope
+from .scope_ops import (
+    op_align_scope_to_axes, op_align_scope_to_geometry, op_mirror, op_mirror_scope, op_reverse_normals,
+    op_rotate_scope,
+)
 from .shape import FACE, VOLUME, Shape
 from .lots import (
     op_inner_rectangle, op_setback, op_setback_per_edge, op_setback_to_area, op_shape_l, op_shape_o, op_shape_u,
@@ -664,7 +667,7 @@ BUILTIN_APPLY = {
     "color": op_color, "material": op_material, "set": op_set,
     "alignScopeToGeometry": op_align_scope_to_geometry, "alignScopeToAxes": op_align_scope_to_axes,
     "rotateScope": op_rotate_scope, "report": op_report, "reverseNormals": op_reverse_normals,
-    **__import__("grammarkit.split.scope_ops", fromlist=["SCOPE_APPLY"]).SCOPE_APPLY,  # mirrorScope, mirrorGeometry
+    "mirrorScope": op_mirror_scope, "mirrorGeometry": op_mirror,
     "trim": op_trim,
     "setupProjection": op_setup_projection, "projectUV": op_project_uv, "texture": op_texture,
     "translateUV": op_translate_uv, "scaleUV": op_scale_uv, "rotateUV": op_rotate_uv,

@@ -31,8 +31,7 @@ from ..geometry import footprints as fp
 from .shape import FACE, VOLUME, Shape
 
 __all__ = ["op_align_scope_to_geometry", "op_align_scope_to_axes", "op_mirror", "op_mirror_scope",
-           "op_reverse_normals", "op_rotate_scope", "reframe", "turn_scope",
-           "SCOPE_APPLY"]
+           "op_reverse_normals", "op_rotate_scope", "reframe", "turn_scope"]
 
 EPS = 1e-9
 _TOL = 1e-9  # a matrix entry this close to 0 or +-1 is taken as exact (axis-aligned turns)
@@ -447,6 +446,3 @@ def op_reverse_normals(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
     c.on = None  # it no longer faces out of its volume
     return c
 
-
-# the operations of this module that ops.BUILTIN_APPLY takes by name (besides those it imports)
-SCOPE_APPLY = {"mirrorScope": op_mirror_scope, "mirrorGeometry": op_mirror}
