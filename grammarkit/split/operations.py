@@ -132,7 +132,8 @@ _SPECS: tuple[OperationSpec, ...] = (
     OperationSpec("setback", (Param("distance"),), block="selectors", selectors=SETBACK_SELECTORS,
                   doc="Move the selected edges of a face inwards: a face per edge, and the remainder."),
     OperationSpec("setbackPerEdge", (Param("distance", "expr"),), block="selectors", selectors=SETBACK_SELECTORS,
-                  doc="setback() with the distance evaluated on every edge (comp.index: the edge's index)."),
+                  doc="setback() with the distance evaluated on every edge (comp.index: the edge's index, "
+                      "comp.sel: its side), or an array of one distance per edge."),
     OperationSpec("setbackToArea", (Param("area"),), block="selectors", selectors=SETBACK_SELECTORS,
                   doc="setback() with the distance that leaves a remainder of the given area."),
     OperationSpec("shapeL", (Param("front_width"), Param("left_width")), block="selectors",
@@ -165,6 +166,13 @@ _SPECS: tuple[OperationSpec, ...] = (
                                Param("left_angle", required=False, default=90.0)),
                   doc="The zoning envelope of a face: extruded to max_height, each side vertical up to "
                       "its base height, then leaning inwards at its angle (degrees; 90: vertical)."),
+    OperationSpec("envelopePerEdge", (Param("direction", "axis", choices=("normal", "worldUp")), Param("max_height"),
+                                      Param("base_height", "expr",
+                                            doc="evaluated on every edge (comp.index, comp.sel, scope.sx), "
+                                                "or an array of one value per edge"),
+                                      Param("angle", "expr", doc="likewise, degrees (90: vertical)")),
+                  doc="envelope() with the base height and angle given per edge (CGA's "
+                      "envelope(direction, maxHeight, baseHeights, angles))."),
     # scatter (grammarkit/split/scatter.py; docs/operations.md "Scatter"); the choices are the
     # same lists as grammarkit.split.scatter's (kept here so that `grammarkit check` stays light)
     OperationSpec("scatter", (Param("domain", "axis", choices=("surface", "volume", "scope")), Param("count"),

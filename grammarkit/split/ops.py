@@ -143,7 +143,7 @@ def op_recess(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
 from .comp import op_comp  # noqa: E402
 # -- splitArea: grammarkit/split/area_split.py (it uses split's layout below, at call time) --
 from .area_split import op_split_area  # noqa: E402
-from .envelope import op_envelope  # noqa: E402
+from .envelope import op_envelope, op_envelope_per_edge  # noqa: E402
 
 
 # -- split -----------------------------------------------------------------------------------
@@ -670,7 +670,7 @@ BUILTIN_APPLY = {
     "deleteUV": op_delete_uv, "tileUV": op_tile_uv, "normalizeUV": op_normalize_uv,
     "setback": op_setback, "setbackPerEdge": op_setback_per_edge, "setbackToArea": op_setback_to_area,
     "shapeL": op_shape_l, "shapeU": op_shape_u, "shapeO": op_shape_o, "innerRectangle": op_inner_rectangle,
-    "splitArea": op_split_area, "envelope": op_envelope,
+    "splitArea": op_split_area, "envelope": op_envelope, "envelopePerEdge": op_envelope_per_edge,
     "label": op_label, "scatter": op_scatter, "print": op_print,
     "convexify": op_convexify,
 }

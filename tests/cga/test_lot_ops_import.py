@@ -8,6 +8,7 @@ import pytest
 
 import grammarkit
 from grammarkit.cga import translate_cga
+from grammarkit.split.engine import WELD
 from _cga_helpers import imported, line, LOT  # noqa: E402  (tests/cga/conftest.py)
 
 
@@ -72,8 +73,74 @@ def test_envelope_forms():
     r = imported("Lot --> envelope(world.up, 9, 5, 45, 5, 45, 5, 45) E\n")  # side: right and left
     assert "left_base=5, left_angle=45" in line(r, "Lot")
     assert part(derive(r), "E").size[2] == pytest.approx(9.0, abs=1e-6)
-    bad = translate_cga('attr hs = "3;3;0;0"\nLot --> envelope(normal, 15, comp(fe) { all: '
-                        'float(listItem(hs, comp.index)) }, comp(fe) { all: float(45) }) E\n', filename="t.cga")
-    # CGA's per-edge arrays are not translated: a located warning, the rest of the file stays
+    # a face of a volume: CGA classifies its edges in the object's frame, so only one value
+    # for every side is exact (candler.cga's ventilation boxes); different values: dropped
+    r = imported("Lot --> extrude(10) comp(f) { top: envelope(world.up, 0.6, 0.45,45,0.45,45,0.45,45) E }\n")
+    assert "envelope(worldUp, 0.6, front_base=0.45" in line(r, "Lot") and not r.diagnostics
+    m = derive(r)
+    e = part(m, "E")
+    assert e.origin[2] == pytest.approx(10.0) and e.size == pytest.approx((20.0, 16.0, 0.6))
+    h = 0.15  # the hip above 0.45 m: integral_0^h (20 - 2z)(16 - 2z) dz
+    top = 320 * h - 36 * h ** 2 + 4 * h ** 3 / 3
+    # the engine grows each solid by WELD (1 mm) on every side: 0.33 % of a 0.6 m height
+    grown = (20 + 2 * WELD) / 20 * (16 + 2 * WELD) / 16 * (0.6 + 2 * WELD) / 0.6
+    assert glb_volume(m) == pytest.approx((20 * 16 * 0.45 + top) * grown, rel=3e-4)
+    bad = translate_cga("Lot --> extrude(10) comp(f) { top: envelope(normal, 5, 1, 45, 2, 45) E }\n",
+                        filename="t.cga")
     dropped = [c for c in bad.report.constructs if c.status == "dropped" and c.name == "envelope"]
-    assert dropped and dropped[0].span.line == 2 and bad.ok
+    assert dropped and dropped[0].span.line == 1 and bad.ok
+    assert "object's frame" in dropped[0].message
+
+
+def glb_volume(model) -> float:
+    import io
+
+    import trimesh
+
+    from grammarkit.geometry.exporters import encode_glb
+
+    loaded = trimesh.load(io.BytesIO(encode_glb(model)), file_type="glb")
+    mesh = loaded.to_mesh() if isinstance(loaded, trimesh.Scene) else loaded
+    mesh = trimesh.Trimesh(mesh.vertices, mesh.faces)
+    assert mesh.is_watertight
+    return float(mesh.volume)
+
+
+# the lot's edges: 0 front (y = 0), 1 right (x = 20), 2 back (y = 16), 3 left (x = 0);
+# the front leaning in at 45 degrees from 5 m, capped at 15 m: the closed form
+FRONT_45 = 20 * 16 * 15 - 20 * 10 ** 2 / 2
+
+
+def test_envelope_per_edge_arrays():
+    r = imported("Lot --> envelope(normal, 15, [5, 0, 0, 0], [45, 90, 90, 90]) E\n")
+    assert "envelopePerEdge(normal, 15, (5, 0, 0, 0), (45, 90, 90, 90)) E." in line(r, "Lot")
+    assert not r.diagnostics
+    assert glb_volume(derive(r)) == pytest.approx(FRONT_45, rel=2e-3)
+
+
+def test_envelope_per_edge_comp_function():
+    # comp(fe) { all: expr }: the expression on every edge (comp.index: the edge's index)
+    r = imported('attr hs = "5;0;0;0"\nattr a = 45\nattr v = 90\n'
+                 "Lot --> envelope(normal, 15, comp(fe) { all: float(listItem(hs, comp.index)) }, "
+                 "comp(fe) { 0: a | all: v }) E\n")
+    assert ("envelopePerEdge(normal, 15, float(listItem(hs, comp.index)), select(comp.index == 0, a, v))"
+            in line(r, "Lot"))
+    assert glb_volume(derive(r)) == pytest.approx(FRONT_45, rel=2e-3)
+    # selectors: the first that takes an edge gives its value; street./object. fall back to
+    # the lot's own sides (noted), CGA's `side` on a lot is every edge
+    r = imported("attr b = 5\nattr z = 0\nattr a = 45\nattr v = 90\n"
+                 "Lot --> envelope(normal, 15, comp(fe) { street.left: b | all: z }, "
+                 "comp(fe) { object.left: a | side: v | 2: a }) E\n")
+    text = line(r, "Lot")
+    assert 'select(comp.sel == "left", b, z)' in text and 'select(comp.sel == "left", a, v)' in text
+    assert any("street.left" in d.message for d in r.diagnostics)
+    assert glb_volume(derive(r)) == pytest.approx(20 * 16 * 15 - 16 * 10 ** 2 / 2, rel=2e-3)
+    # edges no selector takes get 0 (CGA's default): here the angle 0 cuts flat at the base
+    r = imported("attr b = 4\nattr a = 90\nLot --> envelope(normal, 15, comp(fe) { all: b }, "
+                 "comp(fe) { front: a }) E\n")
+    assert 'select(comp.sel == "front", a, 0)' in line(r, "Lot")
+    assert part(derive(r), "E").size[2] == pytest.approx(4.0, abs=1e-6)
+    bad = translate_cga("attr b = 4\nLot --> envelope(normal, 15, comp(fe) { world.north: b }, [90]) E\n",
+                        filename="t.cga")
+    dropped = [c for c in bad.report.constructs if c.status == "dropped" and c.name == "envelope"]
+    assert dropped and "world.north" in dropped[0].message and bad.ok
