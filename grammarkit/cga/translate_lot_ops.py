@@ -57,12 +57,12 @@ def _roof_value(gk: str, args: list, ctx: Any, span: Any) -> tuple[Any, str, lis
     return translate_expr(args[0], ctx), "byAngle", args[1:]
 
 
-def _even(tree: Any, ctx: Any, notes: list) -> None:
-    """grammarkit's gable and hip planes are planar, with horizontal ridges: CGA's `even`
-    (horizontal gable edges at the price of non-planar faces) is the same on rectangles only."""
+def _even(tree: Any, ctx: Any) -> Arg | None:
+    """CGA's `even` (grammarkit's even=: the ridge level, non-planar faces); false is the default."""
     value = translate_expr(tree, ctx)
-    if not (isinstance(value, Bool) and value.value is False):
-        notes.append("even=true is made with planar roof faces (the same on rectangular footprints)")
+    if isinstance(value, Bool) and value.value is False:
+        return None
+    return Arg(name="even", value=value)
 
 
 def _overhang(value: Any, vt: str, angle: Any, notes: list) -> Any:
@@ -99,12 +99,14 @@ def _h_roof_gable(t, args, block, star, frame, rctx, ctx, span, out):
         named.append(Arg(name="overhang", value=_overhang(translate_expr(rest[0], ctx), vt, value, notes)))
     if len(rest) >= 2:
         named.append(Arg(name="overhang_y", value=_overhang(translate_expr(rest[1], ctx), vt, value, notes)))
-    if len(rest) >= 3:
-        _even(rest[2], ctx, notes)
-    if len(rest) >= 4:
+    if len(rest) >= 4:  # CGA ignores even with an index
         a = _index_arg(rest[3], ctx, notes, "roofGable")
         if a is not None:
             named.append(a)
+    elif len(rest) >= 3:
+        e = _even(rest[2], ctx)
+        if e is not None:
+            named.append(e)
     return _roof_call("roofGable", value, vt, named, span, notes)
 
 
@@ -117,7 +119,9 @@ def _h_roof_hip(t, args, block, star, frame, rctx, ctx, span, out):
     if len(rest) >= 1:
         named.append(Arg(name="overhang", value=_overhang(translate_expr(rest[0], ctx), vt, value, notes)))
     if len(rest) >= 2:
-        _even(rest[1], ctx, notes)
+        e = _even(rest[1], ctx)
+        if e is not None:
+            named.append(e)
     return _roof_call("roofHip", value, vt, named, span, notes)
 
 

@@ -366,6 +366,12 @@ def _roof(s: Shape, build: Any, name: str) -> Shape:
     return s.derived(s.world(x0, y0, z0), (x1 - x0, y1 - y0, z1 - z0), None, VOLUME, solid=solid)
 
 
+def _flag(v: Any, what: str) -> bool:
+    if not isinstance(v, bool):
+        raise ValueError(f"{what} must be true or false, got {v!r}")
+    return v
+
+
 def _ridge(v: Any) -> str:
     v = str(v)
     if v not in ("x", "y"):
@@ -410,17 +416,19 @@ def op_roof_gable(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
     value, over, ridge = _num(args[0], "angle"), _num(args[1], "overhang"), _ridge(args[2])
     over_y = None if args[3] is None else _num(args[3], "overhang_y")
     index, vt = _index(args[4]), _value_type(args[5])
+    even = _flag(args[6], "even")
 
     def build(p: Any, angle: float) -> Any:
-        return roofs.gable(p, angle, over, ridge, overhang_y=over_y, index=index)
+        return roofs.gable(p, angle, over, ridge, overhang_y=over_y, index=index, even=even)
     return _roof(s, lambda p: build(p, _pitch(value, vt, build, p)), "roofGable")
 
 
 def op_roof_hip(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
     value, over, vt = _num(args[0], "angle"), _num(args[1], "overhang"), _value_type(args[2])
+    even = _flag(args[3], "even")
 
     def build(p: Any, angle: float) -> Any:
-        return roofs.hip(p, angle, over)
+        return roofs.hip(p, angle, over, even)
     return _roof(s, lambda p: build(p, _pitch(value, vt, build, p)), "roofHip")
 
 

@@ -32,6 +32,21 @@ def test_roof_gable_with_every_option():
     assert part(derive(r), "R").size[:2] == pytest.approx((19.0, 18.0), abs=1e-6)
 
 
+def test_roof_even():
+    # even=true: grammarkit's even= (the ridge level); false is the default and is left out;
+    # with an index CGA ignores even, and so does the translation
+    r = imported("Lot --> roofGable(30, 0, 0, true) R\n")
+    assert "roofGable(30, overhang=0, overhang_y=0, even=true)" in line(r, "Lot") and not r.diagnostics
+    quad = [(0.0, 0.0), (20.0, 0.0), (20.0, 8.0), (0.0, 12.0)]
+    c = 20 / math.hypot(4, 20)  # the gable ends' ridge points: y = c (12 - y) and y = c (8 - y)
+    level = math.tan(math.radians(30)) * (12 * c + 8 * c) / (1 + c) / 2
+    assert part(grammarkit.derive(r.grammar, lot=quad), "R").size[2] == pytest.approx(level, abs=1e-5)
+    r = imported("Lot --> roofHip(30, 0, true) R\n")
+    assert "roofHip(30, overhang=0, even=true)" in line(r, "Lot")
+    r = imported("Lot --> roofHip(30, 0, false) R\nB --> roofGable(30, 0, 0, true, 1) R\n")
+    assert "even" not in line(r, "Lot") and "even" not in line(r, "B")
+
+
 def test_roof_by_height_and_shed_index():
     r = imported("Lot --> roofGable(byHeight, 3) R\n")
     assert "roofGable(3, value_type=byHeight)" in line(r, "Lot")
@@ -42,8 +57,8 @@ def test_roof_by_height_and_shed_index():
     r = imported("Lot --> roofShed(byHeight, 4) R\n")  # CGA's default edge is 0
     assert "roofShed(4, index=0, value_type=byHeight)" in line(r, "Lot")
     assert part(derive(r), "R").size[2] == pytest.approx(4.0, abs=1e-6)
-    r = imported("Lot --> roofHip(30, 0, true) R\n")
-    assert {c.feature for c in r.report.constructs if c.status == "approximated"} == {"roofHip:options"}
+    r = imported("Lot --> roofHip(30, 0, true) R\n")  # even is translated now, not approximated
+    assert not {c.feature for c in r.report.constructs if c.status == "approximated"}
 
 
 def test_comp_fe_and_other_comp_modes():
