@@ -99,14 +99,17 @@ def _h_roof_gable(t, args, block, star, frame, rctx, ctx, span, out):
         named.append(Arg(name="overhang", value=_overhang(translate_expr(rest[0], ctx), vt, value, notes)))
     if len(rest) >= 2:
         named.append(Arg(name="overhang_y", value=_overhang(translate_expr(rest[1], ctx), vt, value, notes)))
-    if len(rest) >= 4:  # CGA ignores even with an index
-        a = _index_arg(rest[3], ctx, notes, "roofGable")
-        if a is not None:
-            named.append(a)
+    index = _index_arg(rest[3], ctx, notes, "roofGable") if len(rest) >= 4 else None
+    if index is not None:  # CGA ignores even with an index
+        named.append(index)
     elif len(rest) >= 3:
         e = _even(rest[2], ctx)
         if e is not None:
             named.append(e)
+    if index is None:
+        # CGA orients an unindexed gable itself (along the long sides of a rectangle), not
+        # along a scope axis: grammarkit's ridge=auto
+        named.append(Arg(name="ridge", value=Ref(name="auto")))
     return _roof_call("roofGable", value, vt, named, span, notes)
 
 

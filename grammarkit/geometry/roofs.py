@@ -226,7 +226,8 @@ def gable(poly: Polygon, angle: float, overhang: float = 0.0, ridge: str = "x", 
           overhang_y: float | None = None, index: int | None = None, even: bool = False) -> Manifold:
     """Two planes meeting in a horizontal ridge over the middle of the footprint.
 
-    The ridge runs along local `ridge` ("x" or "y"), or, when `index` is given, along edge
+    The ridge runs along local `ridge` ("x" or "y"; "auto": along the footprint's longest
+    edge, CGA's automatic orientation on rectangles), or, when `index` is given, along edge
     `index` of the footprint (CGA's indexed gable). `overhang` grows the footprint across the
     ridge (CGA's overhangX, at the eaves) and `overhang_y` along it (CGA's overhangY, at the
     gable ends); without `overhang_y` the footprint grows by `overhang` all round.
@@ -299,6 +300,16 @@ def _direction(poly: Polygon, ridge: str, index: int | None) -> tuple[float, flo
     if index is not None:
         ux, uy = edge_direction(poly, index)
         return ux, uy, int(index) % len(poly)
+    if ridge == "auto":
+        # CGA orients an unindexed gable by itself, from its straight skeleton: on a rectangle
+        # the ridge runs along the long sides. Here: along the longest edge (the first of
+        # equally long ones), which is that on rectangles and follows the outline's main
+        # direction on other footprints, whatever the scope's orientation.
+        n = len(poly)
+        longest = max(range(n), key=lambda i: (round(math.hypot(poly[(i + 1) % n][0] - poly[i][0],
+                                                                  poly[(i + 1) % n][1] - poly[i][1]), 9), -i))
+        ux, uy = edge_direction(poly, longest)
+        return ux, uy, None
     return (1.0, 0.0, None) if ridge == "x" else (0.0, -1.0, None)
 
 

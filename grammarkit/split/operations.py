@@ -66,7 +66,9 @@ _SPECS: tuple[OperationSpec, ...] = (
     OperationSpec("roofGable", (Param("angle", doc="the roof planes' angle (degrees), or their height with value_type=byHeight"),
                                 Param("overhang", required=False, default=0.0,
                                       doc="at the eaves, across the ridge (CGA's overhangX)"),
-                                Param("ridge", "axis", required=False, default="x", choices=("x", "y")),
+                                Param("ridge", "axis", required=False, default="x", choices=("x", "y", "auto"),
+                                      doc="the scope axis the ridge runs along, or auto: along the longest "
+                                          "edge (CGA's automatic orientation on rectangles)"),
                                 Param("overhang_y", required=False, default=None,
                                       doc="at the gable ends, along the ridge (CGA's overhangY; may be "
                                           "negative); not given: the overhang all round"),

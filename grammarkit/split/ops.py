@@ -372,10 +372,10 @@ def _flag(v: Any, what: str) -> bool:
     return v
 
 
-def _ridge(v: Any) -> str:
+def _ridge(v: Any, auto: bool = False) -> str:
     v = str(v)
-    if v not in ("x", "y"):
-        raise ValueError(f"ridge must be x or y, got {v!r}")
+    if v not in (("x", "y", "auto") if auto else ("x", "y")):
+        raise ValueError(f"ridge must be x{', y or auto' if auto else ' or y'}, got {v!r}")
     return v
 
 
@@ -413,7 +413,7 @@ def _pitch(value: float, value_type: str, build: Any, p: Any) -> float:
 
 
 def op_roof_gable(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
-    value, over, ridge = _num(args[0], "angle"), _num(args[1], "overhang"), _ridge(args[2])
+    value, over, ridge = _num(args[0], "angle"), _num(args[1], "overhang"), _ridge(args[2], auto=True)
     over_y = None if args[3] is None else _num(args[3], "overhang_y")
     index, vt = _index(args[4]), _value_type(args[5])
     even = _flag(args[6], "even")

@@ -36,7 +36,7 @@ def test_roof_even():
     # even=true: grammarkit's even= (the ridge level); false is the default and is left out;
     # with an index CGA ignores even, and so does the translation
     r = imported("Lot --> roofGable(30, 0, 0, true) R\n")
-    assert "roofGable(30, overhang=0, overhang_y=0, even=true)" in line(r, "Lot") and not r.diagnostics
+    assert "roofGable(30, overhang=0, overhang_y=0, even=true, ridge=auto)" in line(r, "Lot") and not r.diagnostics
     quad = [(0.0, 0.0), (20.0, 0.0), (20.0, 8.0), (0.0, 12.0)]
     c = 20 / math.hypot(4, 20)  # the gable ends' ridge points: y = c (12 - y) and y = c (8 - y)
     level = math.tan(math.radians(30)) * (12 * c + 8 * c) / (1 + c) / 2
@@ -47,9 +47,23 @@ def test_roof_even():
     assert "even" not in line(r, "Lot") and "even" not in line(r, "B")
 
 
+def test_roof_gable_ridge_follows_the_long_sides_as_in_cga():
+    # CGA orients an unindexed gable itself: the ridge along a rectangle's long sides, whatever
+    # its scope; grammarkit's own default (ridge=x) is kept for .grammar files
+    r = imported("Lot --> roofGable(45) R\n")
+    assert "roofGable(45, ridge=auto)" in line(r, "Lot")
+    deep = [(0.0, 0.0), (10.0, 0.0), (10.0, 24.0), (0.0, 24.0)]  # 10 wide, 24 deep
+    roof = part(grammarkit.derive(r.grammar, lot=deep), "R")
+    assert roof.size[2] == pytest.approx(5.0, abs=1e-6)  # the 10 m span: the ridge runs along y
+    native = part(grammarkit.derive("Lot --> roofGable(45) R.\n", lot=deep), "R")
+    assert native.size[2] == pytest.approx(12.0, abs=1e-6)  # grammarkit's ridge=x: the 24 m span
+    r = imported("Lot --> roofGable(45, 0, 0, false, 1) R\n")
+    assert "ridge" not in line(r, "Lot")  # the index orients it
+
+
 def test_roof_by_height_and_shed_index():
     r = imported("Lot --> roofGable(byHeight, 3) R\n")
-    assert "roofGable(3, value_type=byHeight)" in line(r, "Lot")
+    assert "roofGable(3, ridge=auto, value_type=byHeight)" in line(r, "Lot")
     assert part(derive(r), "R").size[2] == pytest.approx(3.0, abs=1e-6)
     r = imported("Lot --> roofShed(30, 1) R\n")
     assert "roofShed(30, index=1)" in line(r, "Lot")
