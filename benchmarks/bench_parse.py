@@ -94,7 +94,7 @@ def cpu_median(fn, runs: int) -> float:  # noqa: ANN001
     front end runs), so that one stage does not pay for the garbage of the previous one."""
     import gc
 
-    from grammarkit.dsl.parser import paused_gc
+    from grammarkit.gcpause import paused_gc
 
     times = []
     for _ in range(runs):
@@ -114,7 +114,8 @@ def worst_shares(runs: int) -> None:
     from grammarkit.dsl import DEFAULT_MAX_BYTES
     from grammarkit.dsl.checker import check_grammar
     from grammarkit.dsl.frontend import parse_source
-    from grammarkit.dsl.parser import parse_tree, paused_gc
+    from grammarkit.dsl.parser import parse_tree
+    from grammarkit.gcpause import paused_gc
     from grammarkit.plugins import builtin_registries
 
     registries = builtin_registries()

@@ -5,7 +5,6 @@ Everything that can go wrong with raw text (size, encoding, nesting, syntax) bec
 """
 from __future__ import annotations
 
-import contextlib
 import contextvars
 import functools
 import os
@@ -19,6 +18,7 @@ from lark import Lark, Token, Tree
 from lark.exceptions import LarkError, UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken
 
 from ..errors import Diagnostic, GrammarError
+from ..gcpause import paused_gc  # noqa: F401  (grammarkit.dsl re-exports it)
 from ..ir.base import Span
 
 # The largest grammar file read without --max-size. The worst file of ordinary constructs this
@@ -189,25 +189,6 @@ def get_parser() -> Lark:
         cache = False
     return Lark(text, postlex=StatementPostLexer(), lexer_callbacks={"COMMENT": _collect_comment},
                 cache=cache, **_PARSER_OPTIONS)
-
-
-@contextlib.contextmanager
-def paused_gc() -> Iterator[None]:
-    """No cyclic garbage collection while a grammar is parsed, transformed and checked.
-
-    These passes allocate hundreds of thousands of small objects that all stay alive (tokens,
-    tree nodes, IR models); every allocation burst triggers a collection that walks all of
-    them again, which made `check` of a 500 KB file 1.5-3x slower than the work itself
-    (benchmarks/bench_parse.py). Nested uses are fine; the collector resumes afterwards."""
-    import gc
-
-    was_enabled = gc.isenabled()
-    gc.disable()
-    try:
-        yield
-    finally:
-        if was_enabled:
-            gc.enable()
 
 
 # -- reading files -------------------------------------------------------------------------

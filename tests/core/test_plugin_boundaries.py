@@ -7,7 +7,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[2]
 # What a third-party plugin may import: the package and its documented public modules.
 PUBLIC = {"grammarkit", "grammarkit.tiling", "grammarkit.dsl", "grammarkit.registry", "grammarkit.errors",
-          "grammarkit.ir", "grammarkit.hookspecs", "grammarkit.fileio", "grammarkit.jsonable", "grammarkit.plugins", "grammarkit.printer",
+          "grammarkit.ir", "grammarkit.hookspecs", "grammarkit.fileio", "grammarkit.jsonable", "grammarkit.gcpause", "grammarkit.plugins", "grammarkit.printer",
           "grammarkit.split", "grammarkit.run", "grammarkit.geometry.exporters", "grammarkit.geometry.render",
           "grammarkit.geometry.convert", "grammarkit.geometry.meshio"}
 
