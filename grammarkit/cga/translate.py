@@ -1160,8 +1160,14 @@ def _h_i(t, args, block, star, frame, rctx, ctx, span, out):
             raise Untranslatable("asset:missing", f"asset {known!r} was not found (the i() is "
                                  "left out; --missing-assets keep keeps it)", span)
         call = OpCall(name="i", args=(Arg(value=path),), span=span)
-        return [call], (("i:options", "the up axis and insert mode arguments are ignored")
-                        if len(args) > 1 else None)
+        approx = ("i:options", "the up axis and insert mode arguments are ignored") if len(args) > 1 else None
+        if known is None and t.missing_assets == "drop":
+            # which file is only known while deriving: `(case fileExists(p): i(p))` leaves the
+            # i() out there when the file is missing, as "drop" does here for a known one
+            guard = Case(arms=(CaseArm(cond=Call(func="fileExists", args=(path,), span=span),
+                                       body=Seq(items=(call,)), span=span),), span=span)
+            return [guard], approx
+        return [call], approx
     if path.value.startswith("builtin:"):
         return _builtin(path.value[len("builtin:"):], frame, span, len(args) > 1)
     found = t.asset(path.value, span)

@@ -211,3 +211,24 @@ def test_undefined_rule_with_arguments_is_a_leaf():
     assert not any(c.feature == "rule:undefined" for c in r.report.constructs)
     m = derive(load(r.text), lot=LOT)
     assert {t.name for t in m.tags} >= {"Glazing", "Wall"}
+
+
+def test_importer_guards_an_unknown_computed_asset_when_dropping_missing_ones(tmp_path):
+    """With missing_assets="drop", an i() whose file is only known while deriving runs only
+    when the file exists (`(case fileExists(p): i(p))`); the shape is kept as it is otherwise,
+    as a dropped i() of a known missing file leaves it."""
+    text = ('Lot --> extrude(2) split(x) { 1: Part("parts/chimney.glb") | ~1: Part("parts/none.glb") }\n'
+            'Part(asset) --> i(asset) X.\n')
+    r = imported(text, missing_assets="drop")
+    assert "Part(asset) --> (case fileExists(asset): i(asset)) X." in r.text
+    (tmp_path / "parts").mkdir()
+    shutil.copy(PARTS / "chimney.glb", tmp_path / "parts" / "chimney.glb")
+    path = tmp_path / "t.grammar"
+    path.write_text(r.text)
+    m = derive(load(path), lot=[(0, 0), (3, 0), (3, 2), (0, 2)])
+    import trimesh
+    chimney = trimesh.load(PARTS / "chimney.glb", force="mesh")
+    # the chimney in the first metre, the second part's box kept as it was (12 triangles)
+    assert len(m.mesh.faces) >= len(chimney.faces)
+    assert m.mesh.bounds.ravel().tolist() == pytest.approx([0, 0, 0, 3, 2, 2], abs=2e-3)
+    assert "Part(asset) --> i(asset) X." in imported(text).text
