@@ -18,7 +18,7 @@ from typing import Any, Callable
 
 from lark import Tree
 
-from ..ir import Arg, Binary, Bool, Call, Num, OpCall, Ref, Repeat
+from ..ir import Arg, Binary, Bool, Call, Num, OpCall, Ref, Repeat, Str, Vector
 from .expressions import Untranslatable, translate_expr
 
 
@@ -57,12 +57,12 @@ def _roof_value(gk: str, args: list, ctx: Any, span: Any) -> tuple[Any, str, lis
     return translate_expr(args[0], ctx), "byAngle", args[1:]
 
 
-def _even(tree: Any, ctx: Any, notes: list) -> None:
-    """grammarkit's gable and hip planes are planar, with horizontal ridges: CGA's `even`
-    (horizontal gable edges at the price of non-planar faces) is the same on rectangles only."""
+def _even(tree: Any, ctx: Any) -> Arg | None:
+    """CGA's `even` (grammarkit's even=: the ridge level, non-planar faces); false is the default."""
     value = translate_expr(tree, ctx)
-    if not (isinstance(value, Bool) and value.value is False):
-        notes.append("even=true is made with planar roof faces (the same on rectangular footprints)")
+    if isinstance(value, Bool) and value.value is False:
+        return None
+    return Arg(name="even", value=value)
 
 
 def _overhang(value: Any, vt: str, angle: Any, notes: list) -> Any:
@@ -99,12 +99,17 @@ def _h_roof_gable(t, args, block, star, frame, rctx, ctx, span, out):
         named.append(Arg(name="overhang", value=_overhang(translate_expr(rest[0], ctx), vt, value, notes)))
     if len(rest) >= 2:
         named.append(Arg(name="overhang_y", value=_overhang(translate_expr(rest[1], ctx), vt, value, notes)))
-    if len(rest) >= 3:
-        _even(rest[2], ctx, notes)
-    if len(rest) >= 4:
-        a = _index_arg(rest[3], ctx, notes, "roofGable")
-        if a is not None:
-            named.append(a)
+    index = _index_arg(rest[3], ctx, notes, "roofGable") if len(rest) >= 4 else None
+    if index is not None:  # CGA ignores even with an index
+        named.append(index)
+    elif len(rest) >= 3:
+        e = _even(rest[2], ctx)
+        if e is not None:
+            named.append(e)
+    if index is None:
+        # CGA orients an unindexed gable itself (along the long sides of a rectangle), not
+        # along a scope axis: grammarkit's ridge=auto
+        named.append(Arg(name="ridge", value=Ref(name="auto")))
     return _roof_call("roofGable", value, vt, named, span, notes)
 
 
@@ -117,7 +122,9 @@ def _h_roof_hip(t, args, block, star, frame, rctx, ctx, span, out):
     if len(rest) >= 1:
         named.append(Arg(name="overhang", value=_overhang(translate_expr(rest[0], ctx), vt, value, notes)))
     if len(rest) >= 2:
-        _even(rest[1], ctx, notes)
+        e = _even(rest[1], ctx)
+        if e is not None:
+            named.append(e)
     return _roof_call("roofHip", value, vt, named, span, notes)
 
 
@@ -178,29 +185,144 @@ def _h_split_area(t, args, block, star, frame, rctx, ctx, span, out):
 
 
 # -- envelope ------------------------------------------------------------------------------------
+# grammarkit's edge selectors -> the side `comp.sel` names on a per-edge shape
+# (grammarkit/split/lots.py: edge_shape); "all" is every edge
+_SEL_SIDES = {"front": ("front",), "bottom": ("front",), "back": ("back",), "top": ("back",),
+              "left": ("left",), "right": ("right",), "side": ("left", "right"), "all": None}
+
+
+def _entry_expr(body: Any) -> Any:
+    """A comp-function entry's body (parsed as a rule body) read back as an expression tree:
+    CGA's parser takes `front: attrName` and `front: f(x)` (items); a bare number is not an
+    item there, so `front: 5` does not parse and never reaches here."""
+    if isinstance(body, Tree) and body.data == "entry_body":
+        if len(body.children) != 1 or not isinstance(body.children[0], Tree):
+            return None
+        body = body.children[0]
+    if not isinstance(body, Tree):
+        return None
+    if body.data == "call":
+        return Tree("func_call", body.children)
+    if body.data == "name":
+        return Tree("ref", body.children)
+    return None
+
+
+def _is_comp_fe(tree: Any) -> bool:
+    if not (isinstance(tree, Tree) and tree.data == "func_block_call"):
+        return False
+    name = next((c.value for c in tree.children if not isinstance(c, Tree)), None)
+    args = [c for c in tree.children if isinstance(c, Tree) and c.data == "args"]
+    inner = [a for a in args[0].children if isinstance(a, Tree)] if args else []
+    return name == "comp" and len(inner) == 1 and _name(inner[0]) == "fe"
+
+
+def _comp_fe_values(tree: Tree, frame: str, ctx: Any, span: Any, notes: list) -> Any:
+    """CGA's comp function `comp(fe) { sel: v | ... }` (an array: for each face edge the value
+    of the first entry whose selector takes it) as one expression evaluated per edge:
+    `select(comp.sel == "front", v1, select(comp.index == 2, v2, ...))`."""
+    from . import frames
+
+    block = next(c for c in tree.children if isinstance(c, Tree) and c.data == "block")
+    arms: list = []
+    for entry in (e for e in block.children if isinstance(e, Tree)):
+        if entry.data != "entry":
+            raise Untranslatable("envelope:comp-entry", "a comp(fe) function entry that is not `selector: value`", span)
+        key = entry.children[0].children[0]
+        value_tree = _entry_expr(entry.children[-1])
+        if value_tree is None:
+            raise Untranslatable("envelope:comp-entry", "a comp(fe) function entry whose value is not a "
+                                 "name or a function call", span)
+        value = translate_expr(value_tree, ctx)
+        if isinstance(key, Tree) and key.data == "number":
+            k = float(key.children[0].value)
+            if not k.is_integer() or k < 0:
+                raise Untranslatable("envelope:comp-selector", f"comp(fe) index {key.children[0].value}", span)
+            arms.append((Binary(op="==", left=Ref(name="comp.index"), right=Num(value=k)), value))
+            continue
+        sel = _name(key)
+        mapped, approx = frames.edge_selectors(frame, sel) if sel else (None, None)
+        if mapped is None or any(m not in _SEL_SIDES for m in mapped):
+            raise Untranslatable("envelope:comp-selector", f"comp(fe) selector {sel!r} in a per-edge value", span)
+        if approx:
+            notes.append(approx)
+        sides: list = []
+        for m in mapped:
+            if _SEL_SIDES[m] is None:
+                sides = None
+                break
+            sides.extend(_SEL_SIDES[m])
+        if sides is None:
+            arms.append((Bool(value=True), value))
+            break  # `all` takes every edge: later entries are never reached
+        if not sides:
+            continue  # a selector that takes no edge here (CGA's top on a lot)
+        cond = None
+        for side in dict.fromkeys(sides):
+            test = Binary(op="==", left=Ref(name="comp.sel"), right=Str(value=side))
+            cond = test if cond is None else Binary(op="||", left=cond, right=test)
+        arms.append((cond, value))
+    if not arms or not (isinstance(arms[-1][0], Bool)):
+        # CGA's comp function leaves edges no selector takes at the type's default (0)
+        arms.append((Bool(value=True), Num(value=0.0)))
+    out = arms[-1][1]
+    for cond, value in reversed(arms[:-1]):
+        out = Call(func="select", args=(cond, value, out))
+    return out
+
+
+def _per_edge_arg(tree: Any, frame: str, ctx: Any, span: Any, notes: list) -> Any:
+    """A float[] argument of envelope: `comp(fe) { ... }`, an array literal `[a, b, c]`
+    (grammarkit's tuple `(a, b, c)`), or any other expression (its value must be an array of
+    one value per edge, or a number for every edge)."""
+    if _is_comp_fe(tree):
+        return _comp_fe_values(tree, frame, ctx, span, notes)
+    if isinstance(tree, Tree) and tree.data == "array":
+        rows = [c for c in tree.children if isinstance(c, Tree) and c.data == "args"]
+        if len(rows) != 1:
+            raise Untranslatable("envelope:array", "a 2-d array as per-edge values", span)
+        return Vector(items=tuple(translate_expr(c, ctx) for c in rows[0].children))
+    return translate_expr(tree, ctx)
+
+
 def _h_envelope(t, args, block, star, frame, rctx, ctx, span, out):
     """envelope(direction, maxHeight, frontBase, frontAngle [, backBase, backAngle [, sideBase,
-    sideAngle | , rightBase, rightAngle, leftBase, leftAngle]]); street.* sides are the lot's
-    front/back/right/left (grammarkit lots have no street attributes, as CGA's fallback)."""
+    sideAngle | , rightBase, rightAngle, leftBase, leftAngle]]) -> envelope; street.* sides are
+    the lot's front/back/right/left (grammarkit lots have no street attributes, as CGA's
+    fallback). envelope(direction, maxHeight, baseHeights, angles) -> envelopePerEdge."""
     if len(args) not in (4, 6, 8, 10):
-        raise Untranslatable(f"envelope:{len(args)}", "envelope() with per-edge arrays (or this "
-                             "number of arguments) is not supported", span)
-    if frame != "Y":
-        raise Untranslatable("envelope:face", "envelope() on a face of a volume", span)
+        raise Untranslatable(f"envelope:{len(args)}", f"envelope() with {len(args)} arguments", span)
     direction = _name(args[0])
     if direction not in ("normal", "world.up"):
         raise Untranslatable("envelope:direction", f"envelope direction {direction!r}", span)
+    gk_direction = Arg(value=Ref(name="normal" if direction == "normal" else "worldUp"))
+    per_edge = len(args) == 4 and any(_is_comp_fe(a) or (isinstance(a, Tree) and a.data == "array")
+                                      for a in args[2:])
+    if per_edge:
+        notes: list = []
+        base = _per_edge_arg(args[2], frame, ctx, span, notes)
+        angle = _per_edge_arg(args[3], frame, ctx, span, notes)
+        call = OpCall(name="envelopePerEdge", args=(gk_direction, Arg(value=translate_expr(args[1], ctx)),
+                                                    Arg(value=base), Arg(value=angle)), span=span)
+        return [call], (("envelope:options", "; ".join(dict.fromkeys(notes))) if notes else None)
+    if frame != "Y":
+        # CGA classifies a face's edges in the object's frame (street.* falls back to object.*),
+        # which a face of a volume does not have here: exact when every side has the same values
+        bases, angles = args[2::2], args[3::2]
+        if not (len(args) in (8, 10) and all(b == bases[0] for b in bases) and all(a == angles[0] for a in angles)):
+            raise Untranslatable("envelope:face", "envelope() on a face of a volume with different values "
+                                 "per side (CGA classifies its edges in the object's frame)", span)
     vals = [translate_expr(a, ctx) for a in args[1:]]
     max_height, rest = vals[0], vals[1:]
     if len(rest) == 6:  # front, back, side (both right and left)
         rest = rest + rest[4:6]
     names = ("front_base", "front_angle", "back_base", "back_angle", "right_base", "right_angle",
              "left_base", "left_angle")
-    call_args = [Arg(value=Ref(name="normal" if direction == "normal" else "worldUp")), Arg(value=max_height)]
+    call_args = [gk_direction, Arg(value=max_height)]
     call_args += [Arg(name=n, value=v) for n, v in zip(names, rest)]
     return [OpCall(name="envelope", args=tuple(call_args), span=span)], (
         "envelope:street", "street.front/back/left/right are the lot's front/back/left/right edges "
-        "(grammarkit lots have no street attributes)")
+        "(grammarkit lots have no street attributes)") if frame == "Y" else None
 
 
 LOT_HANDLERS: dict[str, Callable[..., Any]] = {

@@ -164,14 +164,57 @@ def _hip_convex(poly: Polygon, t: float, lift: float = 0.0) -> Manifold:
     return solid
 
 
-def hip(poly: Polygon, angle: float, overhang: float = 0.0) -> Manifold:
+def _on_segment(x: float, y: float, a: tuple, b: tuple, eps: float = 1e-6) -> bool:
+    dx, dy = b[0] - a[0], b[1] - a[1]
+    ln2 = dx * dx + dy * dy
+    if ln2 < 1e-24:
+        return math.hypot(x - a[0], y - a[1]) <= eps
+    u = ((x - a[0]) * dx + (y - a[1]) * dy) / ln2
+    if u < -eps or u > 1 + eps:
+        return False
+    return abs((x - a[0]) * dy - (y - a[1]) * dx) / math.sqrt(ln2) <= eps
+
+
+def _even(solid: Manifold, eaves: list[tuple], lift: float) -> Manifold:
+    """CGA's `even`: the roof's ridge vertices (every vertex above the eaves that does not lie
+    on an eave edge: the straight skeleton's nodes, the gable ends' apexes) moved to their
+    average height, so the ridge is level; the faces around them are no longer planar (the
+    mesh keeps its triangles). Every vertex moves vertically and the roof stays a height
+    field over the footprint, so the solid stays closed and free of self-intersections."""
+    import numpy as np
+
+    mesh = solid.simplify(CLEAN_EPS).to_mesh()
+    verts = np.array(mesh.vert_properties, dtype=np.float64)
+    ridge = [i for i, (x, y, z) in enumerate(verts[:, :3])
+             if z > lift + 1e-6 and not any(_on_segment(x, y, a, b) for a, b in eaves)]
+    if len(ridge) < 2:
+        return solid
+    heights = verts[ridge, 2]
+    if float(heights.max() - heights.min()) < 1e-9:
+        return solid  # level already (a rectangle's hip or gable): nothing changes
+    verts[ridge, 2] = float(heights.mean())
+    out = Manifold(manifold3d.Mesh(vert_properties=verts.astype(np.float32),
+                                   tri_verts=np.array(mesh.tri_verts, dtype=np.uint32)))
+    if out.status() != manifold3d.Error.NoError or out.is_empty():
+        raise ValueError("even=true made an invalid roof on this footprint")
+    return out
+
+
+def _edges(p: Polygon) -> list[tuple]:
+    return [(p[i], p[(i + 1) % len(p)]) for i in range(len(p))]
+
+
+def hip(poly: Polygon, angle: float, overhang: float = 0.0, even: bool = False) -> Manifold:
+    """The hip roof; `even` (CGA's): the ridge level at the skeleton nodes' average height,
+    on convex footprints (a non-convex one keeps its planar roof)."""
     t = _check_angle(angle)
     lift = _fascia(overhang)
     pieces = []
     for p in overhung(poly, overhang):
         _check_vertices(p, is_convex(p))
         if is_convex(p):
-            pieces.append(_hip_convex(p, t, lift))
+            piece = _hip_convex(p, t, lift)
+            pieces.append(_even(piece, _edges(p), lift) if even else piece)
         else:
             pieces.extend(_hip_convex(c, t, lift) for c in convex_cover(p))
     if len(pieces) == 1:
@@ -180,16 +223,54 @@ def hip(poly: Polygon, angle: float, overhang: float = 0.0) -> Manifold:
 
 
 def gable(poly: Polygon, angle: float, overhang: float = 0.0, ridge: str = "x", *,
-          overhang_y: float | None = None, index: int | None = None) -> Manifold:
+          overhang_y: float | None = None, index: int | None = None, even: bool = False) -> Manifold:
     """Two planes meeting in a horizontal ridge over the middle of the footprint.
 
-    The ridge runs along local `ridge` ("x" or "y"), or, when `index` is given, along edge
+    The ridge runs along local `ridge` ("x" or "y"; "auto": along the footprint's longest
+    edge, CGA's automatic orientation on rectangles), or, when `index` is given, along edge
     `index` of the footprint (CGA's indexed gable). `overhang` grows the footprint across the
     ridge (CGA's overhangX, at the eaves) and `overhang_y` along it (CGA's overhangY, at the
     gable ends); without `overhang_y` the footprint grows by `overhang` all round.
+
+    `even` (CGA's, ignored with `index` as in CGA): on a convex footprint, CGA's gable with its
+    ridge level — every eave edge (an edge running closer to the ridge direction than across
+    it) gets a plane rising from it at the angle, the gable ends stay vertical, and the ridge
+    vertices are moved to their average height (`_even`). Eaves stay at the wall top, the ridge
+    is level, the faces are no longer planar where the eaves are not parallel.
     """
-    return _pitched(poly, angle, overhang, _direction(poly, ridge, index), both_sides=True,
-                    overhang_y=overhang_y)
+    direction = _direction(poly, ridge, index)
+    if even and index is None:
+        return _gable_even(poly, angle, overhang, direction, overhang_y)
+    return _pitched(poly, angle, overhang, direction, both_sides=True, overhang_y=overhang_y)
+
+
+def _gable_even(poly: Polygon, angle: float, overhang: float, direction: tuple,
+                overhang_y: float | None) -> Manifold:
+    t = _check_angle(angle)
+    lift = _fascia(overhang)
+    ux, uy, _ = direction
+    if overhang_y is None:
+        pieces = overhung(poly, overhang)
+    else:
+        pieces = [_turned(p, ux, uy, back=True) for p in _grow_axes(_turned(poly, ux, uy), overhang_y, overhang)]
+    parts = []
+    for p in pieces:
+        if not is_convex(p):  # CGA's even is for convex faces: the planar gable elsewhere
+            parts.append(_pitched(p, angle, 0.0, direction, both_sides=True, overhang_y=None))
+            continue
+        eaves = []
+        x0, y0, x1, y1 = bbox(p)
+        solid = Manifold.extrude(cross_section(p), t * max(x1 - x0, y1 - y0) + 1.0 + lift)
+        for a, b in _edges(p):
+            dx, dy = b[0] - a[0], b[1] - a[1]
+            ln = math.hypot(dx, dy)
+            if ln < 1e-12 or abs(dx * ux + dy * uy) < abs(-dx * uy + dy * ux):
+                continue  # a gable end: vertical
+            nx, ny = -dy / ln, dx / ln
+            solid = _keep_below(solid, nx, ny, nx * a[0] + ny * a[1], t, lift)
+            eaves.append((a, b))
+        parts.append(_even(solid, eaves, lift))
+    return _clean(parts[0] if len(parts) == 1 else Manifold.batch_boolean(parts, manifold3d.OpType.Add), lift)
 
 
 def shed(poly: Polygon, angle: float, overhang: float = 0.0, ridge: str = "x", *,
@@ -219,6 +300,16 @@ def _direction(poly: Polygon, ridge: str, index: int | None) -> tuple[float, flo
     if index is not None:
         ux, uy = edge_direction(poly, index)
         return ux, uy, int(index) % len(poly)
+    if ridge == "auto":
+        # CGA orients an unindexed gable by itself, from its straight skeleton: on a rectangle
+        # the ridge runs along the long sides. Here: along the longest edge (the first of
+        # equally long ones), which is that on rectangles and follows the outline's main
+        # direction on other footprints, whatever the scope's orientation.
+        n = len(poly)
+        longest = max(range(n), key=lambda i: (round(math.hypot(poly[(i + 1) % n][0] - poly[i][0],
+                                                                  poly[(i + 1) % n][1] - poly[i][1]), 9), -i))
+        ux, uy = edge_direction(poly, longest)
+        return ux, uy, None
     return (1.0, 0.0, None) if ridge == "x" else (0.0, -1.0, None)
 
 

@@ -564,9 +564,11 @@ class _Compiler:
         fns = self._args(call, spec, scope, params)
         if call.name == "set" and fns:
             fns[0] = constant(self._set_key(call, scope))
-        if call.name == "setbackPerEdge" and fns:
-            # the operation evaluates the distance itself, once per edge, on the edge's shape
-            fns[0] = constant(fns[0])
+        # an `expr` parameter is handed over compiled but unevaluated: the operation evaluates
+        # it itself, on shapes of its own (setbackPerEdge, envelopePerEdge: once per edge)
+        for k, p in enumerate(spec.params):
+            if p.type == "expr" and k < len(fns):
+                fns[k] = constant(fns[k])
         # file names are relative to the grammar file that says them: made absolute here
         path_arg = 0 if call.name in ("i", "texture") else (
             1 if call.name == "set" and len(fns) > 1 and str(fns[0](None)).startswith("material.")

@@ -13,10 +13,11 @@ Which base height and angle an edge gets: `envelope` takes them per side, as CGA
 front, back, right, left (an edge is classified by its outward normal in the face's scope,
 like setback's selectors: CGA's street.front/back/left/right fall back to these when the lot
 has no street attributes, as grammarkit lots never do); sides not given keep base height 0
-and angle 90 (vertical), as in CGA. (CGA's per-edge arrays are not supported yet:
-`envelope_solid` takes per-edge values, but the split compiler evaluates expression arguments
-on the face, so a per-edge form needs the compiler to hand `expr` parameters over unevaluated,
-as it does for setbackPerEdge.)
+and angle 90 (vertical), as in CGA. `envelopePerEdge` takes them per edge instead (CGA's
+`envelope(direction, maxHeight, baseHeights, angles)`): two expressions the split compiler
+hands over unevaluated (`expr` parameters), evaluated on every edge's own shape
+(`grammarkit.split.lots.edge_shape`: `comp.index`, `comp.sel` the edge's side, `scope.sx`
+its length), or arrays of one value per edge in face-edge order.
 """
 from __future__ import annotations
 
@@ -27,17 +28,16 @@ import manifold3d
 
 from ..geometry import footprints as fp
 from ..geometry.roofs import keep_below_plane
-from .lots import edge_names, edges
+from .lots import SIDES, edge_side, edges, per_edge_value
 from .shape import FACE, VOLUME, Shape
 
-__all__ = ["envelope_solid", "op_envelope"]
+__all__ = ["envelope_solid", "op_envelope", "op_envelope_per_edge"]
 
 EPS = 1e-9
 # Base heights below this are raised to it: a slanted side that starts at the ground edge
 # meets the bottom in a knife edge, which comes out of the booleans with pinched vertices
 # (the same reason roofs end in grammarkit.geometry.roofs.FASCIA).
 MIN_BASE = 0.02
-SIDES = ("front", "back", "right", "left")
 
 
 def _number(v: Any, what: str) -> float:
@@ -107,6 +107,19 @@ def op_envelope(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
                              _number(angle, f"envelope {side} angle"), f"the {side} edges")
 
     def side_of(i: int, p: tuple, q: tuple) -> tuple[float, float]:
-        names = edge_names(s, p, q)
-        return next((given[side] for side in SIDES if side in names), (0.0, 90.0))
+        return given[edge_side(s, p, q)]
+    return _envelope(s, args[0], args[1], side_of)
+
+
+def op_envelope_per_edge(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
+    """`envelopePerEdge(direction, max_height, base_height, angle)`: the base height and angle
+    evaluated for every edge (or taken from arrays of one value per edge)."""
+    base_of, angle_of = args[2], args[3]
+    n = len(edges(s)) if s.kind == FACE else 0
+
+    def side_of(i: int, p: tuple, q: tuple) -> tuple[float, float]:
+        base = per_edge_value(base_of, s, i, p, q, n, "envelopePerEdge() base height")
+        angle = per_edge_value(angle_of, s, i, p, q, n, "envelopePerEdge() angle")
+        return _check(_number(base, f"envelopePerEdge() base height of edge {i}"),
+                      _number(angle, f"envelopePerEdge() angle of edge {i}"), f"edge {i}")
     return _envelope(s, args[0], args[1], side_of)

@@ -30,7 +30,7 @@ from ..geometry import footprints as fp
 from .shape import FACE, Shape
 
 __all__ = ["SETBACK_SELECTORS", "SHAPE_SELECTORS", "op_inner_rectangle", "op_setback", "op_setback_per_edge",
-           "op_setback_to_area", "op_shape_l", "op_shape_o", "op_shape_u"]
+           "op_setback_to_area", "edge_shape", "edge_side", "per_edge_value", "op_shape_l", "op_shape_o", "op_shape_u"]
 
 EPS = 1e-9
 SETBACK_SELECTORS = ("front", "back", "left", "right", "top", "bottom", "side", "south", "north", "west", "east",
@@ -228,22 +228,54 @@ def op_setback(ctx: Any, s: Shape, args: Any, block: Any) -> list:
     return _setback(s, block, lambda i, p, q: d, "setback")
 
 
+SIDES = ("front", "back", "right", "left")
+
+
+def edge_side(s: Shape, p: tuple, q: tuple) -> str:
+    """The one side of front/back/right/left an edge belongs to (the selectors partition the
+    edges: front/back where the outward normal is closer to -y/+y, else right/left)."""
+    names = edge_names(s, p, q)
+    return next(side for side in SIDES if side in names)
+
+
+def edge_shape(s: Shape, i: int, p: tuple, q: tuple, n: int) -> Shape:
+    """Edge i of n of face `s` as a shape of its own, for per-edge expressions: x along the
+    edge (`scope.sx` its length), z the face's normal, `comp.index` / `comp.total` the edge's
+    index and the number of edges, `comp.sel` its side (front, back, right or left)."""
+    dx, dy = q[0] - p[0], q[1] - p[1]
+    ln = math.hypot(dx, dy)
+    ux, uy = (dx / ln, dy / ln) if ln > EPS else (1.0, 0.0)
+    ex, ey, ez = s.ax
+    ax = (tuple(ux * ex[k] + uy * ey[k] for k in range(3)), tuple(-uy * ex[k] + ux * ey[k] for k in range(3)), ez)
+    edge = s.derived(s.world(p[0], p[1], 0.0), (ln, 0.0, 0.0), None, FACE, ax=ax)
+    edge.si, edge.st = i, n
+    edge.csel = edge_side(s, p, q)
+    return edge
+
+
+def per_edge_value(f: Callable, s: Shape, i: int, p: tuple, q: tuple, n: int, what: str) -> Any:
+    """An `expr` argument evaluated for edge i on the edge's shape (`edge_shape`). A value that
+    is an array (a tuple: `(1, 2, 3)`, CGA's float[]) gives one value per edge in face-edge
+    order (`edges`): the edge's element is taken."""
+    v = f(edge_shape(s, i, p, q, n))
+    if isinstance(v, (tuple, list)):
+        if len(v) != n:
+            raise ValueError(f"{what}: an array of {len(v)} value(s) for a face of {n} edges "
+                             "(one value per edge, in face-edge order)")
+        v = v[i]
+    return v
+
+
 def op_setback_per_edge(ctx: Any, s: Shape, args: Any, block: Any) -> list:
     """`setbackPerEdge(expr) { ... }`: the distance evaluated for every edge on the edge itself
-    (a shape with x along the edge: `scope.sx` is its length, `comp.index` its index)."""
+    (`edge_shape`: `scope.sx` is its length, `comp.index` its index, `comp.sel` its side), or
+    taken from an array of one distance per edge."""
     f = args[0]
-    es = edges(s)
-    n = len(es)
+    n = len(edges(s))
 
     def dist(i: int, p: tuple, q: tuple) -> float:
-        dx, dy = q[0] - p[0], q[1] - p[1]
-        ln = math.hypot(dx, dy)
-        ux, uy = (dx / ln, dy / ln) if ln > EPS else (1.0, 0.0)
-        ex, ey, ez = s.ax
-        ax = (tuple(ux * ex[k] + uy * ey[k] for k in range(3)), tuple(-uy * ex[k] + ux * ey[k] for k in range(3)), ez)
-        edge = s.derived(s.world(p[0], p[1], 0.0), (ln, 0.0, 0.0), None, FACE, ax=ax)
-        edge.si, edge.st = i, n
-        return _distance(f(edge), f"setbackPerEdge() distance of edge {i}")
+        return _distance(per_edge_value(f, s, i, p, q, n, "setbackPerEdge() distance"),
+                         f"setbackPerEdge() distance of edge {i}")
     return _setback(s, block, dist, "setbackPerEdge")
 
 

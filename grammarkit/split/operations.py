@@ -66,19 +66,27 @@ _SPECS: tuple[OperationSpec, ...] = (
     OperationSpec("roofGable", (Param("angle", doc="the roof planes' angle (degrees), or their height with value_type=byHeight"),
                                 Param("overhang", required=False, default=0.0,
                                       doc="at the eaves, across the ridge (CGA's overhangX)"),
-                                Param("ridge", "axis", required=False, default="x", choices=("x", "y")),
+                                Param("ridge", "axis", required=False, default="x", choices=("x", "y", "auto"),
+                                      doc="the scope axis the ridge runs along, or auto: along the longest "
+                                          "edge (CGA's automatic orientation on rectangles)"),
                                 Param("overhang_y", required=False, default=None,
                                       doc="at the gable ends, along the ridge (CGA's overhangY; may be "
                                           "negative); not given: the overhang all round"),
                                 Param("index", required=False, default=None,
                                       doc="the ridge runs along this edge of the face (CGA's index)"),
                                 Param("value_type", "axis", required=False, default="byAngle",
-                                      choices=("byAngle", "byHeight"))),
+                                      choices=("byAngle", "byHeight")),
+                                Param("even", "any", required=False, default=False,
+                                      doc="CGA's even: planes from every eave edge, the ridge level "
+                                          "(non-planar faces where the eaves are not parallel)")),
                   doc="Gable roof over a footprint face; ridge along the given scope axis or edge index."),
     OperationSpec("roofHip", (Param("angle", doc="degrees, or the height with value_type=byHeight"),
                               Param("overhang", required=False, default=0.0),
                               Param("value_type", "axis", required=False, default="byAngle",
-                                    choices=("byAngle", "byHeight"))),
+                                    choices=("byAngle", "byHeight")),
+                              Param("even", "any", required=False, default=False,
+                                    doc="CGA's even: the ridge level at the skeleton nodes' average "
+                                        "height (non-planar faces)")),
                   doc="Hip roof: every edge slopes at the angle (or up to the height)."),
     OperationSpec("roofPyramid", (Param("angle"), Param("overhang", required=False, default=0.0)),
                   doc="Pyramid roof with its apex over the face centroid."),
@@ -142,7 +150,8 @@ _SPECS: tuple[OperationSpec, ...] = (
     OperationSpec("setback", (Param("distance"),), block="selectors", selectors=SETBACK_SELECTORS,
                   doc="Move the selected edges of a face inwards: a face per edge, and the remainder."),
     OperationSpec("setbackPerEdge", (Param("distance", "expr"),), block="selectors", selectors=SETBACK_SELECTORS,
-                  doc="setback() with the distance evaluated on every edge (comp.index: the edge's index)."),
+                  doc="setback() with the distance evaluated on every edge (comp.index: the edge's index, "
+                      "comp.sel: its side), or an array of one distance per edge."),
     OperationSpec("setbackToArea", (Param("area"),), block="selectors", selectors=SETBACK_SELECTORS,
                   doc="setback() with the distance that leaves a remainder of the given area."),
     OperationSpec("shapeL", (Param("front_width"), Param("left_width")), block="selectors",
@@ -175,6 +184,13 @@ _SPECS: tuple[OperationSpec, ...] = (
                                Param("left_angle", required=False, default=90.0)),
                   doc="The zoning envelope of a face: extruded to max_height, each side vertical up to "
                       "its base height, then leaning inwards at its angle (degrees; 90: vertical)."),
+    OperationSpec("envelopePerEdge", (Param("direction", "axis", choices=("normal", "worldUp")), Param("max_height"),
+                                      Param("base_height", "expr",
+                                            doc="evaluated on every edge (comp.index, comp.sel, scope.sx), "
+                                                "or an array of one value per edge"),
+                                      Param("angle", "expr", doc="likewise, degrees (90: vertical)")),
+                  doc="envelope() with the base height and angle given per edge (CGA's "
+                      "envelope(direction, maxHeight, baseHeights, angles))."),
     # scatter (grammarkit/split/scatter.py; docs/operations.md "Scatter"); the choices are the
     # same lists as grammarkit.split.scatter's (kept here so that `grammarkit check` stays light)
     OperationSpec("scatter", (Param("domain", "axis", choices=("surface", "volume", "scope")), Param("count"),

@@ -146,7 +146,7 @@ def op_recess(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
 from .comp import op_comp  # noqa: E402
 # -- splitArea: grammarkit/split/area_split.py (it uses split's layout below, at call time) --
 from .area_split import op_split_area  # noqa: E402
-from .envelope import op_envelope  # noqa: E402
+from .envelope import op_envelope, op_envelope_per_edge  # noqa: E402
 
 
 # -- split -----------------------------------------------------------------------------------
@@ -369,10 +369,16 @@ def _roof(s: Shape, build: Any, name: str) -> Shape:
     return s.derived(s.world(x0, y0, z0), (x1 - x0, y1 - y0, z1 - z0), None, VOLUME, solid=solid)
 
 
-def _ridge(v: Any) -> str:
+def _flag(v: Any, what: str) -> bool:
+    if not isinstance(v, bool):
+        raise ValueError(f"{what} must be true or false, got {v!r}")
+    return v
+
+
+def _ridge(v: Any, auto: bool = False) -> str:
     v = str(v)
-    if v not in ("x", "y"):
-        raise ValueError(f"ridge must be x or y, got {v!r}")
+    if v not in (("x", "y", "auto") if auto else ("x", "y")):
+        raise ValueError(f"ridge must be x{', y or auto' if auto else ' or y'}, got {v!r}")
     return v
 
 
@@ -410,20 +416,22 @@ def _pitch(value: float, value_type: str, build: Any, p: Any) -> float:
 
 
 def op_roof_gable(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
-    value, over, ridge = _num(args[0], "angle"), _num(args[1], "overhang"), _ridge(args[2])
+    value, over, ridge = _num(args[0], "angle"), _num(args[1], "overhang"), _ridge(args[2], auto=True)
     over_y = None if args[3] is None else _num(args[3], "overhang_y")
     index, vt = _index(args[4]), _value_type(args[5])
+    even = _flag(args[6], "even")
 
     def build(p: Any, angle: float) -> Any:
-        return roofs.gable(p, angle, over, ridge, overhang_y=over_y, index=index)
+        return roofs.gable(p, angle, over, ridge, overhang_y=over_y, index=index, even=even)
     return _roof(s, lambda p: build(p, _pitch(value, vt, build, p)), "roofGable")
 
 
 def op_roof_hip(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
     value, over, vt = _num(args[0], "angle"), _num(args[1], "overhang"), _value_type(args[2])
+    even = _flag(args[3], "even")
 
     def build(p: Any, angle: float) -> Any:
-        return roofs.hip(p, angle, over)
+        return roofs.hip(p, angle, over, even)
     return _roof(s, lambda p: build(p, _pitch(value, vt, build, p)), "roofHip")
 
 
@@ -674,7 +682,7 @@ BUILTIN_APPLY = {
     "deleteUV": op_delete_uv, "tileUV": op_tile_uv, "normalizeUV": op_normalize_uv,
     "setback": op_setback, "setbackPerEdge": op_setback_per_edge, "setbackToArea": op_setback_to_area,
     "shapeL": op_shape_l, "shapeU": op_shape_u, "shapeO": op_shape_o, "innerRectangle": op_inner_rectangle,
-    "splitArea": op_split_area, "envelope": op_envelope,
+    "splitArea": op_split_area, "envelope": op_envelope, "envelopePerEdge": op_envelope_per_edge,
     "label": op_label, "scatter": op_scatter, "print": op_print,
     "convexify": op_convexify,
 }

@@ -111,3 +111,14 @@ def test_bad_roof_options_are_located_errors():
         grammarkit.derive("Lot --> roofGable(2, value_type=byWidth) R.\n", lot=RECT)
     with pytest.raises(DerivationError, match="leave no roof"):
         roof("roofGable(45, overhang=0, overhang_y=-6)")
+
+
+def test_gable_ridge_auto_runs_along_the_longest_edge():
+    # a 10 x 24 rectangle turned by 30 degrees: the ridge along the 24 m sides, so the roof
+    # rises over the 10 m span (5 m at 45 degrees), whatever the scope's axes are
+    c, s = math.cos(math.radians(30)), math.sin(math.radians(30))
+    lot = [(x * c - y * s, x * s + y * c) for x, y in ((0, 0), (10, 0), (10, 24), (0, 24))]
+    m = grammarkit.derive("Lot --> roofGable(45, ridge=auto) R.\n", lot=lot)
+    assert m.parts[0].size[2] == pytest.approx(5.0, abs=1e-6)
+    m = grammarkit.derive("Lot --> roofGable(45, ridge=auto) R.\n", lot=[(0, 0), (24, 0), (24, 10), (0, 10)])
+    assert m.parts[0].size[2] == pytest.approx(5.0, abs=1e-6)
