@@ -403,6 +403,9 @@ class _Compiler:
             return rand
         if name in ("select", "pick"):
             return self._lazy(name, args, span)
+        from .functions import FILE_FUNCTIONS
+        if name in FILE_FUNCTIONS:
+            return _file_function(name, args[0], span)
         impl = spec.impl
         if impl is None:
             if folding:
@@ -415,6 +418,46 @@ class _Compiler:
         if all(is_constant(x) for x in args):
             return self.fold(call)
         return call
+
+
+# Distinct queries (paths) whose answer one compiled file-function call remembers.
+_FILE_CACHE_SIZE = 256
+
+
+def _file_function(name: str, arg: Compiled, span: Span | None) -> Compiled:
+    """CGA's fileSearch/fileRandom/fileExists bound to the folder of the grammar file that says
+    the expression (as the compiler resolves a constant `i()` path). Each compiled call looks a
+    query up once and remembers the answer: a facade asks the same query for every tile, and
+    the files of one derivation do not change under it."""
+    from pathlib import Path
+
+    from .functions import TooManyFiles, file_exists, file_random, search_files
+
+    base = (Path(span.file).parent if span is not None and span.file else Path(".")).resolve()
+    cache: dict[str, Any] = {}
+
+    def answer(env: Any) -> Any:
+        q = arg(env)
+        if not isinstance(q, str):
+            raise _fail(f"{name}(): the {'path' if name == 'fileExists' else 'query'} must be a string, "
+                        f"got {value_kind(q)}", span, "bad-operands")
+        hit = cache.get(q)
+        if hit is None:
+            try:
+                hit = file_exists(q, base) if name == "fileExists" else search_files(q, base)
+            except TooManyFiles as exc:
+                raise LimitError(f"{name}(): {exc}", span, code="limit-files") from None
+            except (ValueError, OSError) as exc:
+                raise _fail(f"{name}(): {exc}", span, "function-error") from None
+            if len(cache) < _FILE_CACHE_SIZE:
+                cache[q] = hit
+        return hit
+
+    if name == "fileExists":
+        return answer
+    if name == "fileSearch":
+        return lambda env: "".join(p + ";" for p in answer(env))
+    return lambda env: file_random(env.rng(), answer(env))
 
 
 def _lazy_select(args: list, span: Any) -> Compiled:

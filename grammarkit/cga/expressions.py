@@ -34,9 +34,17 @@ _FUNCTIONS: dict[str, tuple[str, int, int | None]] = {
     "substring": ("substring", 3, 3), "listSize": ("listSize", 1, 1), "listItem": ("listItem", 2, 2),
     "listIndex": ("listIndex", 2, 2), "listFirst": ("listFirst", 1, 1), "listLast": ("listLast", 1, 1),
     "listRange": ("listRange", 3, 3), "replace": ("replace", 3, 3),
+    # the CGA utility library's text helpers and CGA's file functions (grammarkit/functions.py)
+    "getRange": ("getRange", 3, 3), "getPrefix": ("getPrefix", 2, 2), "getSuffix": ("getSuffix", 2, 2),
+    "findFirst": ("findFirst", 2, 2), "findLast": ("findLast", 2, 2),
+    "fileName": ("fileName", 1, 1), "fileBasename": ("fileBasename", 1, 1),
+    "fileDirectory": ("fileDirectory", 1, 1), "fileExtension": ("fileExtension", 1, 1),
+    "fileSearch": ("fileSearch", 1, 1), "fileRandom": ("fileRandom", 1, 1), "fileExists": ("fileExists", 1, 1),
 }
 # functions whose value is text: `+` with one of them concatenates (CGA converts the other side)
-_TEXT_FUNCTIONS = {"str", "substring", "listItem", "listFirst", "listLast", "listRange", "replace"}
+_TEXT_FUNCTIONS = {"str", "substring", "listItem", "listFirst", "listLast", "listRange", "replace",
+                   "getRange", "getPrefix", "getSuffix", "fileName", "fileBasename", "fileDirectory",
+                   "fileExtension", "fileSearch", "fileRandom"}
 _BINARY = {"+": "+", "-": "-", "*": "*", "/": "/", "%": "%", "==": "==", "!=": "!=",
            "<": "<", "<=": "<=", ">": ">", ">=": ">="}
 _INDEX_REFS = {"split.index", "split.total", "comp.index", "comp.total", "comp.sel"}

@@ -692,6 +692,12 @@ class Translator:
         span = self._span(node)
         handler = _HANDLERS.get(name)
         ctx = self._ctx(frame, rctx.params)
+        if handler is None and block is None and name[:1].isupper() and name not in _TEXTURING \
+                and name not in _METADATA:
+            # a call of a rule that no rule of this file defines (any arity): in CGA the shape
+            # is a leaf, its arguments unused, as for a bare undefined name
+            self._record("leaf", name, "translated", span, counting=rctx.counting)
+            return [Terminal(name=gk_name(name), span=span)]
         if handler is None:
             if name in _TEXTURING:
                 why = ("grammarkit's texturing has no such operation (it has setupProjection, projectUV, "
@@ -1125,10 +1131,10 @@ def _h_set(t, args, block, star, frame, rctx, ctx, span, out):
         return [], ("set(trim.horizontal)", "grammarkit makes no horizontal trim planes")
     if target and target.startswith("material.") and len(args) == 2:
         value = translate_expr(args[1], ctx)
-        if target.endswith("map") and not _file_name(t, value):
-            raise Untranslatable("texture:expression", f"set({target}, ...) of a computed file name", span)
-        if target.endswith("map") and isinstance(value, Str) and value.value:
-            t.asset(value.value, span)  # listed in the report; the path is made relative on writing
+        if target.endswith("map"):
+            known = value.value if isinstance(value, Str) else _known_file_name(t, value)
+            if known:
+                t.asset(known, span)  # listed in the report; a literal is made relative on writing
         return [OpCall(name="set", args=(Arg(value=Ref(name=target)), Arg(value=value)), span=span)], None
     if target and len(args) == 2:
         kinds = {v.name: v.kind for v in t.values}
@@ -1146,7 +1152,22 @@ def _h_i(t, args, block, star, frame, rctx, ctx, span, out):
         raise Untranslatable("op:i", "i() without a file", span)
     path = translate_expr(args[0], ctx)
     if not isinstance(path, Str):
-        raise Untranslatable("i:expression", "i() of a computed file name", span)
+        # a computed file name (an attr, a parameter, fileRandom(...), "dir/" + name): grammarkit
+        # evaluates it at derive time too; a value known from the attrs' defaults is looked up
+        # (and, with missing_assets="drop", left out when missing) like a literal
+        known = _known_file_name(t, path)
+        if known is not None and not t.asset(known, span) and t.missing_assets == "drop":
+            raise Untranslatable("asset:missing", f"asset {known!r} was not found (the i() is "
+                                 "left out; --missing-assets keep keeps it)", span)
+        call = OpCall(name="i", args=(Arg(value=path),), span=span)
+        approx = ("i:options", "the up axis and insert mode arguments are ignored") if len(args) > 1 else None
+        if known is None and t.missing_assets == "drop":
+            # which file is only known while deriving: `(case fileExists(p): i(p))` leaves the
+            # i() out there when the file is missing, as "drop" does here for a known one
+            guard = Case(arms=(CaseArm(cond=Call(func="fileExists", args=(path,), span=span),
+                                       body=Seq(items=(call,)), span=span),), span=span)
+            return [guard], approx
+        return [call], approx
     if path.value.startswith("builtin:"):
         return _builtin(path.value[len("builtin:"):], frame, span, len(args) > 1)
     found = t.asset(path.value, span)
@@ -1578,25 +1599,20 @@ def _h_normalize_uv(t, args, block, star, frame, rctx, ctx, span, out):
                                              Arg(value=Ref(name=mode))), span=span)], approx
 
 
-def _file_name(t: Any, value: Any) -> bool:
-    """Whether a translated value is a file name grammarkit can use: a string, or an attr or
-    const whose CGA value is a string literal."""
-    if isinstance(value, Str):
-        return True
-    if isinstance(value, Ref):
-        for v in t.values:
-            if t.value_names.get(v.name) == value.name:
-                return isinstance(v.value, Tree) and v.value.data == "string"
-    return False
+def _known_file_name(t: Any, value: Any) -> str | None:
+    """The file name a computed expression has with the attrs' default values, when that is
+    known without deriving (an attr set to a string, "dir/" + such an attr), else None."""
+    known = static_value(value, t._static_env())
+    return known if isinstance(known, str) and known and not known.startswith("builtin:") else None
 
 
 def _h_texture(t, args, block, star, frame, rctx, ctx, span, out):
     _need(args, 1, 1, "texture", span)
     path = translate_expr(args[0], ctx)
-    if not _file_name(t, path):  # as i(): grammarkit cannot tell the file from an expression
-        raise Untranslatable("texture:expression", "texture() of a computed file name", span)
-    if isinstance(path, Str) and path.value:
-        t.asset(path.value, span)  # listed in the report; made relative to the output on writing
+    # a computed file name is evaluated at derive time (relative to the grammar's folder)
+    known = path.value if isinstance(path, Str) else _known_file_name(t, path)
+    if known:
+        t.asset(known, span)  # listed in the report; a literal is made relative on writing
     return [OpCall(name="texture", args=(Arg(value=path),), span=span)], None
 
 
