@@ -297,8 +297,13 @@ def op_split(ctx: Any, s: Shape, args: Any, block: Any) -> list:
     a = _axis(args[0])
     length = s.sz[a]
     if length <= EPS:
-        raise ValueError(f"split({args[0]}) on a shape of size 0 along {args[0]}"
-                         + (" (faces are flat: split them along x or y)" if a == 2 and s.kind == FACE else ""))
+        if a == 2 and s.kind == FACE:
+            raise ValueError(f"split({args[0]}) on a face: faces are flat, split them along x or y")
+        # a degenerate shape (the side of a volume extruded 0 high, a sliver face): as in CGA,
+        # every part lies outside its empty extent, so there are none
+        ctx.warn(f"split({args[0]}) in rule {s.rule_name!r} on a shape of size 0 along {args[0]}: "
+                 "no parts (as in CGA)")
+        return []
     if getattr(block, "fixed", False):
         # sizes read only attrs/consts: the layout depends on the length alone (floors of a facade)
         key = ("split-layout", id(block), length)
