@@ -14,6 +14,14 @@ Three ways in, one semantics:
   value of an expression whose inputs are all known constants, or `NOT_CONSTANT`;
 - `evaluate(expr, variables, functions=...)`: one-off evaluation (tiling statements, tools).
 
+User functions (`func f(a, b) = expr`, docs/language.md "Functions") come in as a
+`FunctionTable` (`user=`): overloads by arity, each body compiled once, lazily, with its
+parameters read from a call frame and every other name resolved as the caller's resolver
+does. Calls are by value and may recurse (directly or mutually); `select`, `pick`, `&&` and
+`||` evaluate lazily, so a recursion guarded by them ends. Nesting deeper than MAX_CALL_DEPTH
+calls, or more than MAX_CALLS calls for one evaluation, is a located LimitError naming the
+function.
+
 The semantics (docs/language.md "Expressions", pinned by tests/core/test_expressions.py):
 
 - `a % b` is the remainder with the sign of the dividend (C, Java and CGA: `-7 % 3 == -1`),
@@ -33,7 +41,8 @@ from __future__ import annotations
 
 import math
 import random
-from typing import Any, Callable, Mapping
+import sys
+from typing import Any, Callable, Iterable, Mapping
 
 from .errors import DerivationError, GrammarError, LimitError
 from .ir.base import Span
@@ -42,14 +51,27 @@ from .ir.expr import Binary, Bool, Call, Num, Ref, Str, Unary, Vector
 Compiled = Callable[[Any], Any]
 Resolver = Callable[[str, "Span | None"], "Compiled | None"]
 
-__all__ = ["Compiled", "MAX_INT_BITS", "MAX_STRING_LENGTH", "NOT_CONSTANT", "SimpleEnv",
-           "arity_problem", "compile_expr", "constant", "evaluate", "fold_constant", "is_constant"]
+__all__ = ["Compiled", "FunctionTable", "MAX_CALLS", "MAX_CALL_DEPTH", "MAX_INT_BITS", "MAX_STRING_LENGTH",
+           "NOT_CONSTANT", "SimpleEnv", "arity_problem", "compile_expr", "constant", "evaluate",
+           "fold_constant", "folding_table", "is_constant"]
 
 # Longest string an expression may compute (names, colours, paths, materials are far shorter).
 MAX_STRING_LENGTH = 100_000
 # Largest integer (in bits) an expression may compute exactly; floats take over up to ~1e308.
 MAX_INT_BITS = 1024
 _INT_LIMIT = 1 << MAX_INT_BITS
+
+
+# User functions: nested calls (recursion depth) and calls per evaluation of one expression.
+MAX_CALL_DEPTH = 500
+MAX_CALLS = 1_000_000
+# Calls the checker makes to fold one constant call (beyond: "not constant", derive decides).
+FOLD_MAX_CALLS = 10_000
+# Python frames the interpreter may stack: a function call nests a few closures per level of
+# its body, so MAX_CALL_DEPTH calls need more than Python's default limit of 1000 frames.
+# Raised (never lowered) at the first top-level user-function call; a RecursionError that still
+# happens (a body nested very deeply) becomes the same located LimitError.
+_STACK_FRAMES = 40 * MAX_CALL_DEPTH
 
 
 class _NotConstant:
@@ -282,13 +304,14 @@ class _Compiler:
     subexpressions instead of deferring them to run time, and treats unknown functions and
     wrong arities (which the checker reports itself) as non-constant."""
 
-    __slots__ = ("resolve", "functions", "fold_errors")
+    __slots__ = ("resolve", "functions", "fold_errors", "user")
 
     def __init__(self, resolve: Resolver, functions: Mapping[str, Any],
-                 fold_errors: list[DerivationError] | None = None):
+                 fold_errors: list[DerivationError] | None = None, user: "FunctionTable | None" = None):
         self.resolve = resolve
         self.functions = functions
         self.fold_errors = fold_errors
+        self.user = user
 
     def _lazy(self, name: str, args: list, span: Any) -> Compiled:
         """select()/pick(): only the chosen argument is evaluated."""
@@ -373,8 +396,17 @@ class _Compiler:
 
     def call(self, e: Call) -> Compiled:
         span = e.span
-        spec = self.functions.get(e.func)
         folding = self.fold_errors is not None
+        user = self.user
+        if user is not None and e.func in user.overloads:  # a user function hides a built-in one
+            problem = user.arity_problem(e.func, len(e.args))
+            if problem is not None:
+                if folding:
+                    return _not_constant
+                raise GrammarError(problem, span, hint=user.signatures(e.func), code="function-arity")
+            args = [self.compile(x) for x in e.args]
+            return _user_call(user, user.body(e.func, len(args)), args, span)
+        spec = self.functions.get(e.func)
         if spec is None:
             if folding:
                 return _not_constant
@@ -486,21 +518,152 @@ def _lazy_pick(args: list, span: Any) -> Compiled:
     return pick
 
 
-def compile_expr(expr: Any, resolve: Resolver, functions: Mapping[str, Any]) -> Compiled:
+# -- user functions --------------------------------------------------------------------------
+class _Body:
+    """One overload's compiled body; `fn` is set once compiled (a recursive call compiled
+    while its own body is being compiled reads it at run time)."""
+
+    __slots__ = ("name", "params", "fn")
+
+    def __init__(self, name: str, params: tuple[str, ...]):
+        self.name, self.params = name, params
+        self.fn: Compiled | None = None
+
+
+class _Frame:
+    """What a function body is evaluated on: the caller's environment (`env`, never a frame:
+    names other than parameters are read from it), the argument values, the call depth and
+    the count of calls made so far in this evaluation (a one-item list shared by all frames)."""
+
+    __slots__ = ("env", "args", "depth", "calls")
+
+    def __init__(self, env: Any, args: list, depth: int, calls: list):
+        self.env, self.args, self.depth, self.calls = env, args, depth, calls
+
+    def rng(self) -> random.Random:  # rand() and fileRandom() in a body draw from the caller's
+        return self.env.rng()
+
+
+class FunctionTable:
+    """The user functions of a grammar (`func` statements, `grammarkit.ir.Function`) for one way
+    of resolving names: `resolve(name, span)` gives a closure (or None: unknown) for a name a
+    body uses that is not one of its parameters, as for the grammar's top-level expressions
+    (attrs, consts, built-in values); a parameter hides an attr or const of the same name.
+
+    Overloads are told apart by arity; the first definition of a name and arity counts (the
+    checker reports the others). Bodies are compiled once, at their first call site, with
+    `prepare(expr)` applied first when given (an engine's rewrite of its own built-ins)."""
+
+    def __init__(self, functions: Iterable[Any], resolve: Resolver, builtins: Mapping[str, Any], *,
+                 prepare: Callable[[Any], Any] | None = None, max_calls: int = MAX_CALLS):
+        self.overloads: dict[str, dict[int, Any]] = {}
+        for f in functions:
+            self.overloads.setdefault(f.name, {}).setdefault(len(f.params), f)
+        self.resolve = resolve
+        self.builtins = builtins
+        self.prepare = prepare
+        self.max_calls = max_calls
+        self._bodies: dict[tuple[str, int], _Body] = {}
+
+    def __bool__(self) -> bool:
+        return bool(self.overloads)
+
+    def signatures(self, name: str) -> str:
+        """The overloads of `name`, for messages: "defined: f(n) at file:2:1; f(a, b) at ..."."""
+        parts = []
+        for n in sorted(self.overloads.get(name, {})):
+            d = self.overloads[name][n]
+            where = f" at {d.span}" if d.span is not None and d.span.line else ""
+            parts.append(f"{name}({', '.join(d.params)}){where}")
+        return "defined: " + "; ".join(parts)
+
+    def arity_problem(self, name: str, n: int) -> str | None:
+        arities = sorted(self.overloads[name])
+        if n in arities:
+            return None
+        want = " or ".join(str(a) for a in arities) if len(arities) <= 2 else \
+            ", ".join(str(a) for a in arities[:-1]) + f" or {arities[-1]}"
+        return f"function '{name}' takes {want} argument(s), got {n}"
+
+    def body(self, name: str, n: int) -> _Body:
+        key = (name, n)
+        found = self._bodies.get(key)
+        if found is not None:
+            return found
+        d = self.overloads[name][n]
+        params = tuple(d.params)
+        outer = self.resolve
+        found = self._bodies[key] = _Body(name, params)
+
+        def resolve(ref: str, span: Span | None) -> Compiled | None:
+            if ref in params:
+                i = params.index(ref)
+                return lambda fr, _i=i: fr.args[_i]
+            g = outer(ref, span)
+            if g is None or is_constant(g):
+                return g
+            return lambda fr, _g=g: _g(fr.env)
+        try:
+            value = self.prepare(d.value) if self.prepare is not None else d.value
+            found.fn = _Compiler(resolve, self.builtins, user=self).compile(value)
+        except BaseException:
+            del self._bodies[key]
+            raise
+        return found
+
+
+def _ensure_stack() -> None:
+    if sys.getrecursionlimit() < _STACK_FRAMES:
+        sys.setrecursionlimit(_STACK_FRAMES)
+
+
+def _user_call(table: FunctionTable, body: _Body, args: list, span: Span | None) -> Compiled:
+    """A call of a user function: arguments evaluated in the caller's frame (by value), the body
+    on a new frame; the depth and call-count guards; RecursionError -> the same LimitError."""
+    name = body.name
+    max_calls = table.max_calls
+
+    def too_deep() -> LimitError:
+        return LimitError(f"function '{name}': calls nested more than {MAX_CALL_DEPTH} deep (a recursion "
+                          "that does not end?)", span, code="limit-recursion",
+                          hint="make the recursion stop: guard the recursive call with select(...)")
+
+    def call(env: Any) -> Any:
+        vals = [a(env) for a in args]
+        if type(env) is _Frame:
+            depth = env.depth + 1
+            if depth > MAX_CALL_DEPTH:
+                raise too_deep()
+            calls = env.calls
+            calls[0] += 1
+            if calls[0] > max_calls:
+                raise LimitError(f"function '{name}': more than {max_calls:,} calls in one evaluation",
+                                 span, code="limit-calls")
+            return body.fn(_Frame(env.env, vals, depth, calls))  # type: ignore[misc]
+        _ensure_stack()
+        try:
+            return body.fn(_Frame(env, vals, 1, [1]))  # type: ignore[misc]
+        except RecursionError:
+            raise too_deep() from None
+    return call
+
+
+def compile_expr(expr: Any, resolve: Resolver, functions: Mapping[str, Any], *,
+                 user: FunctionTable | None = None) -> Compiled:
     """Compile an IR expression into `f(env)`.
 
     `resolve(name, span)` returns a compiled closure for a reference (or None: unknown name,
     reported as a GrammarError at the reference). `functions` maps names to FunctionSpecs
     (`registries.functions`). `rand` draws from `env.rng()`. Errors of constant
-    subexpressions are deferred to run time.
+    subexpressions are deferred to run time. `user`: the grammar's user functions.
     """
     if functions is None:
         raise TypeError("compile_expr: functions= is required (e.g. registries.functions)")
-    return _Compiler(resolve, functions).compile(expr)
+    return _Compiler(resolve, functions, user=user if user else None).compile(expr)
 
 
 def fold_constant(expr: Any, lookup: Callable[[str], Any], functions: Mapping[str, Any],
-                  errors: list[DerivationError] | None = None) -> Any:
+                  errors: list[DerivationError] | None = None, *, user: FunctionTable | None = None) -> Any:
     """The checker's constant-folding mode: the value of `expr` if every name in it is a
     known constant (`lookup(name)` returns its value, or NOT_CONSTANT), else NOT_CONSTANT.
 
@@ -510,17 +673,64 @@ def fold_constant(expr: Any, lookup: Callable[[str], Any], functions: Mapping[st
 
     This walks the tree instead of compiling closures (the checker folds every expression of a
     file once), with the very operator and call implementations `compile_expr` uses, and folds
-    exactly what `compile_expr` folds."""
+    exactly what `compile_expr` folds.
+
+    A call of a user function with constant arguments is evaluated when `user` (made by
+    `folding_table`) is given: at most FOLD_MAX_CALLS calls, and only while the body reads
+    nothing but its parameters and constants (else it is NOT_CONSTANT)."""
     collected: list[DerivationError] = [] if errors is None else errors
-    return _Folder(lookup, functions, collected).fold(expr)
+    return _Folder(lookup, functions, collected, user if user else None).fold(expr)
+
+
+class _NotConstantSignal(Exception):
+    """Raised by a folded function body that reads a non-constant value (or draws a number)."""
+
+
+def _raise_not_constant(env: Any) -> Any:
+    raise _NotConstantSignal()
+
+
+class _FoldEnv:
+    def rng(self) -> Any:
+        raise _NotConstantSignal()
+
+
+_FOLD_ENV = _FoldEnv()
+
+
+def folding_table(functions: Iterable[Any], lookup: Callable[[str], Any],
+                  builtins: Mapping[str, Any]) -> FunctionTable:
+    """User functions for `fold_constant(..., user=)`: a body name whose `lookup(name)` is
+    NOT_CONSTANT makes the call non-constant."""
+    def resolve(name: str, span: Span | None) -> Compiled:
+        v = lookup(name)
+        return _raise_not_constant if v is NOT_CONSTANT else constant(v)
+    return FunctionTable(functions, resolve, builtins, max_calls=FOLD_MAX_CALLS)
 
 
 class _Folder:
-    __slots__ = ("lookup", "functions", "errors")
+    __slots__ = ("lookup", "functions", "errors", "user")
 
     def __init__(self, lookup: Callable[[str], Any], functions: Mapping[str, Any],
-                 errors: list[DerivationError]):
-        self.lookup, self.functions, self.errors = lookup, functions, errors
+                 errors: list[DerivationError], user: FunctionTable | None = None):
+        self.lookup, self.functions, self.errors, self.user = lookup, functions, errors, user
+
+    def _user(self, e: Call) -> Any:
+        user = self.user
+        args = [self.fold(a) for a in e.args]
+        if user.arity_problem(e.func, len(args)) is not None or any(a is NOT_CONSTANT for a in args):
+            return NOT_CONSTANT
+        try:
+            body = user.body(e.func, len(args))
+            return _user_call(user, body, [constant(a) for a in args], e.span)(_FOLD_ENV)
+        except _NotConstantSignal:
+            return NOT_CONSTANT
+        except DerivationError as exc:
+            if exc.diagnostics[0].code != "limit-calls":  # too long to fold: derive decides
+                self.errors.append(exc)
+            return NOT_CONSTANT
+        except GrammarError:  # a body the checker reports on its own (unknown name, ...)
+            return NOT_CONSTANT
 
     def _run(self, fn: Callable[[], Any]) -> Any:
         try:
@@ -565,6 +775,8 @@ class _Folder:
             fn = _BINARY[op]
             return self._run(lambda: fn(x, y, e.span))
         if isinstance(e, Call):
+            if self.user is not None and e.func in self.user.overloads:
+                return self._user(e)
             spec = self.functions.get(e.func)
             if spec is None or arity_problem(e.func, spec, len(e.args)) is not None:
                 for a in e.args:  # their own errors still count
@@ -594,11 +806,14 @@ def _call(impl: Callable[..., Any], name: str, vals: list, span: Span | None) ->
 
 
 def evaluate(expr: Any, variables: Mapping[str, Any] | None = None, *, functions: Mapping[str, Any],
-             seed: int = 0, names: Callable[[str], Any] | None = None) -> Any:
+             seed: int = 0, names: Callable[[str], Any] | None = None,
+             user_functions: Iterable[Any] = ()) -> Any:
     """Evaluate one expression with plain variables (dotted names included as keys).
 
     `names(name)` gives a value for a name that is not a variable (e.g. a tiling grammar's
-    bare part-type names), or None: unknown. Engines should `compile_expr` once instead.
+    bare part-type names), or None: unknown. `user_functions`: `func` statements
+    (`grammarkit.ir.Function`, e.g. `grammar.functions`) the expression may call; their bodies
+    see the same variables. Engines should `compile_expr` once instead.
     """
     env = SimpleEnv(variables, seed)
 
@@ -610,4 +825,5 @@ def evaluate(expr: Any, variables: Mapping[str, Any] | None = None, *, functions
             if value is not None:
                 return constant(value)
         return None
-    return compile_expr(expr, resolve, functions)(env)
+    user = FunctionTable(user_functions, resolve, functions) if user_functions else None
+    return compile_expr(expr, resolve, functions, user=user)(env)

@@ -21,7 +21,7 @@ from typing import Any, Iterable
 from .errors import GrammarError
 from .ir import (
     Attr, Binary, Bool, Branch, Call, Case, Choice, Const, ConstraintDef, Default, DockDef, ExampleDef,
-    Grammar, Import, NeighborRule, Nil, Num, OpCall, PartDef, Pattern, Placement, Push, Ref, Repeat,
+    Function, Grammar, Import, NeighborRule, Nil, Num, OpCall, PartDef, Pattern, Placement, Push, Ref, Repeat,
     Rule, Seq, SiteDef, Snippet, Str, Successor, Terminal, Unary, UpDef, Use, Variants, Vector,
 )
 from .ir.expr import PRECEDENCE, UNARY_PRECEDENCE
@@ -334,6 +334,9 @@ def _statement(p: _Printer, s: Any) -> list[str]:
         lines.append(_attr(s))
     elif isinstance(s, Const):
         lines.append(f"const {_ident(s.name, s)} = {format_expr(s.value)}")
+    elif isinstance(s, Function):
+        params = ", ".join(_ident(n, s) for n in s.params)
+        lines.append(f"func {_ident(s.name, s)}({params}) = {format_expr(s.value)}")
     elif isinstance(s, Rule):
         lines.append(_rule(p, s, 0))
     elif isinstance(s, Import):

@@ -11,7 +11,7 @@ import re
 # grammarkit's reserved words (docs/language.md); kept here so that importing the CGA
 # translator does not load the .grammar parser.
 GK_KEYWORDS = frozenset({
-    "grammar", "import", "attr", "const", "snippet", "use", "as", "default", "for", "variants",
+    "grammar", "import", "attr", "const", "func", "snippet", "use", "as", "default", "for", "variants",
     "case", "else", "NIL", "true", "false", "part", "site", "at", "facing", "mirror", "dock",
     "rot", "neighbors", "in", "constraint", "example",
 })

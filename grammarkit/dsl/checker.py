@@ -13,9 +13,9 @@ from dataclasses import dataclass, field
 from typing import Any, Iterable, Mapping
 
 from ..errors import Diagnostic, DiagnosticBag
-from ..expr_eval import NOT_CONSTANT, arity_problem, fold_constant
+from ..expr_eval import NOT_CONSTANT, FunctionTable, arity_problem, fold_constant, folding_table
 from ..ir import (
-    Attr, Binary, Branch, Call, Case, Choice, Const, Default, ExampleDef,
+    Attr, Binary, Branch, Call, Case, Choice, Const, Default, ExampleDef, Function,
     Grammar, Nil, Num, OpCall, PartDef, Pattern, Push, Ref, Repeat, Rule, Seq, SiteDef,
     Snippet, Successor, Terminal, Unary, Use, Variants, Vector,
 )
@@ -66,6 +66,9 @@ class Checker:
         self._reported: set[tuple] = set()  # fold errors already reported (span, message)
         self._functions = registries.functions  # looked up once: folding asks for every expression
         self._memo: dict[tuple[int, int], tuple] = {}
+        # user functions (`func`): name -> arity -> first definition
+        self.user_functions: dict[str, dict[int, Function]] = {}
+        self._fold_table: FunctionTable | None = None
 
     # -- entry -----------------------------------------------------------------------------
     def run(self) -> list[Diagnostic]:
@@ -77,6 +80,8 @@ class Checker:
             self.check_attr(a, _Scope(top_values, {}))
         for c in g.consts:
             self.check_expr(c.value, _Scope(top_values, {}))
+        for f in g.functions:
+            self.check_expr(f.value, _Scope(top_values | set(f.params), {}, params=frozenset(f.params)))
         for r in g.rules:
             self.check_rule(r, _Scope(top_values | set(r.params), self.top_rules,
                                       params=frozenset(r.params)))
@@ -102,6 +107,7 @@ class Checker:
                 self._dup("value", v.name, v, self._values[v.name])
             else:
                 self._values[v.name] = v
+        self.collect_functions()
         self.top_rules: dict[str, Rule] = {}
         for r in g.rules:
             if r.name in self.top_rules:
@@ -157,8 +163,49 @@ class Checker:
             else:
                 examples[e.name] = e
 
+    def collect_functions(self) -> None:
+        g = self.g
+        tiling = g.family == "tiling"
+        for f in g.functions:
+            if tiling:
+                self.bag.error(f"function '{f.name}': tiling grammars have no user functions (yet)", f.span,
+                               hint="compute the value with attrs and consts", code="func-in-tiling")
+            arities = self.user_functions.setdefault(f.name, {})
+            n = len(f.params)
+            if n in arities:
+                first = arities[n]
+                self.bag.error(f"function '{f.name}' with {n} parameter{'s' if n != 1 else ''} is defined "
+                               f"twice{_where(first.span).replace(' (at ', ' (first at ')}", f.span,
+                               hint="overloads of a function differ in their number of parameters",
+                               code="duplicate")
+            else:
+                arities[n] = f
+            seen: set[str] = set()
+            for p in f.params:
+                if p in seen:
+                    self.bag.error(f"parameter '{p}' of function '{f.name}' is listed twice", f.span,
+                                   code="duplicate")
+                seen.add(p)
+            if f.name in self.reg.functions and len(arities) == 1 and arities.get(n) is f:
+                self.bag.warning(f"function '{f.name}' has the name of a built-in function; calls "
+                                 f"{f.name}(...) in this grammar mean the user function", f.span,
+                                 code="shadows-function")
+
+    def _function_refs(self, e: Any, seen: set[tuple[str, int]]) -> Iterable[Ref]:
+        """The names `e` reads, through the bodies of the user functions it calls (their
+        parameters excluded): what a value depends on."""
+        for x in self._refs(e, calls=True):
+            if isinstance(x, Ref):
+                yield x
+                continue
+            f = self.user_functions.get(x.func, {}).get(len(x.args))
+            if f is None or (x.func, len(x.args)) in seen:
+                continue
+            seen.add((x.func, len(x.args)))
+            yield from (r for r in self._function_refs(f.value, seen) if r.name not in f.params)
+
     # -- constants -------------------------------------------------------------------------
-    def _refs(self, e: Any) -> Iterable[Ref]:
+    def _refs(self, e: Any, calls: bool = False) -> Iterable[Any]:
         stack = [e]
         while stack:
             x = stack.pop()
@@ -169,12 +216,14 @@ class Checker:
             elif isinstance(x, Binary):
                 stack.extend((x.left, x.right))
             elif isinstance(x, Call):
+                if calls and x.func in self.user_functions:
+                    yield x
                 stack.extend(x.args)
             elif isinstance(x, Vector):
                 stack.extend(x.items)
 
     def check_value_cycles(self) -> None:
-        graph = {n: [r.name for r in self._refs(v.value) if r.name in self._values]
+        graph = {n: [r.name for r in self._function_refs(v.value, set()) if r.name in self._values]
                  for n, v in self._values.items()}
         color: dict[str, int] = {}
         reported: set[frozenset[str]] = set()
@@ -246,7 +295,7 @@ class Checker:
                     if n in found or isinstance(v, Attr):
                         continue
                     if any(isinstance(self._values.get(r.name), Attr) or r.name in found
-                           for r in self._refs(v.value)):
+                           for r in self._function_refs(v.value, set())):
                         found.add(n)
                         changed = True
             self._attr_deps = found
@@ -256,7 +305,21 @@ class Checker:
         if isinstance(e, Num):  # most arguments and sizes are plain numbers
             v = e.value
             return int(v) if float(v).is_integer() and abs(v) < 2 ** 53 else v
-        return fold_constant(e, lambda n: self._lookup(n, scope, used), self._functions, errors)
+        return fold_constant(e, lambda n: self._lookup(n, scope, used), self._functions, errors,
+                             user=self._folding_functions())
+
+    def _folding_functions(self) -> FunctionTable | None:
+        """The user functions for folding. Their bodies see attrs as not constant (a `--set`
+        may change them, and the error report would not know which attr a body read)."""
+        if not self.user_functions:
+            return None
+        if self._fold_table is None:
+            def lookup(name: str) -> Any:
+                if isinstance(self._values.get(name), Attr) or name in self._attr_dependent():
+                    return NOT_CONSTANT
+                return self._lookup(name, None, None)
+            self._fold_table = folding_table(self.g.functions, lookup, self._functions)
+        return self._fold_table
 
     def _folded(self, e: Any, scope: _Scope | None) -> tuple[Any, tuple[str, ...], tuple]:
         """(value or NOT_CONSTANT, attrs it used, evaluation errors) of `e` in `scope`, folded
@@ -328,10 +391,18 @@ class Checker:
                            code="undefined-name")
 
     def check_call(self, c: Call) -> None:
+        overloads = self.user_functions.get(c.func)
+        if overloads is not None:
+            n = len(c.args)
+            if n not in overloads:
+                table = FunctionTable(self.g.functions, lambda name, span: None, self._functions)
+                self.bag.error(table.arity_problem(c.func, n) or "", c.span, hint=table.signatures(c.func),
+                               code="function-arity")
+            return
         spec = self.reg.functions.get(c.func)
         if spec is None:
             self.bag.error(f"unknown function '{c.func}'", c.span,
-                           hint=_known_hint("functions", c.func, self.reg.functions),
+                           hint=_known_hint("functions", c.func, set(self.reg.functions) | set(self.user_functions)),
                            code="unknown-function")
             return
         problem = arity_problem(c.func, spec, len(c.args))

@@ -15,7 +15,7 @@ from lark import Token, Tree
 from ..errors import DiagnosticBag
 from ..ir import (
     Arg, Attr, Binary, Const, Bool, Branch, Call, Case, CaseArm, Choice, ChoiceArm, ConstraintDef, CountRange,
-    Default, DockDef, ExampleDef, Import, InlinePart, NeighborRule, Nil, Num, OpCall, PartDef, Pattern,
+    Default, DockDef, ExampleDef, Function, Import, InlinePart, NeighborRule, Nil, Num, OpCall, PartDef, Pattern,
     Placement, Push, Ref, Repeat, Rule, Seq, SiteDef, Snippet, Str, Successor, Terminal, Unary, UpDef, Use,
     Variants, VariantOption, Vector,
 )
@@ -133,6 +133,9 @@ class ToIR:
 
     def const(self, meta, c):
         return Const(name=self.name(c[0]), value=c[1], span=self.span(meta))
+
+    def func(self, meta, c):
+        return Function(name=self.name(c[0]), params=c[1], value=c[2], span=self.span(meta))
 
     def rule(self, meta, c):
         name = self.name(c[0])

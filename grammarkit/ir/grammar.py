@@ -10,12 +10,12 @@ from typing import Annotated, Literal, Union
 from pydantic import Field
 
 from .base import Node
-from .split import Attr, Const, Default, Import, Rule, Snippet, Use, Variants
+from .split import Attr, Const, Default, Function, Import, Rule, Snippet, Use, Variants
 from .tiling import ConstraintDef, DockDef, ExampleDef, NeighborRule, PartDef, SiteDef, UpDef
 
 Statement = Annotated[
     Union[
-        Attr, Const, Rule, Snippet, Use, Default, Variants, Import,
+        Attr, Const, Function, Rule, Snippet, Use, Default, Variants, Import,
         PartDef, SiteDef, DockDef, NeighborRule, ConstraintDef, ExampleDef, UpDef,
     ],
     Field(discriminator="kind"),
@@ -50,6 +50,7 @@ class Grammar(Node):
 
     attrs = property(lambda self: self._of(Attr))
     consts = property(lambda self: self._of(Const))
+    functions = property(lambda self: self._of(Function))
     rules = property(lambda self: self._of(Rule))
     snippets = property(lambda self: self._of(Snippet))
     uses = property(lambda self: self._of(Use))

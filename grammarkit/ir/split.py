@@ -152,6 +152,20 @@ class Const(Node):
     comments: tuple[str, ...] = ()
 
 
+class Function(Node):
+    """`func name(a, b) = expr`: a user function, called in expressions as `name(x, y)`.
+
+    Functions are overloaded by arity (one definition per name and parameter count), may call
+    themselves and each other, and see their parameters, the grammar's attrs and consts and the
+    built-in values (`scope.sx`, ...); a parameter shadows an attr or const of the same name."""
+
+    kind: Literal["func"] = "func"
+    name: str
+    params: tuple[str, ...] = ()
+    value: Expr
+    comments: tuple[str, ...] = ()
+
+
 class Snippet(Node):
     """`snippet NAME : ObjectType { rules }` with optional attrs inside; axiom is `Start`."""
 

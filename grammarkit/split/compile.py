@@ -32,7 +32,7 @@ from typing import Any, Callable, Mapping
 
 from ..dsl.binding import bind_operation, check_block, check_sequence, parse_color
 from ..errors import GrammarError, GrammarkitError
-from ..expr_eval import compile_expr, constant, is_constant
+from ..expr_eval import FunctionTable, compile_expr, constant, is_constant
 from ..ir import expr as E
 from ..ir import split as S
 from ..ir.base import Span
@@ -309,6 +309,11 @@ class _Compiler:
         # expressions reading them are not shape-free (split layouts are not cached for them)
         self.set_attrs = frozenset(_set_targets(grammar))
         self.pending: list[tuple[CRule, S.Rule, _Scope]] = []
+        # user functions (`func`): bodies see the grammar's attrs, consts and the built-in values
+        # of the shape the calling expression is evaluated on; compiled once, at their first call
+        self.user = FunctionTable(grammar.functions, self._resolver(_Scope(), ()), self.functions,
+                                  prepare=self._occlusion_refs) if grammar.functions else None
+        self.user_names = frozenset(self.user.overloads) if self.user else frozenset()
 
     def _check_snippet(self, name: str, span: Span | None) -> None:
         if name not in self.snippets:
@@ -403,9 +408,19 @@ class _Compiler:
 
     # -- expressions ---------------------------------------------------------------------------
     def _expr(self, e: Any, scope: _Scope, params: tuple[str, ...]) -> Callable:
+        e = self._occlusion_refs(e)
+        f = compile_expr(e, self._resolver(scope, params), self.functions, user=self.user)
+        try:
+            f._shape_free = _shape_free(e, params, self.set_attrs, self.user_names)  # type: ignore[attr-defined]
+        except AttributeError:  # a shared constant closure: constants are shape-free anyway
+            pass
+        return f
+
+    def _resolver(self, scope: _Scope, params: tuple[str, ...]) -> Callable:
+        """How the names of an expression in `scope` (with rule parameters `params`) read the
+        shape it is evaluated on."""
         glob = self.global_names
         grammar_attrs = self.grammar_attrs
-        e = self._occlusion_refs(e)
 
         def resolve(name: str, span: Span | None) -> Callable | None:
             if name in params:
@@ -445,12 +460,7 @@ class _Compiler:
             if name in glob:
                 return lambda s, _k=name: s.values[_k]
             return None
-        f = compile_expr(e, resolve, self.functions)
-        try:
-            f._shape_free = _shape_free(e, params, self.set_attrs)  # type: ignore[attr-defined]
-        except AttributeError:  # a shared constant closure: constants are shape-free anyway
-            pass
-        return f
+        return resolve
 
     # -- sequences -----------------------------------------------------------------------------
     def _seq(self, seq: S.Seq, scope: _Scope, params: tuple[str, ...], rule: CRule) -> tuple:
@@ -682,21 +692,24 @@ class _Compiler:
         return _op_step(apply, (axis_fn, size_fn, sep_fn), _make_block(slots), call.span, "repeat")
 
 
-def _shape_free(e: Any, params: tuple[str, ...], mutable: frozenset = frozenset()) -> bool:
+def _shape_free(e: Any, params: tuple[str, ...], mutable: frozenset = frozenset(),
+                user: frozenset = frozenset()) -> bool:
     """True if an expression reads only attrs, consts and literals (no scope, split index, rule
     parameter, rand, or attr that `set()` changes): its value is the same for every shape of
-    one derivation."""
+    one derivation. A call of a user function (`user`: their names) counts as shape-dependent
+    (its body may read the scope)."""
     if isinstance(e, E.Ref):
         return (e.name not in params and e.name not in mutable
                 and not e.name.startswith(("scope.", "split.", "comp.", "geometry.", "occlusion:")))
     if isinstance(e, E.Call):
-        return e.func != "rand" and all(_shape_free(a, params, mutable) for a in e.args)
+        return e.func != "rand" and e.func not in user and all(_shape_free(a, params, mutable, user)
+                                                               for a in e.args)
     if isinstance(e, E.Unary):
-        return _shape_free(e.operand, params, mutable)
+        return _shape_free(e.operand, params, mutable, user)
     if isinstance(e, E.Binary):
-        return _shape_free(e.left, params, mutable) and _shape_free(e.right, params, mutable)
+        return _shape_free(e.left, params, mutable, user) and _shape_free(e.right, params, mutable, user)
     if isinstance(e, E.Vector):
-        return all(_shape_free(a, params, mutable) for a in e.items)
+        return all(_shape_free(a, params, mutable, user) for a in e.items)
     return True
 
 
