@@ -11,7 +11,7 @@ from grammarkit.dsl import KEYWORDS, check, parse
 from grammarkit.errors import GrammarError
 from grammarkit.ir import (
     Arg, Attr, Binary, Bool, Branch, Call, Case, CaseArm, Choice, ChoiceArm, Const, ConstraintDef,
-    CountRange, Default, DockDef, ExampleDef, Grammar, Import, InlinePart, NeighborRule, Nil, Num,
+    CountRange, Default, DockDef, ExampleDef, Function, Grammar, Import, InlinePart, NeighborRule, Nil, Num,
     OpCall, PartDef, Pattern, Placement, Push, Ref, Repeat, Rule, Seq, SiteDef, Snippet, Str,
     Successor, Terminal, Unary, Use, Variants, VariantOption, Vector,
 )
@@ -111,6 +111,8 @@ def statements():
     return st.one_of(
         attrs,
         st.builds(Const, name=ident, value=exprs),
+        st.builds(Function, name=ident, params=st.lists(ident, max_size=3).map(tuple), value=exprs,
+                  comments=st.lists(comment_text, max_size=2).map(tuple)),
         rules(names),
         st.builds(Snippet, name=ident, object_type=ident, attrs=st.lists(attrs, max_size=2).map(tuple),
                   rules=st.lists(rules(names, 1), max_size=2).map(tuple)),
