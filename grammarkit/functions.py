@@ -80,6 +80,12 @@ def get_suffix(s: str, match: str) -> str:
     return s[i + len(match):] if i >= 0 else ""
 
 
+def count_matches(s: str, match: str) -> int:
+    """CGA's count: how many times `match` occurs in `s` (not overlapping; 0 for an empty match)."""
+    s, match = str(s), str(match)
+    return s.count(match) if match else 0
+
+
 def find_first(s: str, match: str) -> int:
     return str(s).find(str(match))
 
@@ -259,6 +265,7 @@ BUILTIN_FUNCTIONS: tuple[FunctionSpec, ...] = (
     FunctionSpec("getSuffix", 2, 2, "getSuffix(s, match): s after the last match", get_suffix),
     FunctionSpec("findFirst", 2, 2, "findFirst(s, match): index of the first match, or -1", find_first),
     FunctionSpec("findLast", 2, 2, "findLast(s, match): index of the last match, or -1", find_last),
+    FunctionSpec("count", 2, 2, "count(s, match): how many times match occurs in s", count_matches),
     # CGA's file functions (fileSearch, fileRandom, fileExists: bound by the evaluator)
     FunctionSpec("fileName", 1, 1, "fileName(path): the file name without its folder", file_name),
     FunctionSpec("fileBasename", 1, 1, "fileBasename(path): the file name without folder and extension",

@@ -4,9 +4,11 @@ What maps: numbers, strings, booleans, arithmetic, comparisons, `&&`, `||`, `!`,
 consts and rule parameters, `scope.*` (through the frame's axis mapping, see frames.py),
 `split.index/total`, `comp.index/total`, the math functions grammarkit has, `rint`
 (grammarkit's `round`), `pow(a, b)` (`a ^ b`), `p(x)` (`rand() < x`) and CGA *functions*
-(`name(params) = expr`), which grammarkit does not have: they are inlined at each call with
-their arguments substituted (parenthesised by the IR, so precedence is kept), which is exact
-for CGA's pure functions; a recursive function cannot be inlined.
+(`name(params) = expr`): a function is inlined at each call with its arguments substituted
+(parenthesised by the IR, so precedence is kept), which is exact for CGA's pure functions;
+a recursive one (directly or through others) cannot be inlined and becomes a grammarkit
+function `func name(params) = expr` instead (`ExprContext.emitted`, see translate.py), called
+by name.
 
 What does not map raises `Untranslatable` naming the missing feature; the caller decides
 whether the construct that holds the expression is dropped or approximated.
@@ -36,7 +38,7 @@ _FUNCTIONS: dict[str, tuple[str, int, int | None]] = {
     "listRange": ("listRange", 3, 3), "replace": ("replace", 3, 3),
     # the CGA utility library's text helpers and CGA's file functions (grammarkit/functions.py)
     "getRange": ("getRange", 3, 3), "getPrefix": ("getPrefix", 2, 2), "getSuffix": ("getSuffix", 2, 2),
-    "findFirst": ("findFirst", 2, 2), "findLast": ("findLast", 2, 2),
+    "findFirst": ("findFirst", 2, 2), "findLast": ("findLast", 2, 2), "count": ("count", 2, 2),
     "fileName": ("fileName", 1, 1), "fileBasename": ("fileBasename", 1, 1),
     "fileDirectory": ("fileDirectory", 1, 1), "fileExtension": ("fileExtension", 1, 1),
     "fileSearch": ("fileSearch", 1, 1), "fileRandom": ("fileRandom", 1, 1), "fileExists": ("fileExists", 1, 1),
@@ -119,14 +121,21 @@ class ExprContext:
     # Inside an s()/t()/setupProjection argument: the grammarkit scope size a `'v` anywhere in
     # the expression is relative to (`'1 + 0.3` is scope.sy + 0.3); None elsewhere.
     relative: str | None = None
+    # CGA functions emitted as grammarkit functions (the recursive ones): (name, arity) ->
+    # frame -> the grammarkit function's name, or the Untranslatable its body raised.
+    emitted: dict[tuple[str, int], dict[str, Any]] = field(default_factory=dict)
+    # names of the emitted functions whose value is text (`+` with a call of one concatenates)
+    text_functions: set[str] = field(default_factory=set)
 
     def with_frame(self, frame: frames.Frame) -> "ExprContext":
         return ExprContext(self.filename, frame, self.params, self.values, self.functions,
-                           self.bound, self.inlining, self.on_inline, self.relative)
+                           self.bound, self.inlining, self.on_inline, self.relative, self.emitted,
+                           self.text_functions)
 
     def with_relative(self, size_ref: str | None) -> "ExprContext":
         return ExprContext(self.filename, self.frame, self.params, self.values, self.functions,
-                           self.bound, self.inlining, self.on_inline, size_ref)
+                           self.bound, self.inlining, self.on_inline, size_ref, self.emitted,
+                           self.text_functions)
 
 
 def translate_expr(node: Any, ctx: ExprContext) -> Any:
@@ -154,9 +163,10 @@ def translate_expr(node: Any, ctx: ExprContext) -> Any:
     if kind == "binop":
         left, op, right = kids
         a, b = translate_expr(left, ctx), translate_expr(right, ctx)
-        if op.value == "+" and (_is_text(a) or _is_text(b)):
+        tf = ctx.text_functions
+        if op.value == "+" and (is_text(a, tf) or is_text(b, tf)):
             # CGA's + joins text and turns the other side into text (str(3) is "3")
-            a, b = (x if _is_text(x) else Call(func="str", args=(x,), span=x.span) for x in (a, b))
+            a, b = (x if is_text(x, tf) else Call(func="str", args=(x,), span=x.span) for x in (a, b))
         return Binary(op=_BINARY[op.value], left=a, right=b, span=span)
     if kind in ("or_op", "and_op"):
         left, right = kids
@@ -204,14 +214,16 @@ def translate_expr(node: Any, ctx: ExprContext) -> Any:
     raise Untranslatable(f"expr:{kind}", f"expression {kind} is not supported", span)
 
 
-def _is_text(e: Any) -> bool:
-    """Whether an IR expression is statically text (a string, a text function, a join)."""
+def is_text(e: Any, text_functions: "set[str] | frozenset[str]" = frozenset()) -> bool:
+    """Whether an IR expression is statically text (a string, a text function, a join);
+    `text_functions`: user functions known to return text."""
     if isinstance(e, Str):
         return True
     if isinstance(e, Call):
-        return e.func in _TEXT_FUNCTIONS or (e.func == "select" and (_is_text(e.args[1]) or _is_text(e.args[2])))
+        return (e.func in _TEXT_FUNCTIONS or e.func in text_functions
+                or (e.func == "select" and (is_text(e.args[1], text_functions) or is_text(e.args[2], text_functions))))
     if isinstance(e, Binary):
-        return e.op == "+" and (_is_text(e.left) or _is_text(e.right))
+        return e.op == "+" and (is_text(e.left, text_functions) or is_text(e.right, text_functions))
     return False
 
 
@@ -241,6 +253,8 @@ def _ref(name: str, span: Span | None, ctx: ExprContext) -> Any:
         return Ref(name=ctx.params[name], span=span)
     if name in ctx.values:
         return Ref(name=ctx.values[name], span=span)
+    if (name, 0) in ctx.emitted:
+        return _emitted_call((name, 0), [], span, ctx)
     if (name, 0) in ctx.functions:
         return _inline(ctx.functions[(name, 0)], [], span, ctx)
     mapped = frames.scope_name(ctx.frame, name)
@@ -258,6 +272,8 @@ def _ref(name: str, span: Span | None, ctx: ExprContext) -> Any:
 
 def _call(name: str, args: list[Any], span: Span | None, ctx: ExprContext) -> Any:
     key = (name, len(args))
+    if key in ctx.emitted:
+        return _emitted_call(key, args, span, ctx)
     if key in ctx.functions:
         return _inline(ctx.functions[key], args, span, ctx)
     if name in _GEOMETRY_REFS and (not args or name == "geometry.isRectangular" and len(args) == 1):
@@ -304,6 +320,16 @@ def _call(name: str, args: list[Any], span: Span | None, ctx: ExprContext) -> An
     raise Untranslatable(f"fn:{name}", f"function {name}() is not supported", span)
 
 
+def _emitted_call(key: tuple[str, int], args: list[Any], span: Span | None, ctx: ExprContext) -> Any:
+    """A call of a CGA function emitted as a grammarkit function (for the caller's frame)."""
+    target = ctx.emitted[key].get(ctx.frame)
+    if isinstance(target, Untranslatable):
+        raise Untranslatable(target.feature, target.message, span)
+    if target is None:  # not emitted for this frame (cannot happen: both frames are)
+        raise Untranslatable("fn:recursive", f"recursive function {key[0]}() cannot be inlined", span)
+    return Call(func=target, args=tuple(translate_expr(a, ctx) for a in args), span=span)
+
+
 def _inline(fn: Function, args: list[Any], span: Span | None, ctx: ExprContext) -> Any:
     if fn.name in ctx.inlining:
         raise Untranslatable("fn:recursive", f"recursive function {fn.name}() cannot be inlined", span)
@@ -311,7 +337,8 @@ def _inline(fn: Function, args: list[Any], span: Span | None, ctx: ExprContext) 
         raise Untranslatable("fn:deep", f"functions nested more than {MAX_INLINE_DEPTH} deep", span)
     values = [translate_expr(a, ctx) for a in args]
     inner = ExprContext(ctx.filename, ctx.frame, {}, ctx.values, ctx.functions,
-                        dict(zip(fn.params, values)), ctx.inlining + (fn.name,), ctx.on_inline)
+                        dict(zip(fn.params, values)), ctx.inlining + (fn.name,), ctx.on_inline,
+                        emitted=ctx.emitted, text_functions=ctx.text_functions)
     out = translate_expr(fn.body, inner)
     if ctx.on_inline is not None:
         ctx.on_inline(fn.name)
@@ -366,5 +393,5 @@ _BIN_EVAL: dict[str, Callable[[Any, Any], Any]] = {
     "&&": lambda a, b: bool(a) and bool(b), "||": lambda a, b: bool(a) or bool(b),
 }
 
-__all__ = ["ExprContext", "Function", "Untranslatable", "translate_expr", "static_value", "span_of",
+__all__ = ["ExprContext", "Function", "Untranslatable", "is_text", "translate_expr", "static_value", "span_of",
            "children", "call_args", "unquote", "gk_name"]
