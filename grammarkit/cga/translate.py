@@ -1170,10 +1170,16 @@ def _h_r(t, args, block, star, frame, rctx, ctx, span, out):
                   "scope origin")
         args = args[1:]
     _need(args, 3, 3, "r", span)
-    rx, ry, rz = (translate_expr(a, ctx) for a in args)
+    return _turns("r", [translate_expr(a, ctx) for a in args], frame, span), approx
+
+
+def _turns(op: str, angles: list, frame: str, span: Span | None) -> list:
+    """CGA's `op(x, y, z)` turn (r or rotateScope) as grammarkit operations. In frame Z the
+    axes are the same; in frame Y CGA rotates about x, then its y (grammarkit z), then its z
+    (grammarkit -y): one operation per non-zero angle, in that order."""
+    rx, ry, rz = angles
     if frame == "Z":
-        return [OpCall(name="r", args=(Arg(value=rx), Arg(value=ry), Arg(value=rz)), span=span)], approx
-    # Frame Y: CGA rotates about x, then its y (grammarkit z), then its z (grammarkit -y).
+        return [OpCall(name=op, args=(Arg(value=rx), Arg(value=ry), Arg(value=rz)), span=span)]
     zero = Num(value=0)
     steps = []
     for gk_axis, value in (("x", rx), ("z", ry), ("y", rz)):
@@ -1183,8 +1189,8 @@ def _h_r(t, args, block, star, frame, rctx, ctx, span, out):
             value = Num(value=-value.value) if isinstance(value, Num) else Unary(op="-", operand=value)
         vec = [zero, zero, zero]
         vec["xyz".index(gk_axis)] = value
-        steps.append(OpCall(name="r", args=tuple(Arg(value=v) for v in vec), span=span))
-    return steps, approx
+        steps.append(OpCall(name=op, args=tuple(Arg(value=v) for v in vec), span=span))
+    return steps
 
 
 def _h_center(t, args, block, star, frame, rctx, ctx, span, out):
@@ -1395,20 +1401,7 @@ def _h_rotate_scope(t, args, block, star, frame, rctx, ctx, span, out):
     """rotateScope(x, y, z): the scope turned about its axes, x first (as r()); in frame Y,
     CGA's y is grammarkit's z and its z grammarkit's -y (the steps of _h_r)."""
     _need(args, 3, 3, "rotateScope", span)
-    rx, ry, rz = (translate_expr(a, ctx) for a in args)
-    if frame == "Z":
-        return [OpCall(name="rotateScope", args=(Arg(value=rx), Arg(value=ry), Arg(value=rz)), span=span)], None
-    zero = Num(value=0)
-    steps = []
-    for gk_axis, value in (("x", rx), ("z", ry), ("y", rz)):
-        if isinstance(value, Num) and value.value == 0:
-            continue
-        if gk_axis == "y":
-            value = Num(value=-value.value) if isinstance(value, Num) else Unary(op="-", operand=value)
-        vec = [zero, zero, zero]
-        vec["xyz".index(gk_axis)] = value
-        steps.append(OpCall(name="rotateScope", args=tuple(Arg(value=v) for v in vec), span=span))
-    return steps, None
+    return _turns("rotateScope", [translate_expr(a, ctx) for a in args], frame, span), None
 
 
 def _flag_args(args: list, frame: str, ctx: Any) -> list:

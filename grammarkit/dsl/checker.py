@@ -95,6 +95,14 @@ class Checker:
         return self.bag.items
 
     # -- definitions -----------------------------------------------------------------------
+    def _params_once(self, params: Any, owner: str, span: Any) -> None:
+        """A located error for each parameter name a rule or function lists twice."""
+        seen: set[str] = set()
+        for p in params:
+            if p in seen:
+                self.bag.error(f"parameter '{p}' of {owner} is listed twice", span, code="duplicate")
+            seen.add(p)
+
     def _dup(self, kind: str, name: str, node: Any, first: Any) -> None:
         where = f" (first at {first.span})" if first.span is not None and first.span.line else ""
         self.bag.error(f"{kind} '{name}' is defined twice{where}", node.span,
@@ -118,12 +126,7 @@ class Checker:
                 self.bag.warning(f"rule '{r.name}' has the name of an operation; calls "
                                  f"{r.name}(...) in this grammar mean the rule", r.span,
                                  code="shadows-operation")
-            seen: set[str] = set()
-            for p in r.params:
-                if p in seen:
-                    self.bag.error(f"parameter '{p}' of rule '{r.name}' is listed twice", r.span,
-                                   code="duplicate")
-                seen.add(p)
+            self._params_once(r.params, f"rule '{r.name}'", r.span)
         self.snippets: dict[str, Snippet] = {}
         for s in g.snippets:
             if s.name in self.snippets:
@@ -180,12 +183,7 @@ class Checker:
                                code="duplicate")
             else:
                 arities[n] = f
-            seen: set[str] = set()
-            for p in f.params:
-                if p in seen:
-                    self.bag.error(f"parameter '{p}' of function '{f.name}' is listed twice", f.span,
-                                   code="duplicate")
-                seen.add(p)
+            self._params_once(f.params, f"function '{f.name}'", f.span)
             if f.name in self.reg.functions and len(arities) == 1 and arities.get(n) is f:
                 self.bag.warning(f"function '{f.name}' has the name of a built-in function; calls "
                                  f"{f.name}(...) in this grammar mean the user function", f.span,
