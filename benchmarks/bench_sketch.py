@@ -11,9 +11,10 @@ these seed 1000+), in the training style ("sketchy": new pens) and in styles nev
    the predicted class holds it: snippets that draw identically are one class; the exact-name
    accuracy is shown too) and the parameter RMSE in normalised units with the true snippet's
    regressor: CNN only, then after `--steps` refinement steps on `--refine-n` sketches per
-   snippet with three set-ups (REFINERS): greedy coordinate search with the paper's score on
+   snippet with four set-ups (REFINERS): greedy coordinate search with the paper's score on
    the stage camera (Nishida's code), Metropolis-Hastings with the paper's score (the paper),
-   and the default (line scans + compass search, chamfer score, view searched +/-3 deg).
+   and the default (line scans + compass search, chamfer score, view searched +/-3 deg, a
+   Gaussian prior around the network's estimate), also without the prior ("no prior").
    "equiv." RMSE measures the distance to the set of values that derive the same geometry (a
    floor height only shows through the number of floors). Times: median per recognition
    (cnn = image to network input, classify, regress; the others the whole recognition with
@@ -125,10 +126,12 @@ def equiv_errors(rec, stage, info, u_true, r):
     return np.array(out)
 
 
-#: refinement set-ups compared in section 1: (label, method, score, view range in degrees)
-REFINERS = (("greedy", "greedy", "paper", 0.0),  # Nishida's public code
-            ("MH", "metropolis", "paper", 0.0),  # the paper
-            ("pattern", "pattern", "chamfer", 3.0))  # this implementation's default
+#: refinement set-ups compared in section 1: (label, method, score, view range in degrees,
+#: prior around the network's estimate)
+REFINERS = (("greedy", "greedy", "paper", 0.0, False),  # Nishida's public code
+            ("MH", "metropolis", "paper", 0.0, False),  # the paper
+            ("no prior", "pattern", "chamfer", 3.0, False),  # the default's search on the score alone
+            ("pattern", "pattern", "chamfer", 3.0, True))  # this implementation's default
 
 
 def selected_types(lib, args):
@@ -160,9 +163,11 @@ def section_accuracy(rec, args, out):
           "raw, and 'equiv.' (to the values deriving the same geometry); refinement columns on the "
           "refined subset (cnn = before): greedy = Nishida's code (paper score, stage camera), "
           "MH = the paper (Metropolis-Hastings, paper score, stage camera), pattern = the default "
-          "(line scans + compass search, chamfer score, view searched +/-3 deg)")
+          "(line scans + compass search, chamfer score, view searched +/-3 deg, a Gaussian prior "
+          "around the network's estimate as wide as the regressor's validation RMSE), no prior = "
+          "the same search on the score alone")
     hdr = (f"{'type':<8}{'n':>5}{'acc':>7}{'acc(name)':>10}{'RMSE cnn':>10}{'equiv.':>8}"
-           f"{'| subset: cnn':>14}{'greedy':>8}{'MH':>7}{'pattern':>8}{'equiv.':>8}{'visible':>8}"
+           f"{'| subset: cnn':>14}{'greedy':>8}{'MH':>7}{'no prior':>9}{'pattern':>8}{'equiv.':>8}{'visible':>8}"
            f"{'| cnn ms':>9}{'greedy ms':>10}{'MH ms':>8}{'pattern ms':>11}")
     print(hdr)
     print("-" * len(hdr))
@@ -199,10 +204,10 @@ def section_accuracy(rec, args, out):
             t_cnn.append(statistics.median(times) / 1e3)
             if k < args.refine_n and rs.estimated:
                 sub_cnn.append(errors_of(rs, info, u_true))
-                for label, method, score, view in REFINERS:
+                for label, method, score, view, prior in REFINERS:
                     t0 = time.perf_counter()
                     rr = rec.recognize_ink(ink, t, snippet=name, refine_steps=args.steps, method=method,
-                                           score=score, view_range=view, seed=i)
+                                           score=score, view_range=view, seed=i, prior=prior)
                     t_r[label].append(time.perf_counter() - t0)
                     err_r[label].append(errors_of(rr, info, u_true))
                     eq_r[label].append(equiv_errors(rec, stage, info, u_true, rr))
@@ -218,17 +223,17 @@ def section_accuracy(rec, args, out):
             row[f"ms_{label}"] = med(t_r[label])
         rows[t] = row
         print(f"{t:<8}{n:>5}{row['acc']:>7.3f}{row['acc_name']:>10.3f}{row['rmse_cnn']:>10.3f}{row['eq_all']:>8.3f}"
-              f"{row['sub_cnn']:>14.3f}{row['rmse_greedy']:>8.3f}{row['rmse_MH']:>7.3f}{row['rmse_pattern']:>8.3f}"
+              f"{row['sub_cnn']:>14.3f}{row['rmse_greedy']:>8.3f}{row['rmse_MH']:>7.3f}{row['rmse_no prior']:>9.3f}{row['rmse_pattern']:>8.3f}"
               f"{row['eq_pattern']:>8.3f}{row['vis_pattern']:>8.3f}"
               f"{row['ms_cnn']:>9.1f}{row['ms_greedy']:>10.0f}{row['ms_MH']:>8.0f}{row['ms_pattern']:>11.0f}",
               flush=True)
     print("paper (Table 2, GPU): accuracy 0.99 mass, 0.98 roof, 0.98 window, 0.95 ledge; RMSE after "
           "MCMC 0.03 / 0.06 / 0.09 / 0.08; 25 ms classification, ~305-329 ms with refinement")
-    keys = ("acc", "rmse_cnn", "eq_all", "sub_cnn", "rmse_greedy", "rmse_MH", "rmse_pattern", "eq_pattern",
+    keys = ("acc", "rmse_cnn", "eq_all", "sub_cnn", "rmse_greedy", "rmse_MH", "rmse_no prior", "rmse_pattern", "eq_pattern",
             "vis_pattern")
     m = {k: float(np.mean([r[k] for r in rows.values()])) for k in keys}
     print(f"{'mean':<8}{'':>5}{m['acc']:>7.3f}{'':>10}{m['rmse_cnn']:>10.3f}{m['eq_all']:>8.3f}"
-          f"{m['sub_cnn']:>14.3f}{m['rmse_greedy']:>8.3f}{m['rmse_MH']:>7.3f}{m['rmse_pattern']:>8.3f}"
+          f"{m['sub_cnn']:>14.3f}{m['rmse_greedy']:>8.3f}{m['rmse_MH']:>7.3f}{m['rmse_no prior']:>9.3f}{m['rmse_pattern']:>8.3f}"
           f"{m['eq_pattern']:>8.3f}{m['vis_pattern']:>8.3f}")
     print(f"visible: pattern's RMSE without the weakly visible parameters (moving their lines < {WEAK_REACH:g} px "
           "of the 128 px score canvas over their range: plugins/sketch/scripts/visibility.py)")

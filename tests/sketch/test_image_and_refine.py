@@ -177,3 +177,47 @@ def test_a_flat_score_gives_the_parameter_back_to_the_network():
     assert 0.39 < u[0] <= 0.421 and s >= score([0.0, 0.7]) * 0.9  # bisection: within 0.9 / 32
     u, s = keep_network_values(score, np.array([0.0, 0.7]), 1.0, np.array([0.9, 0.7]), 0.1, at_least=1.0)
     assert u[0] <= 0.4 and s == 1.0
+
+
+class _BowlScorer:
+    """A stand-in for refine.Scorer: exp(-|u - optimum|^2 / 0.02), no view search."""
+
+    def __init__(self, optimum):
+        self.optimum = np.asarray(optimum, float)
+
+    def start(self, u):
+        return np.asarray(u, float)
+
+    def __call__(self, u):
+        d = np.asarray(u, float) - self.optimum
+        return float(np.exp(-(d @ d) / 0.02))
+
+
+def test_the_prior_weighs_the_score_against_the_networks_estimate():
+    import math
+
+    from grammarkit_sketch.refine import refine, with_prior
+
+    scorer = _BowlScorer([0.8])
+    f = with_prior(scorer, np.array([0.5]), 0.1)
+    assert f(np.array([0.6])) == pytest.approx(scorer(np.array([0.6])) * math.exp(-0.5))
+    # maximum of exp(-(u-0.8)^2/0.02 - (u-0.5)^2/0.02) is at the midpoint 0.65
+    u, s, _ = refine(scorer, np.array([0.5]), 20, prior_sigma=0.1)
+    assert u[0] == pytest.approx(0.65, abs=0.01) and s == pytest.approx(scorer(u))
+    u_alone, _, _ = refine(scorer, np.array([0.5]), 20)
+    assert u_alone[0] == pytest.approx(0.8, abs=0.01)  # the score alone goes to its optimum
+    u_narrow, _, _ = refine(scorer, np.array([0.5]), 20, prior_sigma=0.01)
+    assert abs(u_narrow[0] - 0.5) < 0.01  # a network far surer than the score keeps its value
+    with pytest.raises(ValueError, match="prior sigma"):
+        refine(scorer, np.array([0.5]), 5, prior_sigma=0.0)
+
+
+def test_the_prior_is_the_regressors_validation_error_with_a_floor():
+    from types import SimpleNamespace
+
+    from grammarkit_sketch.recognizer import PRIOR_FLOOR, prior_sigma
+
+    tm = SimpleNamespace(metrics={"val_rmse.roof_hip": 0.05, "val_rmse.roof_flat": 0.001})
+    assert prior_sigma(tm, "roof_hip") == 0.05
+    assert prior_sigma(tm, "roof_flat") == PRIOR_FLOOR
+    assert prior_sigma(tm, "roof_gable") is None  # no metric: no prior

@@ -79,6 +79,10 @@ def print_recognition(r: Any, library: Any, source: str) -> None:
 @click.option("--view-range", type=click.FloatRange(0, 10), default=3.0, show_default=True,
               help="Degrees the refinement may turn the view (pitch and yaw) to match a sketch "
                    "drawn in slightly wrong perspective; 0: the stage camera only.")
+@click.option("--prior/--no-prior", default=True, show_default=True,
+              help="The default refinement (pattern) weighs the score with a Gaussian prior around "
+                   "the network's estimate (as wide as the regressor's validation error); "
+                   "--no-prior searches the score alone.")
 @click.option("--snippet", default=None, help="Skip the classifier: estimate this snippet's parameters.")
 @click.option("--preview", type=click.Path(dir_okay=False, path_type=Path), default=None,
               help="Write the sketch with the recognised model drawn over it (PNG).")
@@ -87,7 +91,7 @@ def print_recognition(r: Any, library: Any, source: str) -> None:
 @click.option("--seed", type=int, default=0, show_default=True, help="Seed of the Metropolis-Hastings search.")
 @click.option("--json", "as_json", is_flag=True, help="Print the result as JSON.")
 def recognize_command(sketch: Path | None, object_type: str, library: Path | None, models: Path | None,
-                      refine_steps: int, method: str, score: str, view_range: float,
+                      refine_steps: int, method: str, score: str, view_range: float, prior: bool,
                       snippet: str | None, preview: Path | None,
                       canvas: Path | None, seed: int, as_json: bool) -> None:
     """Recognise the snippet and its parameters in a sketch of one object type.
@@ -109,7 +113,7 @@ def recognize_command(sketch: Path | None, object_type: str, library: Path | Non
     if sketch is None:
         raise click.UsageError("give a SKETCH image (or --canvas OUT.png)")
     r = rec.recognize(sketch, t, refine_steps=refine_steps, method=method, snippet=snippet, seed=seed,
-                      score=score, view_range=view_range)
+                      score=score, view_range=view_range, prior=prior)
     if preview is not None:
         rec.preview(sketch, r, preview)
     if as_json:

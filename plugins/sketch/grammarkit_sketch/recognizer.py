@@ -93,6 +93,18 @@ def _fmt(v: float) -> str:
     return f"{float(v):.4g}" if abs(float(v)) < 1000 else f"{float(v):.1f}"
 
 
+PRIOR_FLOOR = 0.02  # normalised: the prior never claims the network is surer than this
+
+
+def prior_sigma(tm: Any, snippet: str) -> float | None:
+    """The width of the refinement's prior for `snippet`'s parameters: its regressor's
+    validation RMSE (models file metrics), at least PRIOR_FLOOR; None without that metric."""
+    v = tm.metrics.get(f"val_rmse.{snippet}") if isinstance(tm.metrics, dict) else None
+    if not isinstance(v, (int, float)) or not v > 0:
+        return None
+    return max(float(v), PRIOR_FLOOR)
+
+
 class Recognizer:
     """Models + library, with the derivers and networks kept warm between sketches."""
 
@@ -138,11 +150,13 @@ class Recognizer:
                         refine_steps: int = 0, method: str = "pattern", snippet: str | None = None,
                         seed: int = 0, t_load: float = 0.0, target: np.ndarray | None = None,
                         score: str = "chamfer", score_short: int = SCORE_SHORT,
-                        view_range: float = VIEW_RANGE) -> Recognition:
+                        view_range: float = VIEW_RANGE, prior: bool = True) -> Recognition:
         """Recognise a network input (RES x RES ink); see `recognize`. `target` is the sketch's
         line mask at the score canvas (dataset.line_mask with `score_short`); without it the
         input stands in (resized to the score canvas, which loses the long side's detail of an
-        elongated canvas)."""
+        elongated canvas). `prior`: the default refinement (`pattern`) maximises the score times
+        a Gaussian prior around the regressor's estimate, its width the regressor's validation
+        RMSE (refine.with_prior); False searches the score alone."""
         if method not in METHODS:
             raise GrammarkitError(f"unknown refinement method {method!r}; expected one of "
                                   f"{', '.join(METHODS)}", None, code="sketch-bad-method")
@@ -184,7 +198,12 @@ class Recognizer:
         u_ref, match = u, net_score
         params = {p.name: p for p in info.params}
         if refine_steps > 0 and len(u):
-            u_ref, match, _ = refine(scorer, u, refine_steps, method, seed)
+            # the prior's width is the regressor's error on the canonical anchor it was trained
+            # on; on another anchor (a session's tower face) its estimate is in canonical
+            # proportions and no such prior holds: the score alone decides there
+            canonical = np.allclose(stage.anchor_size, tm.stage.anchor_size, rtol=0.05)
+            sigma = prior_sigma(tm, chosen) if prior and method == "pattern" and canonical else None
+            u_ref, match, _ = refine(scorer, u, refine_steps, method, seed, prior_sigma=sigma)
         for n, val in zip(names, u_ref):
             values[n] = params[n].value(val)
         if refine_steps > 0 and names:
@@ -352,7 +371,8 @@ def get_recognizer(models: Any = None, library: Any = None) -> Recognizer:
 
 def recognize(image: Any, object_type: str, *, models: Any = None, library: Any = None,
               refine: int = 0, method: str = "pattern", snippet: str | None = None,
-              seed: int = 0, score: str = "chamfer", view_range: float = VIEW_RANGE) -> Recognition:
+              seed: int = 0, score: str = "chamfer", view_range: float = VIEW_RANGE,
+              prior: bool = True) -> Recognition:
     """Recognise a sketch of one object type.
 
     image:   a path, a PIL image or an array (dark lines on light paper). An object type with
@@ -365,11 +385,13 @@ def recognize(image: Any, object_type: str, *, models: Any = None, library: Any 
     score:   "chamfer" (truncated symmetric chamfer distance, the default) or "paper"
              (exp(-RMS(D(render) - D(sketch))), the paper's equation 1).
     view_range: degrees the refinement may turn the view to fit the sketch's perspective.
+    prior:   "pattern" maximises the score times a Gaussian prior around the network's estimate
+             (as wide as the regressor's validation RMSE); False: the score alone.
     snippet: skip the classifier and estimate this snippet's parameters.
     """
     rec = get_recognizer(models, library)
     return rec.recognize(image, object_type, refine_steps=refine, method=method, snippet=snippet, seed=seed,
-                         score=score, view_range=view_range)
+                         score=score, view_range=view_range, prior=prior)
 
 
 __all__ = ["Candidate", "ModelFileError", "Recognition", "Recognizer", "get_recognizer", "recognize",

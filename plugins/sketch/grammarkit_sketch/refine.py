@@ -297,8 +297,27 @@ def metropolis(score: Callable[[np.ndarray], float], u0: np.ndarray, steps: int,
     return best_u, best
 
 
+def with_prior(scorer: Callable[[np.ndarray], float], u_net: np.ndarray,
+               sigma: float) -> Callable[[np.ndarray], float]:
+    """The score times a Gaussian prior around the network's estimate: s(u) x exp(-|u - u_net|^2
+    / (2 sigma^2)) over the parameters (not the view offsets). With sigma the regressor's
+    validation RMSE this is the maximum a posteriori estimate with the network as the prior:
+    the drawing moves a parameter away from the network's value only as far as it shows it
+    better. Measured (docs/sketch.md): once the regressors reach RMSE 0.02-0.06, the score's own
+    optimum (biased by the pen's overshoot and wobble) lies further from the truth than the
+    network's estimate, and refinement without the prior made the error larger."""
+    u_net = np.asarray(u_net, dtype=float)
+    k = len(u_net)
+    inv = 0.5 / (sigma * sigma)
+
+    def objective(u: np.ndarray) -> float:
+        d = np.asarray(u, dtype=float)[:k] - u_net
+        return scorer(u) * math.exp(-inv * float(d @ d))
+    return objective
+
+
 def refine(scorer: Scorer, u0: np.ndarray, steps: int, method: str = "pattern",
-           seed: int = 0) -> tuple[np.ndarray, float, float]:
+           seed: int = 0, prior_sigma: float | None = None) -> tuple[np.ndarray, float, float]:
     """(refined parameters u, its score, seconds). With a view search (scorer.view_range > 0)
     the view offsets are searched too; `scorer.offsets(...)` of the result is not returned, the
     parameters are what a recognition reports.
@@ -306,21 +325,28 @@ def refine(scorer: Scorer, u0: np.ndarray, steps: int, method: str = "pattern",
     `pattern`: a few compass-search sweeps (the view settles first), one line-search sweep over
     the parameters (`scan`, SCAN_POINTS values each), compass search for `steps` sweeps, then
     each parameter back towards the network's estimate as far as the score stays within
-    NETWORK_TOLERANCE (`keep_network_values`).
+    NETWORK_TOLERANCE (`keep_network_values`). With `prior_sigma` it maximises the score times
+    a Gaussian prior around the network's estimate (`with_prior`) instead of the score alone;
+    the score returned is the match score s of the result either way. `greedy` and
+    `metropolis` (Nishida's code and the paper) always search the score alone.
     """
     if method not in METHODS:
         raise ValueError(f"unknown refinement method {method!r}; expected one of {', '.join(METHODS)}")
+    if prior_sigma is not None and not (prior_sigma > 0):
+        raise ValueError(f"prior sigma must be > 0, got {prior_sigma!r}")
     t0 = time.perf_counter()
     k = len(u0)
     start = scorer.start(np.asarray(u0, float))
     if steps <= 0 or k == 0:
         return np.asarray(u0, float), scorer(start), time.perf_counter() - t0
     if method == "pattern":
-        u, _ = pattern(scorer, start, min(steps, PATTERN_WARMUP))
-        u, _ = scan(scorer, u, SCAN_POINTS, k, SCAN_MIN_GAIN)
-        u, s = pattern(scorer, u, steps)
-        u, s = keep_network_values(scorer, u, s, np.asarray(u0, float), NETWORK_TOLERANCE,
-                                   at_least=scorer(start))
+        goal = scorer if prior_sigma is None else with_prior(scorer, u0, prior_sigma)
+        u, _ = pattern(goal, start, min(steps, PATTERN_WARMUP))
+        u, _ = scan(goal, u, SCAN_POINTS, k, SCAN_MIN_GAIN)
+        u, s = pattern(goal, u, steps)
+        u, _ = keep_network_values(goal, u, s, np.asarray(u0, float), NETWORK_TOLERANCE,
+                                   at_least=goal(start))
+        s = scorer(u)
     elif method == "greedy":
         u, s = greedy(scorer, start, steps)
     else:

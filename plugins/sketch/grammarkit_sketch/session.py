@@ -232,16 +232,20 @@ class Session:
         if snippet is None and not np.allclose(sc.stage.anchor_size, canonical, rtol=0.05):
             # The networks were trained on the canonical anchor; on an anchor of other
             # proportions (a 40 m tower's facade) the classifier may prefer a snippet that,
-            # drawn on the real anchor, matches the strokes far worse. Re-rank the likely
-            # classes by probability x match score on the real anchor (the classifier's belief
-            # weighted by how well each snippet, drawn there, fits the strokes).
+            # drawn on the real anchor, matches the strokes far worse. The likely classes are
+            # re-ranked on the real anchor: with refinement by the match score of each at its
+            # refined parameters (the classifier, trained on other proportions, only nominates
+            # them); without, by probability x match score of the networks' estimates (which
+            # are in canonical proportions, so the score alone would mislead).
+            def rank(x: Recognition) -> float:
+                return x.score if refine > 0 else x.probability * x.score
             for c in r.top[1:]:
                 if c.probability < RERANK_MIN_PROBABILITY:
                     break
                 alt = self.recognizer.recognize_ink(ink, t, stage=sc.stage, what=f"stage {t}",
                                                     refine_steps=refine, method=method, snippet=c.snippet,
                                                     seed=seed)
-                if alt.probability * alt.score > r.probability * r.score:
+                if rank(alt) > rank(r):
                     r = alt
         self.stages[t] = StageResult(t, r, size, [list(map(list, ln)) for ln in lines])
         return r
