@@ -99,7 +99,6 @@ def _lines_of(text: str) -> list[str]:
 def _file_lines(file: str) -> list[str] | None:
     import os
 
-    from .dsl.parser import DEFAULT_MAX_BYTES, read_source
     try:
         st = os.stat(file)
     except (OSError, ValueError):
@@ -108,14 +107,38 @@ def _file_lines(file: str) -> list[str] | None:
     if key not in _file_cache:
         if len(_file_cache) >= 8:
             _file_cache.pop(next(iter(_file_cache)))
-        try:
-            # bounded, regular files only: a diagnostic never reads a FIFO or a device
-            text = read_source(Path(file), max_bytes=4 * DEFAULT_MAX_BYTES)
-            lines: list[str] | None = text.removeprefix("\ufeff").split("\n")
-        except GrammarkitError:
-            lines = None
+        data = _read_regular(file, _SHOWN_FILE_BYTES)
+        lines = None if data is None else (
+            data.decode("utf-8", "replace").removeprefix("\ufeff").split("\n"))
         _file_cache[key] = lines
     return _file_cache[key]
+
+
+_SHOWN_FILE_BYTES = 2 * 1024 * 1024  # a diagnostic shows lines of files up to this size
+
+
+def _read_regular(file: str, max_bytes: int) -> bytes | None:
+    """The bytes of a regular file of at most `max_bytes`, else None. A diagnostic never reads
+    a FIFO or a device. Written here rather than taken from grammarkit.fileio because this
+    module is the bottom floor that fileio itself builds on (docs/architecture.md)."""
+    import os
+    import stat
+
+    try:
+        fd = os.open(file, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_CLOEXEC", 0))
+    except (OSError, ValueError):
+        return None
+    try:
+        st = os.fstat(fd)
+        if not stat.S_ISREG(st.st_mode) or st.st_size > max_bytes:
+            return None
+        os.set_blocking(fd, True)
+        data = os.read(fd, max_bytes + 1)
+        return None if len(data) > max_bytes else data
+    except OSError:
+        return None
+    finally:
+        os.close(fd)
 
 
 class GrammarkitError(Exception):

@@ -19,13 +19,9 @@ from lark.exceptions import LarkError, UnexpectedCharacters, UnexpectedEOF, Unex
 
 from ..errors import Diagnostic, GrammarError
 from ..gcpause import paused_gc  # noqa: F401  (grammarkit.dsl re-exports it)
+from ..fileio import DEFAULT_MAX_BYTES, decode_source, read_limited, read_source  # noqa: F401 - re-exported
 from ..ir.base import Span
 
-# The largest grammar file read without --max-size. The worst file of ordinary constructs this
-# size (long operation chains, tests/qa/test_big_files.py) checks in about 5 s of CPU and
-# 0.6 GB; 5 MB took minutes and gigabytes. Real grammars are far smaller (the largest shipped
-# one is 9 KB); a generated one can raise the limit.
-DEFAULT_MAX_BYTES = 512 * 1024
 MAX_NESTING = 48  # brackets; keeps every later recursive pass far from Python's recursion limit
 MAX_SYNTAX_ERRORS = 50
 
@@ -189,89 +185,6 @@ def get_parser() -> Lark:
         cache = False
     return Lark(text, postlex=StatementPostLexer(), lexer_callbacks={"COMMENT": _collect_comment},
                 cache=cache, **_PARSER_OPTIONS)
-
-
-# -- reading files -------------------------------------------------------------------------
-
-def read_source(path: Path, *, max_bytes: int = DEFAULT_MAX_BYTES) -> str:
-    """Read a grammar file as text, with located errors for size and encoding problems.
-
-    Only regular files are read (a FIFO would block forever, a device such as /dev/zero has no
-    end, and `stat` reports 0 bytes for both), and never more than `max_bytes` + 1 bytes, so
-    the limit holds even for a file that grows while it is read."""
-    import stat as stat_mod
-
-    fname = str(path)
-
-    def refuse(message: str, code: str, hint: str | None = None) -> GrammarError:
-        return GrammarError(message, Span(file=fname, line=1, column=1, end_line=1, end_column=1)
-                            if code == "too-large" else Span(file=fname), code=code, hint=hint)
-
-    def too_large(size: str) -> GrammarError:
-        return refuse(f"file is too large ({size}; the limit is {max_bytes:,} bytes)", "too-large",
-                      "split the grammar into several files joined with `import`, or raise the limit")
-
-    try:
-        # O_NONBLOCK: opening a FIFO without a writer must not block; the mode is checked on
-        # the open descriptor, so the file cannot be swapped between the check and the read
-        fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_CLOEXEC", 0))
-    except (OSError, ValueError) as exc:
-        if isinstance(exc, OSError) and exc.errno == 21 or Path(fname).is_dir():
-            raise refuse(f"cannot read {fname}: it is a folder, not a grammar file", "io-error") from None
-        reason = exc.strerror if isinstance(exc, OSError) and exc.strerror else str(exc)
-        raise refuse(f"cannot read {fname}: {reason}", "io-error") from None
-    try:
-        st = os.fstat(fd)
-        if stat_mod.S_ISDIR(st.st_mode):
-            raise refuse(f"cannot read {fname}: it is a folder, not a grammar file", "io-error")
-        if not stat_mod.S_ISREG(st.st_mode):
-            kind = ("a named pipe (FIFO)" if stat_mod.S_ISFIFO(st.st_mode) else
-                    "a device" if stat_mod.S_ISCHR(st.st_mode) or stat_mod.S_ISBLK(st.st_mode) else
-                    "a socket" if stat_mod.S_ISSOCK(st.st_mode) else "not a regular file")
-            raise refuse(f"cannot read {fname}: it is {kind}, not a regular file", "not-a-file",
-                         "give the path of a grammar file")
-        if st.st_size > max_bytes:
-            raise too_large(f"{st.st_size:,} bytes")
-        os.set_blocking(fd, True)
-        chunks, total = [], 0
-        while total <= max_bytes:
-            chunk = os.read(fd, min(1 << 20, max_bytes + 1 - total))
-            if not chunk:
-                break
-            chunks.append(chunk)
-            total += len(chunk)
-        if total > max_bytes:
-            raise too_large(f"more than {max_bytes:,} bytes")
-        data = b"".join(chunks)
-    except OSError as exc:
-        raise refuse(f"cannot read {fname}: {exc.strerror or exc}", "io-error") from None
-    finally:
-        os.close(fd)
-    return decode_source(data, fname)
-
-
-def read_limited(stream, max_bytes: int, name: str) -> bytes:  # noqa: ANN001 - a binary stream
-    """At most `max_bytes` of a stream (standard input), or a located too-large error: never
-    more than `max_bytes` + 1 bytes are read."""
-    data = stream.read(max_bytes + 1)
-    if len(data) > max_bytes:
-        raise GrammarError(f"input is too large (more than {max_bytes:,} bytes; the limit is "
-                           f"{max_bytes:,} bytes)", Span(file=name, line=1, column=1, end_line=1,
-                                                        end_column=1), code="too-large")
-    return data
-
-
-def decode_source(data: bytes, filename: str | None) -> str:
-    try:
-        return data.decode("utf-8")
-    except UnicodeDecodeError as exc:
-        before = data[:exc.start]
-        line = before.count(b"\n") + 1
-        col = exc.start - (before.rfind(b"\n") + 1) + 1
-        raise GrammarError(
-            f"file is not valid UTF-8 text (byte 0x{data[exc.start]:02x} at offset {exc.start})",
-            Span(file=filename, line=line, column=col, end_line=line, end_column=col + 1),
-            code="encoding", hint="save the file as UTF-8") from None
 
 
 # -- parsing -------------------------------------------------------------------------------

@@ -1,7 +1,7 @@
 """Model writers for GLB, glTF, OBJ, STL and PLY, registered as the `core-exporters` plugin.
 
 Every writer turns a split `Model`, a tiling `Assembly`, a trimesh Scene or a Trimesh into
-bytes (`encode_*`); the run layer's writer (`grammarkit.run.writer.write_files`) writes them
+bytes (`encode_*`); the run layer's writer (`grammarkit.fileio.write_files`) writes them
 atomically. All formats share one intermediate form, a list of `Solid`s: one vertex set each
 (never split at colour seams), its triangles grouped into named groups, each triangle with a
 material (a name and an sRGB colour).
@@ -737,7 +737,7 @@ def encode_with(spec: ExporterSpec, obj: Any) -> bytes:
 
 def export(obj: Any, path: str | Path, format: str | None = None) -> Path:
     """Write a Scene / Trimesh / model / assembly to `path` atomically; returns the path."""
-    from ..run.writer import write_files
+    from ..fileio import write_files
 
     path = Path(path)
     spec = exporter_for(path, format)

@@ -33,7 +33,7 @@ from pathlib import Path
 from typing import Any, Iterable, Mapping
 
 from ..errors import GrammarkitError
-from ..fileio import OutputError, atomic_output
+from ..fileio import OutputError, atomic_output, make_parent, write_files  # noqa: F401 - re-exported
 from ..jsonable import to_jsonable
 
 __all__ = ["OutputFolder", "RunMismatch", "check_outputs", "grammar_hash", "write_files"]
@@ -83,29 +83,6 @@ def check_outputs(outputs: Mapping[str, Path | None], inputs: Iterable[Path] = (
             raise OutputError(f"{path}: {option} and {seen[key]} name the same file; "
                               "each output needs its own path")
         seen[key] = option
-
-
-def write_files(files: Mapping[Path, bytes | str]) -> None:
-    """Write every file or none: temporary names first, renames only when all were written."""
-    for path in files:
-        _make_parent(Path(path))
-    with contextlib.ExitStack() as stack:
-        for path, data in files.items():
-            tmp = stack.enter_context(atomic_output(Path(path)))
-            if isinstance(data, str):
-                tmp.write_text(data, encoding="utf-8")
-            else:
-                tmp.write_bytes(data)
-
-
-def _make_parent(path: Path) -> None:
-    folder = path.parent
-    if folder.exists() and not folder.is_dir():
-        raise OutputError(f"{path}: cannot write: {folder} is a file, not a folder")
-    try:
-        folder.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise OutputError(f"{path}: cannot create folder {folder}: {exc.strerror or exc}") from None
 
 
 def _fsync_dir(folder: Path) -> None:

@@ -656,7 +656,7 @@ class Model:
         from pathlib import Path
 
         from ..geometry.exporters import encode_glb, encode_gltf, encode_with, exporter_for
-        from ..run.writer import write_files
+        from ..fileio import write_files
 
         path = Path(path)
         spec = exporter_for(path, format)

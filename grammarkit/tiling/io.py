@@ -344,9 +344,9 @@ def write_assembly(assembly: Assembly, path: str | os.PathLike) -> Path:
     """Write `assembly` as GLB/glTF/OBJ/STL/PLY (by suffix) or, for a path without suffix, a
     folder of GLB part files, through the exporter registry (grammarkit.geometry.exporters: one
     node per part with its type in the extras, a colour per part type, +Y up) and the one
-    atomic writer (grammarkit.run.writer.write_files)."""
+    atomic writer (grammarkit.fileio.write_files)."""
     from ..geometry.exporters import encode_with, exporter_for
-    from ..run.writer import write_files
+    from ..fileio import write_files
 
     path = Path(path)
     if not assembly.parts:
