@@ -51,7 +51,10 @@ class Request:
     registries: the operations/functions/constraints/exporters in effect for this run.
     progress:   `progress(description, total) -> advance(n=1, **fields)` for progress bars.
     deadline:   `time.monotonic()` value after which the back end must stop (None: no limit);
-                `check_deadline()` raises a LimitError for it.
+                `check_deadline()` raises a LimitError for it (`--timeout`: a hard stop).
+    soft_deadline: `time.monotonic()` value of the graceful budget (`--time-limit`): past it a
+                back end stops making new results, keeps what it made and returns; the run layer
+                reports the shortfall. `time_is_up()` tells whether it has passed.
     format:     the export format the writer will use, or None when results stay in memory
                 (Python API). Back ends that make models in worker processes may encode them
                 there (`grammarkit.run.encode_model`) and yield the bytes as `Result.model`.
@@ -70,6 +73,7 @@ class Request:
     registries: Any = None
     progress: Callable[..., Callable[..., None]] = _no_progress
     deadline: float | None = None
+    soft_deadline: float | None = None
     format: str | None = None
     preview: bool = False
 
@@ -83,6 +87,14 @@ class Request:
             from ..errors import LimitError
 
             raise LimitError("the run's time budget (--timeout) is spent", None, code="timeout")
+
+    def time_is_up(self) -> bool:
+        """True once the graceful budget (`--time-limit`) has passed: stop making new results."""
+        if self.soft_deadline is None:
+            return False
+        import time
+
+        return time.monotonic() > self.soft_deadline
 
 
 @dataclass
