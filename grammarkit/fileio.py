@@ -10,7 +10,7 @@ import contextlib
 import os
 import tempfile
 from pathlib import Path
-from typing import Iterator, Mapping
+from typing import Iterable, Iterator, Mapping
 
 from .errors import GrammarError, ShapeError
 from .ir.base import Span
@@ -46,6 +46,7 @@ def atomic_output(path: str | Path) -> Iterator[Path]:
     disk) becomes a ShapeError naming `path`, so the CLI reports it instead of a traceback.
     """
     path = Path(path)
+    refuse_special(path)
     if path.is_symlink():
         # write through the link to the file it names: the link stays a link (fmt --in-place
         # on a symlinked grammar formats the real file), and the error names the user's path
@@ -86,6 +87,71 @@ def atomic_output(path: str | Path) -> Iterator[Path]:
         raise
     finally:
         os.close(fd)
+
+
+def special_kind(path: str | Path) -> str | None:
+    """What `path` is when it exists and is neither a regular file nor a folder ("a device",
+    "a named pipe (FIFO)", "a socket"), following symlinks; None otherwise."""
+    import stat as stat_mod
+
+    try:
+        mode = os.stat(path).st_mode
+    except (OSError, ValueError):
+        return None  # missing (or a dangling link): a new file is written
+    if stat_mod.S_ISREG(mode) or stat_mod.S_ISDIR(mode):
+        return None
+    if stat_mod.S_ISCHR(mode) or stat_mod.S_ISBLK(mode):
+        return "a device"
+    if stat_mod.S_ISFIFO(mode):
+        return "a named pipe (FIFO)"
+    if stat_mod.S_ISSOCK(mode):
+        return "a socket"
+    return "not a regular file"
+
+
+def refuse_special(path: str | Path, option: str | None = None) -> None:
+    """Refuse an output path that exists and is not a regular file or a folder.
+
+    The atomic writer renames its temporary file over the target, so writing to /dev/null or
+    a FIFO would replace the device node (as root: for the whole machine) with a plain file."""
+    kind = special_kind(path)
+    if kind is None:
+        return
+    real = os.path.realpath(path)
+    via = f" (it links to {real})" if real != os.path.abspath(path) else ""
+    what = f"{option} " if option else ""
+    raise OutputError(f"{path}: refusing to write {what}here: it is {kind}{via}, not a regular "
+                      "file; give the path of a file to create or replace")
+
+
+def same_file(a: Path, b: Path) -> bool:
+    try:
+        return os.path.samefile(a, b)
+    except OSError:
+        return os.path.realpath(a) == os.path.realpath(b)
+
+
+def check_outputs(outputs: Mapping[str, Path | None], inputs: Iterable[Path] = ()) -> None:
+    """Refuse, before any work, an output that is an input, that another output also uses, or
+    that exists and is not a regular file (a device, a FIFO, a socket).
+
+    `outputs` maps an option name (for the message) to its path."""
+    seen: dict[str, str] = {}
+    inputs = [Path(p) for p in inputs]
+    for option, path in outputs.items():
+        if path is None:
+            continue
+        path = Path(path)
+        refuse_special(path, option)
+        for src in inputs:
+            if same_file(path, src):
+                raise OutputError(f"{path}: {option} would overwrite the input {src}; "
+                                  "choose another output path")
+        key = os.path.realpath(path)
+        if key in seen:
+            raise OutputError(f"{path}: {option} and {seen[key]} name the same file; "
+                              "each output needs its own path")
+        seen[key] = option
 
 
 def _lock(fd: int) -> bool:
@@ -231,3 +297,130 @@ def decode_source(data: bytes, filename: str | None) -> str:
             f"file is not valid UTF-8 text (byte 0x{data[exc.start]:02x} at offset {exc.start})",
             Span(file=filename, line=line, column=col, end_line=line, end_column=col + 1),
             code="encoding", hint="save the file as UTF-8") from None
+
+
+LOCK_NAME = ".grammarkit.lock"
+
+
+class FolderBusy(OutputError):
+    """Another live process holds the lock of an output folder."""
+
+
+class FolderLock:
+    """An exclusive lock on an output folder for the whole of one run (issue 31: two runs into
+    one folder mixed their results and doubled manifest lines).
+
+    The lock is `fcntl.flock` on `.grammarkit.lock` inside the folder. The kernel drops it when
+    the holding process ends, however it ends, so a lock whose holder died is simply taken
+    over; the file's text (pid, command, start time) only serves the message of a run that is
+    refused. The folder is created if missing (and removed again on release if the run left
+    nothing in it), because the lock must exist before anything in the folder is read.
+    """
+
+    def __init__(self, folder: str | Path):
+        self.folder = Path(folder)
+        self.path = self.folder / LOCK_NAME
+        self._fd: int | None = None
+        self._created = False
+
+    def acquire(self) -> "FolderLock":
+        import json
+        import shlex
+        import sys
+        import time
+
+        try:
+            import fcntl
+        except ImportError:  # pragma: no cover - not POSIX: no lock
+            return self
+        for _ in range(20):
+            if not self.folder.is_dir():
+                try:
+                    self.folder.mkdir(parents=True)
+                    self._created = True
+                except FileExistsError:
+                    pass
+                except OSError as exc:
+                    raise OutputError(f"{self.folder}: cannot create folder: "
+                                      f"{exc.strerror or exc}") from None
+            try:
+                fd = os.open(self.path, os.O_RDWR | os.O_CREAT | getattr(os, "O_CLOEXEC", 0)
+                             | getattr(os, "O_NOFOLLOW", 0), 0o644)
+            except FileNotFoundError:
+                continue  # the folder was removed by a run releasing it: make it again
+            except OSError as exc:
+                raise OutputError(f"{self.folder}: cannot lock the folder ({self.path}): "
+                                  f"{exc.strerror or exc}") from None
+            try:
+                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except OSError:
+                holder = _read_holder(fd)
+                os.close(fd)
+                raise FolderBusy(f"{self.folder}: another run is writing into this folder "
+                                 f"({holder}); wait until it ends, or use another folder") from None
+            try:
+                same = os.fstat(fd).st_ino == os.stat(self.path, follow_symlinks=False).st_ino
+            except OSError:
+                same = False
+            if not same:  # the holder released (and removed) the file between open and flock
+                os.close(fd)
+                continue
+            record = {"pid": os.getpid(), "command": shlex.join(_command_line())[:500],
+                      "since": time.strftime("%Y-%m-%d %H:%M:%S")}
+            with contextlib.suppress(OSError):
+                os.ftruncate(fd, 0)
+                os.pwrite(fd, (json.dumps(record) + "\n").encode("utf-8"), 0)
+            self._fd = fd
+            return self
+        raise FolderBusy(f"{self.folder}: cannot lock the folder: its lock file keeps changing")
+
+    def release(self) -> None:
+        """Remove the lock file (while still holding it) and drop the lock."""
+        fd, self._fd = self._fd, None
+        if fd is None:
+            return
+        with contextlib.suppress(OSError):
+            self.path.unlink()
+        os.close(fd)
+        if self._created:
+            with contextlib.suppress(OSError):
+                self.folder.rmdir()  # only if the run left it empty
+
+    @property
+    def held(self) -> bool:
+        return self._fd is not None
+
+    def __enter__(self) -> "FolderLock":
+        return self.acquire()
+
+    def __exit__(self, *exc: object) -> None:
+        self.release()
+
+
+def _command_line() -> list[str]:
+    """This process's command as a person would type it: `grammarkit batch ...`,
+    `python -m grammarkit ...`, `python script.py ...`, `python -c ...`."""
+    import sys
+
+    argv = list(sys.argv) or [""]
+    python = os.path.basename(sys.executable or "python")
+    head = argv[0]
+    if head.endswith("__main__.py"):
+        return [python, "-m", os.path.basename(os.path.dirname(head)), *argv[1:]]
+    if head in ("-c", "-m", "") or head.endswith(".py"):
+        return [python, *argv]
+    return [os.path.basename(head), *argv[1:]]
+
+
+def _read_holder(fd: int) -> str:
+    """'pid 123: grammarkit batch ...; since ...' from a lock file's record, as far as known."""
+    import json
+
+    try:
+        record = json.loads(os.pread(fd, 4096, 0).decode("utf-8", "replace") or "{}")
+    except (OSError, ValueError):
+        record = {}
+    if not isinstance(record, dict) or "pid" not in record:
+        return "a process that has not said who it is yet"
+    return (f"pid {record.get('pid')}: {record.get('command') or 'unknown command'}; "
+            f"since {record.get('since') or 'unknown'}")

@@ -5,7 +5,8 @@ first), one implementation at a time, so that a broken plugin is reported with i
 skipped while everything else keeps working (`grammarkit plugins` lists the failure):
 
 - an entry point that fails to import, or a hook that raises (even `SystemExit`), is recorded
-  against its plugin; a `KeyboardInterrupt` raised there becomes a PluginError naming it;
+  against its plugin; a `KeyboardInterrupt` (Ctrl-C, or SIGTERM on the command line) is the
+  user's stop and is re-raised;
 - every item a hook returns is checked against the hook's spec type (an OperationSpec from
   `grammarkit_operations`, ...); a wrong item is reported and dropped, the rest is kept;
 - a name provided twice is an error naming both plugins. A built-in (an entry point of
@@ -234,7 +235,7 @@ class PluginManager:
                 with _plugin_output():
                     obj = ep.load()
             except KeyboardInterrupt:
-                raise PluginError(f"plugin {ep.name!r}: interrupted while importing {ep.value!r}") from None
+                raise  # Ctrl-C (or SIGTERM) while importing: the user's stop, obeyed
             except BaseException as exc:  # noqa: BLE001 - any import failure (even sys.exit) is the plugin's
                 info.errors.append(f"failed to load {ep.value!r}: {type(exc).__name__}: {exc}")
                 continue
@@ -286,7 +287,7 @@ class PluginManager:
                 with _plugin_output():
                     items = _items(impl.function())
             except KeyboardInterrupt:
-                raise PluginError(f"plugin {info.name!r}: interrupted in hook {kind.hook}") from None
+                raise  # the user's stop, obeyed (not recorded against the plugin)
             except TypeError as exc:
                 if str(exc).startswith("returned "):
                     info.errors.append(f"hook {kind.hook} {exc}; ignored")

@@ -11,9 +11,53 @@ that were loaded are printed as warnings on stderr when the command ends.
 from __future__ import annotations
 
 import os
+import signal
+import sys
+import threading
 from importlib import import_module
 
-import click
+
+def _stop(signum: int, frame: object) -> None:
+    raise KeyboardInterrupt  # SIGTERM stops like Ctrl-C: the current result completes or vanishes
+
+
+_EARLY_SIGNALS: list[int] = []
+
+
+def _remember(signum: int, frame: object) -> None:
+    _EARLY_SIGNALS.append(signum)  # during start-up imports: obeyed when the command starts
+
+
+def install_stop_signals() -> None:
+    """Make SIGINT and SIGTERM stop a command cleanly from its first moment (issue 31: one in
+    the first second was ignored and a batch ran on for minutes).
+
+    SIGTERM raises KeyboardInterrupt like Ctrl-C, so every command unwinds through its
+    `finally` blocks (results complete or vanish, locks are released). SIGINT gets Python's
+    handler back even when it was inherited as ignored: a shell script starts its background
+    jobs with SIGINT ignored, and `kill -INT` must still stop them. Installed as early as
+    possible when this process is the `grammarkit` command (a program that merely imports this
+    module keeps its own handlers), and again when the command starts; main thread only."""
+    if threading.current_thread() is not threading.main_thread():
+        return
+    signal.signal(signal.SIGTERM, _stop)
+    signal.signal(signal.SIGINT, signal.default_int_handler)
+
+
+def _is_the_command() -> bool:
+    argv0 = sys.argv[0] if sys.argv else ""
+    parts = argv0.replace("\\", "/").split("/")
+    return parts[-1] in ("grammarkit", "grammarkit.exe") or parts[-2:] in (
+        ["grammarkit", "__main__.py"], ["cli", "__main__.py"])
+
+
+if _is_the_command() and threading.current_thread() is threading.main_thread():
+    # before the imports below, which take a while on a busy machine: a stop asked for now is
+    # remembered (raising in the middle of an import would print a traceback)
+    signal.signal(signal.SIGTERM, _remember)
+    signal.signal(signal.SIGINT, _remember)
+
+import click  # noqa: E402 - after the signal handlers, on purpose
 
 from .. import __version__
 from ..errors import GrammarkitError
@@ -36,6 +80,13 @@ BUILTIN_COMMANDS: dict[str, tuple[str, str]] = {
 class GrammarkitGroup(click.Group):
     """Built-in commands imported lazily, plugin commands found on demand, user errors turned
     into diagnostics, plugin problems reported."""
+
+    def main(self, *args, **kwargs):  # noqa: ANN002, ANN003, ANN201 - click's signature
+        install_stop_signals()
+        if _EARLY_SIGNALS:
+            click.echo("interrupted: stopped before anything was written", err=True)
+            sys.exit(130)
+        return super().main(*args, **kwargs)
 
     def list_commands(self, ctx: click.Context) -> list[str]:
         # plugin commands are not listed here: finding them means importing every plugin,
@@ -72,6 +123,11 @@ class GrammarkitGroup(click.Group):
         except GrammarkitError as exc:
             report_error(exc)
             ctx.exit(1)
+        except KeyboardInterrupt:
+            # a signal before a command began writing (the commands that write say themselves
+            # what was written): nothing was changed
+            click.echo("interrupted: stopped before anything was written", err=True)
+            ctx.exit(130)
         except ImportError as exc:
             missing = missing_dependency(exc)
             if missing is None:

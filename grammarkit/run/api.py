@@ -230,8 +230,17 @@ def run_backend(grammar: Any, *, out: str | Path, backend: str | None = None, n:
            "options": request.options.model_dump(mode="json") if request.options is not None else {},
            "n": n}
     extra_inputs = [Path(g.source_path)] if getattr(g, "source_path", None) else []
-    folder = OutputFolder(Path(out), run, protected=tuple(Path(p) for p in (*inputs, *extra_inputs)),
-                          overwrite=overwrite)
+    with OutputFolder(Path(out), run, protected=tuple(Path(p) for p in (*inputs, *extra_inputs)),
+                      overwrite=overwrite) as folder:  # locked until the run ends
+        return _write_results(spec, request, folder, registries, n, fmt, preview, on_result, t0)
+
+
+def _write_results(spec: BackendSpec, request: Request, folder: Any, registries: Any, n: int,
+                   fmt: str, preview: bool, on_result: Callable[[dict], None] | None,
+                   t0: float) -> RunSummary:
+    """Drive the back end and hand each new result to the writer, until `n` are in the folder."""
+    from ..jsonable import to_jsonable
+
     summary = RunSummary(spec.name, n, 0, folder.resumed, folder.path, folder.manifest, None)
     if folder.done >= n:
         summary.shortfall = None
@@ -286,7 +295,6 @@ def run_backend(grammar: Any, *, out: str | Path, backend: str | None = None, n:
                 stats = stop.value or {}
     finally:
         gen.close()
-        folder.close()
     summary.stats = stats
     if folder.done < n:
         reason = stats.get("shortfall") if isinstance(stats, dict) else None

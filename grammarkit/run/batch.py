@@ -312,7 +312,7 @@ class _Writer:
         """Write what is queued (unless a write failed) and stop the thread."""
         self.queue.put(None)
         self.thread.join()
-        self.folder.close()
+        self.folder.sync()
 
     def _run(self) -> None:
         folder = self.folder
@@ -487,65 +487,66 @@ def run_batch(grammar: Any, items: Any, out: str | Path, *, executor: Any = None
            "sample": sample, "format": fmt, "renders": list(renders),
            "render_size": render_size if renders else None, "limits": limit_values,
            "lots": lotset.describe() if lotset is not None else None, "n": len(work)}
-    folder = OutputFolder(Path(out), run, protected=tuple(inputs), overwrite=overwrite)
-    summary = BatchSummary(kind=mode, requested=len(work), resumed=min(folder.done, len(work)),
-                           out=folder.path, manifest=folder.manifest, warnings=warnings)
-    if folder.done > len(work):
-        raise GrammarkitError(f"{folder.path}: holds {folder.done} items of this run, more than the "
-                              f"{len(work)} asked for now; ask for at least {folder.done}")
-    if overwrite:
-        from .dataset import DATASET_JSON, INDEX_JSONL, INDEX_PARQUET
+    # the folder stays locked until the index and the merged model are written too
+    with OutputFolder(Path(out), run, protected=tuple(inputs), overwrite=overwrite) as folder:
+        summary = BatchSummary(kind=mode, requested=len(work), resumed=min(folder.done, len(work)),
+                               out=folder.path, manifest=folder.manifest, warnings=warnings)
+        if folder.done > len(work):
+            raise GrammarkitError(f"{folder.path}: holds {folder.done} items of this run, more than the "
+                                  f"{len(work)} asked for now; ask for at least {folder.done}")
+        if overwrite:
+            from .dataset import DATASET_JSON, INDEX_JSONL, INDEX_PARQUET
 
-        for stale in (INDEX_JSONL, INDEX_PARQUET, DATASET_JSON):
-            (folder.path / stale).unlink(missing_ok=True)
+            for stale in (INDEX_JSONL, INDEX_PARQUET, DATASET_JSON):
+                (folder.path / stale).unlink(missing_ok=True)
 
-    own_executor = executor is None
-    if executor is None:
-        executor = make_executor(None, workers)
-    summary.executor = getattr(executor, "name", type(executor).__name__)
-    summary.workers = int(getattr(executor, "workers", 1) or 1)
-    deadline = None if timeout is None else time.monotonic() + float(timeout)
-    settings = BatchSettings(grammar=g, mode=mode, seed=seed, attrs=attrs, sample=bool(sample),
-                             exporter=exporter, fmt=fmt, renders=renders, render_size=render_size,
-                             limits=limit_values)
-    if progress is not None:
-        progress(folder.done, len(work), None)
-    todo = work[folder.done:]
-    try:
-        if todo:
-            with executor.session(_init_state, settings) as session:
-                results = session.map(_make_item, todo)
-                try:
-                    _consume(results, todo, folder, summary, mode, g.name or "model", fmt,
-                             fail_fast, progress, len(work), deadline, timeout)
-                finally:
-                    results.close()  # results still out are cancelled, not left running
-    except (GrammarkitError, KeyboardInterrupt):
-        raise
-    except RuntimeError as exc:  # WorkerError: a worker process died, the cluster went away
-        raise GrammarkitError(f"the {summary.executor} executor failed: {exc}; {folder.done} items "
-                              f"are complete in {folder.path}/manifest.jsonl; run the same command "
-                              "again to continue") from None
-    finally:
-        if own_executor:
-            executor.close()
+        own_executor = executor is None
+        if executor is None:
+            executor = make_executor(None, workers)
+        summary.executor = getattr(executor, "name", type(executor).__name__)
+        summary.workers = int(getattr(executor, "workers", 1) or 1)
+        deadline = None if timeout is None else time.monotonic() + float(timeout)
+        settings = BatchSettings(grammar=g, mode=mode, seed=seed, attrs=attrs, sample=bool(sample),
+                                 exporter=exporter, fmt=fmt, renders=renders, render_size=render_size,
+                                 limits=limit_values)
+        if progress is not None:
+            progress(folder.done, len(work), None)
+        todo = work[folder.done:]
+        try:
+            if todo:
+                with executor.session(_init_state, settings) as session:
+                    results = session.map(_make_item, todo)
+                    try:
+                        _consume(results, todo, folder, summary, mode, g.name or "model", fmt,
+                                 fail_fast, progress, len(work), deadline, timeout)
+                    finally:
+                        results.close()  # results still out are cancelled, not left running
+        except (GrammarkitError, KeyboardInterrupt):
+            raise
+        except RuntimeError as exc:  # WorkerError: a worker process died, the cluster went away
+            raise GrammarkitError(f"the {summary.executor} executor failed: {exc}; {folder.done} items "
+                                  f"are complete in {folder.path}/manifest.jsonl; run the same command "
+                                  "again to continue") from None
+        finally:
+            if own_executor:
+                executor.close()
 
-    entries = folder.entries
-    summary.ok = sum(1 for e in entries if e.get("status", "ok") == "ok")
-    summary.failed = len(entries) - summary.ok
-    summary.failures = [{"id": e["id"], "error": e.get("error")} for e in entries
-                        if e.get("status") == "failed"][:20]
-    if entries:
-        from ..geometry.camera import Camera
-        from .dataset import write_index
+        entries = folder.entries
+        summary.ok = sum(1 for e in entries if e.get("status", "ok") == "ok")
+        summary.failed = len(entries) - summary.ok
+        summary.failures = [{"id": e["id"], "error": e.get("error")} for e in entries
+                            if e.get("status") == "failed"][:20]
+        if entries:
+            from ..geometry.camera import Camera
+            from .dataset import write_index
 
-        info = {"grammar": g.name, "grammar_hash": run["grammar_hash"], "kind": mode, "seed": seed,
-                "format": fmt, "renders": {"styles": list(renders), "size": render_size,
-                                           "camera": asdict(Camera())} if renders else None,
-                "lots": run["lots"]}
-        summary.index = write_index(folder.path, grammar=g, entries=entries,
-                                    parquet=index == "parquet", info=info)
-    if merge_path is not None:
-        summary.merged = merge_models(folder.path, entries, merge_path)
-    summary.seconds = time.perf_counter() - t0
-    return summary
+            info = {"grammar": g.name, "grammar_hash": run["grammar_hash"], "kind": mode, "seed": seed,
+                    "format": fmt, "renders": {"styles": list(renders), "size": render_size,
+                                               "camera": asdict(Camera())} if renders else None,
+                    "lots": run["lots"]}
+            summary.index = write_index(folder.path, grammar=g, entries=entries,
+                                        parquet=index == "parquet", info=info)
+        if merge_path is not None:
+            summary.merged = merge_models(folder.path, entries, merge_path)
+        summary.seconds = time.perf_counter() - t0
+        return summary

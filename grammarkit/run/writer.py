@@ -33,7 +33,10 @@ from pathlib import Path
 from typing import Any, Iterable, Mapping
 
 from ..errors import GrammarkitError
-from ..fileio import OutputError, atomic_output, make_parent, write_files  # noqa: F401 - re-exported
+from ..fileio import (  # noqa: F401 - re-exported
+    FolderBusy, FolderLock, OutputError, atomic_output, check_outputs, make_parent, refuse_special,
+    same_file, write_files,
+)
 from ..jsonable import to_jsonable
 
 __all__ = ["OutputFolder", "RunMismatch", "check_outputs", "grammar_hash", "write_files"]
@@ -55,34 +58,6 @@ def grammar_hash(grammar: Any) -> str:
 
     text = format_grammar(grammar)
     return hashlib.sha256(text.encode("utf-8")).hexdigest()[:16]
-
-
-def _same_file(a: Path, b: Path) -> bool:
-    try:
-        return os.path.samefile(a, b)
-    except OSError:
-        return os.path.realpath(a) == os.path.realpath(b)
-
-
-def check_outputs(outputs: Mapping[str, Path | None], inputs: Iterable[Path] = ()) -> None:
-    """Refuse, before any work, an output that is an input or that another output also uses.
-
-    `outputs` maps an option name (for the message) to its path."""
-    seen: dict[str, str] = {}
-    inputs = [Path(p) for p in inputs]
-    for option, path in outputs.items():
-        if path is None:
-            continue
-        path = Path(path)
-        for src in inputs:
-            if _same_file(path, src):
-                raise OutputError(f"{path}: {option} would overwrite the input {src}; "
-                                  "choose another output path")
-        key = os.path.realpath(path)
-        if key in seen:
-            raise OutputError(f"{path}: {option} and {seen[key]} name the same file; "
-                              "each output needs its own path")
-        seen[key] = option
 
 
 def _fsync_dir(folder: Path) -> None:
@@ -113,8 +88,10 @@ class OutputFolder:
     protected: input files that no output may replace.
     overwrite: start over: delete the files an earlier run listed, then write afresh.
 
-    Nothing is created or changed on disk until the first `add` (a run that fails before
-    its first result leaves the folder as it was).
+    The folder is locked for the life of the object (grammarkit.fileio.FolderLock): a second
+    run into it fails at once, naming the process that holds it; `close()` releases it. Nothing
+    in the folder is changed until the first `add` but the lock file, which `close()` removes
+    (a run that fails before its first result leaves the folder as it was).
     """
 
     path: Path
@@ -130,6 +107,7 @@ class OutputFolder:
         self.path = Path(self.path)
         self.run = to_jsonable(self.run)
         p = self.path
+        refuse_special(p, "-o")
         if p.exists() and not p.is_dir():
             raise OutputError(f"{p}: is a file; this command writes a folder of results "
                               "(model files and manifest.jsonl)")
@@ -138,9 +116,15 @@ class OutputFolder:
                               f"like one model file; give a folder name, e.g. -o {p.with_suffix('')}/")
         self._check_creatable()
         self._opened = False
-        if p.is_dir():
+        # locked before anything in the folder is read: recovery deletes unlisted files, which
+        # must never be those of a run still writing
+        self._lock = FolderLock(p).acquire()
+        try:
             self._recover()
-        self._read_state()
+            self._read_state()
+        except BaseException:
+            self._lock.release()
+            raise
 
     def _check_creatable(self) -> None:
         """Fail now, not after the work, if the folder cannot exist: the nearest existing
@@ -261,7 +245,7 @@ class OutputFolder:
             if "/" in name or name.startswith(".") or name in (MANIFEST, RUN_FILE):
                 raise OutputError(f"{target}: refusing to write a result file with this name")
             for src in self.protected:
-                if _same_file(target, src):
+                if same_file(target, src):
                     raise OutputError(f"{target}: writing this result would overwrite the input "
                                       f"{src}; choose another output folder")
         self._open()
@@ -315,10 +299,24 @@ class OutputFolder:
                 os.close(fd)
         _fsync_dir(self.path)
 
-    def close(self) -> None:
-        """Flush everything to disk (call when the run ends, however it ends)."""
+    def sync(self) -> None:
+        """Flush everything written so far to disk."""
         if self._opened:
             self._maybe_sync(force=True)
+
+    def close(self) -> None:
+        """Flush everything to disk and release the folder's lock (call when the run ends,
+        however it ends; closing twice is harmless)."""
+        try:
+            self.sync()
+        finally:
+            self._lock.release()
+
+    def __enter__(self) -> "OutputFolder":
+        return self
+
+    def __exit__(self, *exc: Any) -> None:
+        self.close()
 
     @property
     def manifest(self) -> Path:

@@ -130,7 +130,7 @@ def test_exits_in_hooks_are_reported_not_obeyed():
     assert "raised SystemExit" in {i.name: i for i in pm.plugins()}["exits"].errors[0]
     pm = PluginManager(load_entry_points=False)
     pm.register(Interrupts(), "interrupts")
-    with pytest.raises(PluginError, match="plugin 'interrupts': interrupted in hook grammarkit_operations"):
+    with pytest.raises(KeyboardInterrupt):  # the user's Ctrl-C is obeyed, not blamed on the plugin
         pm.operations()
 
 

@@ -8,6 +8,7 @@ import os
 import pytest
 
 from grammarkit.errors import ShapeError
+from grammarkit.fileio import LOCK_NAME, FolderBusy
 from grammarkit.run.writer import MANIFEST, PENDING, OutputFolder, RunMismatch, check_outputs, write_files
 
 RUN = {"backend": "test", "seed": 1, "n": 3}
@@ -26,20 +27,40 @@ def lines(path):
     return [json.loads(x) for x in (path / MANIFEST).read_text().splitlines()]
 
 
-def test_nothing_is_created_before_the_first_result(tmp_path):
+def listing(path):
+    """The folder's files, without the run's lock file (there while a run holds the folder)."""
+    return sorted(p.name for p in path.iterdir() if p.name != LOCK_NAME)
+
+
+def test_nothing_but_the_lock_is_created_before_the_first_result(tmp_path):
     out = tmp_path / "a" / "b"
     f = folder(out)
-    assert not out.exists() and f.done == 0
+    assert [p.name for p in out.iterdir()] == [LOCK_NAME] and f.done == 0
+    f.close()
+    assert not out.exists()  # made for the lock and left empty: removed again
+    f = folder(out)
     add(f, 0)
+    assert listing(out) == ["manifest.jsonl", "r0.bin", "run.json"]
+    f.close()
     assert sorted(p.name for p in out.iterdir()) == ["manifest.jsonl", "r0.bin", "run.json"]
+
+
+def test_a_second_folder_object_on_a_held_folder_is_refused(tmp_path):
+    f = folder(tmp_path / "o")
+    with pytest.raises(FolderBusy, match="another run is writing into this folder"):
+        folder(tmp_path / "o")
+    f.close()
+    folder(tmp_path / "o").close()
 
 
 def test_same_run_continues_other_run_is_refused_overwrite_starts_over(tmp_path):
     f = folder(tmp_path / "o")
     for i in range(2):
         add(f, i)
+    f.close()
     again = folder(tmp_path / "o", run={"n": 10})  # n may grow: the same run, continued
     assert again.done == 2 and again.resumed == 2
+    again.close()
     with pytest.raises(RunMismatch, match="seed=1"):
         folder(tmp_path / "o", run={"seed": 2})
     fresh = folder(tmp_path / "o", run={"seed": 2}, overwrite=True)
@@ -53,9 +74,12 @@ def test_a_torn_last_line_and_a_vanished_file_end_the_list(tmp_path):
     f = folder(tmp_path / "o")
     for i in range(3):
         add(f, i)
+    f.close()
     with open(tmp_path / "o" / MANIFEST, "a") as fh:
         fh.write('{"id": "r3", "ind')  # a crash mid-line
-    assert folder(tmp_path / "o").done == 3
+    g = folder(tmp_path / "o")
+    assert g.done == 3
+    g.close()
     (tmp_path / "o" / "r1.bin").unlink()
     g = folder(tmp_path / "o")
     assert g.done == 1
@@ -67,13 +91,14 @@ def test_a_torn_last_line_and_a_vanished_file_end_the_list(tmp_path):
 def test_files_renamed_in_but_never_listed_are_removed_on_the_next_open(tmp_path):
     f = folder(tmp_path / "o")
     add(f, 0)
+    f.close()
     # what SIGKILL between rename and manifest line leaves behind
     (tmp_path / "o" / "r1.bin").write_bytes(b"orphan")
     (tmp_path / "o" / PENDING).write_text(json.dumps(["r1.bin"]))
     (tmp_path / "o" / ".r2.bin.abcd.tmp").write_bytes(b"half")
     g = folder(tmp_path / "o")
     assert g.done == 1
-    assert sorted(p.name for p in (tmp_path / "o").iterdir()) == ["manifest.jsonl", "r0.bin", "run.json"]
+    assert listing(tmp_path / "o") == ["manifest.jsonl", "r0.bin", "run.json"]
 
 
 def test_a_failing_result_leaves_no_file_and_no_line(tmp_path, monkeypatch):
@@ -93,7 +118,7 @@ def test_a_failing_result_leaves_no_file_and_no_line(tmp_path, monkeypatch):
         f.add({"id": "r1", "index": 1, "file": "r1.bin", "attachments": {"png": "r1.png"}},
               {"r1.bin": b"m", "r1.png": b"p"})
     monkeypatch.undo()
-    assert sorted(p.name for p in (tmp_path / "o").iterdir()) == ["manifest.jsonl", "r0.bin", "run.json"]
+    assert listing(tmp_path / "o") == ["manifest.jsonl", "r0.bin", "run.json"]
     assert len(lines(tmp_path / "o")) == 1
 
 
