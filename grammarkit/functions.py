@@ -17,7 +17,7 @@ from pathlib import Path
 from typing import Any, Iterable
 
 from .hookspecs import hookimpl
-from .registry import FunctionSpec
+from .registry import BUILTIN_ASSET_NAMES, FunctionSpec
 
 Point = tuple[float, float]
 
@@ -227,8 +227,7 @@ def file_exists(path: str, base: "str | Path") -> bool:
     the built-in assets (`builtin:cube`, ...)."""
     p = _slashes(path)
     if p.startswith("builtin:"):
-        from .split.assets import BUILTINS
-        return p[len("builtin:"):] in BUILTINS
+        return p[len("builtin:"):] in BUILTIN_ASSET_NAMES
     if not p:
         return False
     q = Path(p)

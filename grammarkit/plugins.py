@@ -376,7 +376,7 @@ class PluginManager:
         with self._lock:
             if self._registries is None:
                 self._registries = Registries({k: getattr(self, k) for k in Registries.KINDS},
-                                              installed=not self._runtime)
+                                              rebuild=None if self._runtime else default_registries)
             return self._registries
 
     def backend(self, name: str) -> BackendSpec:
