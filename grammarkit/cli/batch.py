@@ -5,14 +5,13 @@ options, shows progress (rich, on stderr, only on a terminal) and reports the ou
 """
 from __future__ import annotations
 
-import json
-import signal
 from pathlib import Path
 from typing import Any
 
 import click
 
 from ..errors import GrammarkitError
+from .derive import report_summary
 
 MAX_VARIATIONS = 1_000_000
 MAX_WORKERS = 256  # processes of a local cluster; a remote cluster has its own size
@@ -104,14 +103,20 @@ class _Reporter:
               help="triangles of one model at most (a bigger one fails that item)")
 @click.option("--fail-fast", is_flag=True, help="stop at the first failing item (it is not recorded)")
 @click.option("--timeout", type=click.FloatRange(min=0, min_open=True), default=None,
-              help="stop (resumably) after this many seconds")
+              help="hard stop: fail (resumably) after this many seconds")
+@click.option("--time-limit", type=click.FloatRange(min=0, min_open=True), default=None,
+              metavar="SECONDS", help="graceful budget: start no new item after this many seconds, "
+              "write and index what was made and say what fell short")
 @click.option("--overwrite", is_flag=True, help="discard an earlier run in the folder instead of "
               "continuing it")
+@click.option("--json", "as_json", is_flag=True, help="print the summary as JSON on stdout (for "
+              "scripts) instead of a few lines for people")
 def batch(grammar: Path, lots: Path | None, variations: int | None, out: Path, seed: int,
           sets: tuple[str, ...], attrs_mode: str | None, fmt: str, render: str | None,
           render_size: int, merge: Path | None, index_format: str, executor: str,
           workers: int | None, connect_timeout: float, degrees: str, holes: str, units: str,
-          max_triangles: int | None, fail_fast: bool, timeout: float | None, overwrite: bool) -> None:
+          max_triangles: int | None, fail_fast: bool, timeout: float | None,
+          time_limit: float | None, overwrite: bool, as_json: bool) -> None:
     """Derive many models of the grammar GRAMMAR into a resumable folder.
 
     \b
@@ -136,18 +141,14 @@ def batch(grammar: Path, lots: Path | None, variations: int | None, out: Path, s
     reporter = _Reporter(console, what)
     options = {"connect_timeout": connect_timeout} if executor.strip() != "local" else {}
     ex = make_executor(executor, workers, **options)
-
-    def terminate(signum: int, frame: Any) -> None:
-        raise KeyboardInterrupt  # SIGTERM stops like Ctrl-C: the current item completes or vanishes
-
-    previous = signal.signal(signal.SIGTERM, terminate)
+    # SIGTERM raises KeyboardInterrupt like Ctrl-C from the command's start (grammarkit.cli)
     try:
         with reporter.progress:
             summary = run_batch(
                 grammar, items, out, executor=ex, seed=seed, attrs=_pairs(sets, "--set"),
                 sample=None if attrs_mode is None else attrs_mode == "sample", format=fmt,
                 render=render, render_size=render_size, merge=merge, index=index_format,
-                fail_fast=fail_fast, overwrite=overwrite, timeout=timeout,
+                fail_fast=fail_fast, overwrite=overwrite, timeout=timeout, time_limit=time_limit,
                 limits={"max_triangles": max_triangles}, degrees=degrees, holes=holes, units=units,
                 progress=reporter)
     except KeyboardInterrupt:
@@ -156,14 +157,13 @@ def batch(grammar: Path, lots: Path | None, variations: int | None, out: Path, s
                    err=True)
         raise SystemExit(130) from None
     finally:
-        signal.signal(signal.SIGTERM, previous)
         ex.close()
     for w in summary.warnings:
         console.print(f"[yellow]warning:[/] {w}", highlight=False)
     if summary.resumed:
         console.print(f"continued an earlier run: {summary.resumed} items were already in {out}/",
                       highlight=False)
-    click.echo(json.dumps(summary.to_dict(), indent=1, default=str))
+    report_summary(summary, as_json)
     if summary.failed:
         shown = "\n".join(f"  {f['id']}: {f['error']}" for f in summary.failures[:10])
         more = f"\n  ... and {summary.failed - 10} more" if summary.failed > 10 else ""

@@ -105,13 +105,19 @@ def _check_image(path: Path, option: str) -> None:
 @click.option("--executor", "executor_spec", default="local", show_default=True,
               help="where parallel work runs: local, dask (a LocalCluster), or dask://HOST:PORT")
 @click.option("--timeout", type=click.FloatRange(min=0, min_open=True), default=None,
-              help="stop with an error after this many seconds")
+              help="hard stop: fail with an error after this many seconds")
+@click.option("--time-limit", type=click.FloatRange(min=0, min_open=True), default=None,
+              metavar="SECONDS", help="graceful budget: make no new result after this many "
+              "seconds, keep what was made and say what fell short")
 @click.option("--overwrite", is_flag=True, help="folder output: discard an earlier run's results "
               "instead of continuing it")
+@click.option("--json", "as_json", is_flag=True, help="print the run's summary as JSON on stdout "
+              "(for scripts) instead of a few lines for people")
 def derive(file: Path, out: Path, preview: Path | None, seed: int, sets: tuple[str, ...],
            fmt: str | None, tree: Path | None, variations: int | None, backend: str | None,
            count: int | None, iterations: int, workers: int | None, options: tuple[str, ...],
-           executor_spec: str, timeout: float | None, overwrite: bool) -> None:
+           executor_spec: str, timeout: float | None, time_limit: float | None, overwrite: bool,
+           as_json: bool) -> None:
     """Derive a model from the grammar FILE.
 
     \b
@@ -124,15 +130,16 @@ def derive(file: Path, out: Path, preview: Path | None, seed: int, sets: tuple[s
     from .deadline import hard_deadline
 
     console = Console(stderr=True)
+    limits = {"timeout": timeout, "time_limit": time_limit}
     with hard_deadline(timeout):
         _derive(file, out, preview, seed, sets, fmt, tree, variations, backend, count, iterations,
-                workers, options, executor_spec, timeout, overwrite, console)
+                workers, options, executor_spec, limits, overwrite, as_json, console)
 
 
 def _derive(file: Path, out: Path, preview: Path | None, seed: int, sets: tuple[str, ...],
             fmt: str | None, tree: Path | None, variations: int | None, backend: str | None,
             count: int | None, iterations: int, workers: int | None, options: tuple[str, ...],
-            executor_spec: str, timeout: float | None, overwrite: bool, console: Any) -> None:
+            executor_spec: str, limits: dict, overwrite: bool, as_json: bool, console: Any) -> None:
     from ..dsl import load
     from ..plugins import get_plugin_manager
     from ..run.api import resolve_backend
@@ -157,7 +164,7 @@ def _derive(file: Path, out: Path, preview: Path | None, seed: int, sets: tuple[
     formats = sorted(registries.exporters)
     if count is None and spec.name == "split":
         _run_single(grammar, file, out, seed, attrs, _format_of(out, fmt, formats), preview, tree,
-                    option_values, timeout, registries, console)
+                    option_values, limits["timeout"], registries, console)
         return
     if tree is not None:
         if tree != Path(".") and tree.resolve() != out.resolve():
@@ -171,8 +178,8 @@ def _derive(file: Path, out: Path, preview: Path | None, seed: int, sets: tuple[
         raise click.UsageError("for a folder of results, give --preview alone: each result gets "
                                "<id>.png in the -o folder")
     _run_folder(grammar, file, spec.name, out, count or 1, iterations, seed, attrs, option_values,
-                fmt, preview is not None, workers, executor_spec, timeout, overwrite, registries,
-                console)
+                fmt, preview is not None, workers, executor_spec, limits, overwrite, registries,
+                as_json, console)
 
 
 def _run_single(grammar: Any, file: Path, out: Path, seed: int, attrs: dict[str, str], fmt: str,
@@ -231,27 +238,22 @@ def _image_bytes(png: bytes, path: Path) -> bytes:
 
 def _run_folder(grammar: Any, file: Path, backend: str, out: Path, n: int, iterations: int,
                 seed: int, attrs: dict[str, str], options: dict[str, Any], fmt: str | None,
-                preview: bool, workers: int | None, executor_spec: str, timeout: float | None,
-                overwrite: bool, registries: Any, console: Any) -> None:
-    import signal
-
+                preview: bool, workers: int | None, executor_spec: str, limits: dict,
+                overwrite: bool, registries: Any, as_json: bool, console: Any) -> None:
     from ..run.api import run_backend
     from ..run.executor import make_executor
 
     progress, factory = progress_factory(console)
     written: list[str] = []
-
-    def terminate(signum: int, frame: Any) -> None:
-        raise KeyboardInterrupt  # SIGTERM ends the run like Ctrl-C: the current result completes or vanishes
-
-    previous = signal.signal(signal.SIGTERM, terminate)
+    # SIGTERM raises KeyboardInterrupt like Ctrl-C from the command's start (grammarkit.cli)
     executor = make_executor(executor_spec, workers)
     try:
         with progress:
             summary = run_backend(grammar, out=out, backend=backend, n=n, seed=seed,
                                   iterations=iterations, attrs=attrs, options=options,
                                   executor=executor, format=fmt, preview=preview, progress=factory,
-                                  timeout=timeout, overwrite=overwrite, inputs=(file,),
+                                  timeout=limits["timeout"], time_limit=limits["time_limit"],
+                                  overwrite=overwrite, inputs=(file,),
                                   registries=registries, on_result=lambda e: written.append(e["id"]))
     except KeyboardInterrupt:
         click.echo(f"interrupted: {len(written)} new results written to {out}/ (manifest.jsonl lists "
@@ -259,14 +261,20 @@ def _run_folder(grammar: Any, file: Path, backend: str, out: Path, n: int, itera
         raise SystemExit(130) from None
     finally:
         executor.close()
-        signal.signal(signal.SIGTERM, previous)
     if summary.resumed:
         console.print(f"continued an earlier run: {summary.resumed} results were already in {out}/",
                       highlight=False)
-    if summary.shortfall:
-        console.print(f"[yellow]warning:[/] made {summary.total} of {n} requested results: "
-                      f"{summary.shortfall}", highlight=False)
-    click.echo(json.dumps(summary.to_dict(), indent=1, default=str))
+    report_summary(summary, as_json)
+
+
+def report_summary(summary: Any, as_json: bool) -> None:
+    """What a folder run wrote and what fell short: a few lines on stdout for people, or the
+    summary as one JSON document (`--json`) for scripts."""
+    if as_json:
+        click.echo(json.dumps(summary.to_dict(), indent=1, default=str))
+        return
+    for line in summary.lines():
+        click.echo(line)
 
 
 __all__ = ["derive", "progress_factory", "GrammarkitError"]

@@ -41,6 +41,16 @@ class RunSummary:
     def total(self) -> int:
         return self.written + self.resumed
 
+    def lines(self) -> list[str]:
+        """The summary for people: what was written, what fell short and why."""
+        where = f" to {self.out}/" if self.out else ""
+        out = [f"wrote {self.written} result{'s' if self.written != 1 else ''}{where} "
+               f"({self.backend}, {self.seconds:.1f} s)"
+               + (f"; manifest {self.manifest}" if self.manifest and self.total else "")]
+        if self.shortfall:
+            out.append(f"made {self.total} of {self.requested}: {self.shortfall}")
+        return out
+
     def to_dict(self) -> dict:
         from ..jsonable import to_jsonable
 
@@ -130,7 +140,7 @@ def _drive(spec: BackendSpec, request: Request) -> Iterator[Result]:
 def _request(grammar: Any, spec: BackendSpec, registries: Any, *, n: int, seed: int, start: int,
              iterations: int, attrs: Mapping[str, Any] | None, options: Any, executor: Any,
              workers: int | None, progress: Callable | None, timeout: float | None,
-             format: str | None, preview: bool) -> Request:
+             format: str | None, preview: bool, time_limit: float | None = None) -> Request:
     from .executor import make_executor
     from .options import parse_options
 
@@ -139,8 +149,10 @@ def _request(grammar: Any, spec: BackendSpec, registries: Any, *, n: int, seed: 
             raise GrammarkitError(f"{what} must be a whole number >= {lo}, got {value!r}")
     if isinstance(seed, bool) or not isinstance(seed, int):
         raise GrammarkitError(f"seed must be an integer, got {seed!r}")
-    if timeout is not None and not (isinstance(timeout, (int, float)) and timeout > 0):
-        raise GrammarkitError(f"timeout must be a positive number of seconds, got {timeout!r}")
+    for what, value in (("timeout", timeout), ("time_limit", time_limit)):
+        if value is not None and (isinstance(value, bool) or not isinstance(value, (int, float))
+                                  or not value > 0):
+            raise GrammarkitError(f"{what} must be a positive number of seconds, got {value!r}")
     opts = parse_options(spec.options, options, backend=spec.name)
     if executor is None:
         executor = make_executor(None, workers)
@@ -150,21 +162,27 @@ def _request(grammar: Any, spec: BackendSpec, registries: Any, *, n: int, seed: 
     return Request(grammar=grammar, n=n, seed=seed, start=start, iterations=iterations,
                    attrs=dict(attrs or {}), options=opts, executor=executor, registries=registries,
                    deadline=None if timeout is None else time.monotonic() + float(timeout),
+                   soft_deadline=None if time_limit is None else time.monotonic() + float(time_limit),
                    format=format, preview=preview, **kwargs)
 
 
 def iter_results(grammar: Any, *, backend: str | None = None, n: int = 1, seed: int = 0,
                  iterations: int = 1, attrs: Mapping[str, Any] | None = None, options: Any = None,
                  executor: Any = None, workers: int | None = 1, progress: Callable | None = None,
-                 timeout: float | None = None, registries: Any = None) -> Iterator[Result]:
-    """Results of a back end, in memory (models as objects; nothing is written)."""
+                 timeout: float | None = None, time_limit: float | None = None,
+                 registries: Any = None) -> Iterator[Result]:
+    """Results of a back end, in memory (models as objects; nothing is written).
+
+    `time_limit` (seconds) is the graceful budget: no new result is started after it (the
+    ones made are kept); `timeout` is the hard stop, a LimitError."""
     registries = _registries(registries)
     g = _grammar(grammar)
     spec = resolve_backend(g, backend if backend is not None else
                            ("split" if g.family == "split" else None), registries)
     request = _request(g, spec, registries, n=n, seed=seed, start=0, iterations=iterations,
                        attrs=attrs, options=options, executor=executor, workers=workers,
-                       progress=progress, timeout=timeout, format=None, preview=False)
+                       progress=progress, timeout=timeout, format=None, preview=False,
+                       time_limit=time_limit)
     count = 0
     for result in _drive(spec, request):
         if count >= n:
@@ -201,14 +219,17 @@ def run_backend(grammar: Any, *, out: str | Path, backend: str | None = None, n:
                 seed: int = 0, iterations: int = 1, attrs: Mapping[str, Any] | None = None,
                 options: Any = None, executor: Any = None, workers: int | None = None,
                 format: str | None = None, preview: bool = False, progress: Callable | None = None,
-                timeout: float | None = None, overwrite: bool = False,
-                inputs: tuple[Path, ...] = (), registries: Any = None,
+                timeout: float | None = None, time_limit: float | None = None,
+                overwrite: bool = False, inputs: tuple[Path, ...] = (), registries: Any = None,
                 on_result: Callable[[dict], None] | None = None) -> RunSummary:
     """Run a back end into the folder `out` (see grammarkit.run.writer for its layout).
 
     Re-running the same call into the same folder continues after the last complete result;
     a different call is refused unless `overwrite=True`. `inputs` are files no output may
-    replace. Returns a RunSummary; `shortfall` says why fewer than `n` results exist.
+    replace. `time_limit` (seconds) is the graceful budget: past it no new result is made, the
+    ones written stay, and the summary says so; `timeout` is the hard stop, a LimitError.
+    Returns a RunSummary; `shortfall` says why fewer than `n` results exist (the time limit,
+    the back end's own cap such as its iterations, or the back end running out of results).
     """
     from ..jsonable import to_jsonable
     from .writer import OutputFolder, grammar_hash
@@ -223,7 +244,8 @@ def run_backend(grammar: Any, *, out: str | Path, backend: str | None = None, n:
         raise GrammarkitError(f"unknown output format {fmt!r}; known formats: {known}")
     request = _request(g, spec, registries, n=n, seed=seed, start=0, iterations=iterations,
                        attrs=attrs, options=options, executor=executor, workers=workers,
-                       progress=progress, timeout=timeout, format=fmt, preview=preview)
+                       progress=progress, timeout=timeout, format=fmt, preview=preview,
+                       time_limit=time_limit)
     run = {"version": FORMAT_VERSION, "backend": spec.name, "grammar": g.name,
            "grammar_hash": grammar_hash(g), "seed": seed, "iterations": iterations,
            "attrs": to_jsonable(dict(attrs or {})), "format": fmt, "preview": bool(preview),
@@ -232,12 +254,22 @@ def run_backend(grammar: Any, *, out: str | Path, backend: str | None = None, n:
     extra_inputs = [Path(g.source_path)] if getattr(g, "source_path", None) else []
     with OutputFolder(Path(out), run, protected=tuple(Path(p) for p in (*inputs, *extra_inputs)),
                       overwrite=overwrite) as folder:  # locked until the run ends
-        return _write_results(spec, request, folder, registries, n, fmt, preview, on_result, t0)
+        return _write_results(spec, request, folder, registries, n, fmt, preview, on_result, t0,
+                              time_limit)
+
+
+def shortfall_reason(request: Request, stats: Any, time_limit: float | None) -> str:
+    """Why a run made fewer results than asked, in the user's terms."""
+    if request.time_is_up():
+        return f"the time limit ({time_limit:g} s) was reached" if time_limit else \
+            "the time limit was reached"
+    reason = stats.get("shortfall") if isinstance(stats, dict) else None
+    return reason or "the back end is exhausted: it produced no more results"
 
 
 def _write_results(spec: BackendSpec, request: Request, folder: Any, registries: Any, n: int,
                    fmt: str, preview: bool, on_result: Callable[[dict], None] | None,
-                   t0: float) -> RunSummary:
+                   t0: float, time_limit: float | None) -> RunSummary:
     """Drive the back end and hand each new result to the writer, until `n` are in the folder."""
     from ..jsonable import to_jsonable
 
@@ -287,6 +319,8 @@ def _write_results(spec: BackendSpec, request: Request, folder: Any, registries:
             summary.written += 1
             if on_result is not None:
                 on_result(entry)
+            if folder.done < n and request.time_is_up():
+                break  # the graceful budget: keep what was written, say so below
         else:
             # the back end was asked for n: let it finish so that its summary comes back
             try:
@@ -297,7 +331,6 @@ def _write_results(spec: BackendSpec, request: Request, folder: Any, registries:
         gen.close()
     summary.stats = stats
     if folder.done < n:
-        reason = stats.get("shortfall") if isinstance(stats, dict) else None
-        summary.shortfall = reason or "the back end produced no more results"
+        summary.shortfall = shortfall_reason(request, stats, time_limit)
     summary.seconds = time.perf_counter() - t0
     return summary

@@ -85,6 +85,7 @@ class BatchSummary:
     merged: Path | None = None
     failures: list[dict] = field(default_factory=list)  # the first few: {id, error}
     warnings: list[str] = field(default_factory=list)
+    shortfall: str | None = None  # why fewer items than requested are in the folder
     executor: str = "local"
     workers: int = 1
     seconds: float = 0.0
@@ -95,13 +96,27 @@ class BatchSummary:
     def items_per_second(self) -> float:
         return self.written / self.seconds if self.seconds > 0 else 0.0
 
+    def lines(self) -> list[str]:
+        """The summary for people: what was written, what fell short and why."""
+        out = [f"wrote {self.written} item{'s' if self.written != 1 else ''} to {self.out}/ "
+               f"({self.ok} ok, {self.failed} failed in the folder; {self.seconds:.1f} s, "
+               f"{self.items_per_second:.2f} items/s); manifest {self.manifest}"]
+        if self.index:
+            out.append("index: " + ", ".join(str(p) for p in self.index))
+        if self.merged:
+            out.append(f"merged model: {self.merged}")
+        if self.shortfall:
+            out.append(f"made {self.ok + self.failed} of {self.requested}: {self.shortfall}")
+        return out
+
     def to_dict(self) -> dict:
         return {"kind": self.kind, "requested": self.requested, "written": self.written,
                 "resumed": self.resumed, "ok": self.ok, "failed": self.failed,
                 "out": str(self.out) if self.out else None,
                 "manifest": str(self.manifest) if self.manifest else None,
                 "index": [str(p) for p in self.index], "merged": str(self.merged) if self.merged else None,
-                "failures": self.failures, "warnings": self.warnings, "executor": self.executor,
+                "failures": self.failures, "warnings": self.warnings, "shortfall": self.shortfall,
+                "executor": self.executor,
                 "workers": self.workers, "seconds": round(self.seconds, 3),
                 "items_per_second": round(self.items_per_second, 3)}
 
@@ -351,7 +366,8 @@ class _Writer:
 
 def _consume(results: Any, todo: Sequence[Any], folder: Any, summary: BatchSummary, mode: str,
              name: str, fmt: str, fail_fast: bool, progress: Callable | None, total: int,
-             deadline: float | None, timeout: float | None) -> None:
+             deadline: float | None, timeout: float | None,
+             soft_deadline: float | None = None) -> bool:
     """Record every outcome in item order (files and manifest line), or stop cleanly: what was
     handed to the writer before a stop is written first, so the manifest is a prefix."""
     writer = _Writer(folder, summary, total, progress)
@@ -363,6 +379,9 @@ def _consume(results: Any, todo: Sequence[Any], folder: Any, summary: BatchSumma
                 stop = BatchFailed(outcome["error"])
                 break
             writer.put(entry, files, float(outcome["metrics"].get("seconds") or 0.0))
+            if soft_deadline is not None and time.monotonic() > soft_deadline:
+                stop = TimeoutError()  # graceful: what was handed over is written, the rest waits
+                break
             if deadline is not None and time.monotonic() > deadline:
                 stop = LimitError("the batch's time budget (--timeout) is spent", None, code="timeout")
                 break
@@ -372,10 +391,13 @@ def _consume(results: Any, todo: Sequence[Any], folder: Any, summary: BatchSumma
     if isinstance(stop, BatchFailed):
         raise BatchFailed(f"{stop} (stopped at the first failure: --fail-fast; {folder.done} items "
                           f"are complete in {folder.path}/manifest.jsonl)")
+    if isinstance(stop, TimeoutError):
+        return True
     if stop is not None:
         raise LimitError(f"the batch's time budget (--timeout {timeout:g} s) is spent after "
                          f"{folder.done} of {total} items; run the same command again to continue",
                          None, code="timeout")
+    return False
 
 
 def run_batch(grammar: Any, items: Any, out: str | Path, *, executor: Any = None,
@@ -384,7 +406,7 @@ def run_batch(grammar: Any, items: Any, out: str | Path, *, executor: Any = None
               render: Sequence[str] | str | None = None, render_size: int = 256,
               merge: str | Path | None = None, index: str = "jsonl", fail_fast: bool = False,
               overwrite: bool = False, timeout: float | None = None,
-              limits: Mapping[str, int] | None = None, degrees: str = "project",
+              time_limit: float | None = None, limits: Mapping[str, int] | None = None, degrees: str = "project",
               holes: str = "refuse", units: str = "auto",
               progress: Callable[[int, int, dict | None], None] | None = None,
               registries: Any = None) -> BatchSummary:
@@ -404,6 +426,9 @@ def run_batch(grammar: Any, items: Any, out: str | Path, *, executor: Any = None
               camera: pitch 30, yaw -45, fov 45, framed), `render_size` pixels square.
     merge:    also write every ok model into one GLB (a .glb path; items in glb) at the end.
     index:    "jsonl" (always written) or "parquet" (also index.parquet; needs pyarrow).
+    timeout:  the hard stop: a LimitError after this many seconds (resumable).
+    time_limit: the graceful budget: no new item is started after this many seconds, the
+              items made are written and indexed, and `summary.shortfall` says so.
     progress: `progress(done, total, entry)`: once at the start (entry None), then per item
               written (called from the batch's writer thread).
     degrees, holes, units: how lots are read (grammarkit.run.lots.read_lots).
@@ -434,8 +459,11 @@ def run_batch(grammar: Any, items: Any, out: str | Path, *, executor: Any = None
                               f"got {render_size!r}")
     if index not in ("jsonl", "parquet"):
         raise GrammarkitError(f"index must be 'jsonl' or 'parquet', not {index!r}")
-    if timeout is not None and not (isinstance(timeout, (int, float)) and timeout > 0):
-        raise GrammarkitError(f"timeout must be a positive number of seconds, got {timeout!r}")
+    for what, value in (("timeout", timeout), ("time_limit", time_limit)):
+        if value is not None and (isinstance(value, bool) or not isinstance(value, (int, float))
+                                  or not value > 0):
+            raise GrammarkitError(f"{what} must be a positive number of seconds, got {value!r}")
+    soft_deadline = None if time_limit is None else time.monotonic() + float(time_limit)
     attrs = dict(attrs or {})
     check_attrs(g, attrs)  # a bad --set fails before any work, pointing at the attr
     limit_values = {k: int(v) for k, v in dict(limits or {}).items() if v is not None}
@@ -517,8 +545,11 @@ def run_batch(grammar: Any, items: Any, out: str | Path, *, executor: Any = None
                 with executor.session(_init_state, settings) as session:
                     results = session.map(_make_item, todo)
                     try:
-                        _consume(results, todo, folder, summary, mode, g.name or "model", fmt,
-                                 fail_fast, progress, len(work), deadline, timeout)
+                        if _consume(results, todo, folder, summary, mode, g.name or "model", fmt,
+                                    fail_fast, progress, len(work), deadline, timeout,
+                                    soft_deadline):
+                            summary.shortfall = (f"the time limit ({time_limit:g} s) was reached; "
+                                                 "run the same command again to continue")
                     finally:
                         results.close()  # results still out are cancelled, not left running
         except (GrammarkitError, KeyboardInterrupt):

@@ -116,6 +116,8 @@ def run(request: Request) -> Iterator[Result]:
                        request.registries)
         for i in indices:
             request.check_deadline()
+            if request.time_is_up():
+                return {}  # the graceful budget: stop before the next model
             yield _derive_item(state, i)
         return {}
     advance = request.progress(f"deriving {request.n} models of {request.grammar.name or 'model'}",
@@ -129,6 +131,8 @@ def run(request: Request) -> Iterator[Result]:
             request.check_deadline()
             advance(1, file=result.id)
             yield result
+            if request.time_is_up():
+                break  # the graceful budget: the models out are cancelled, the written kept
     return {}
 
 

@@ -57,7 +57,7 @@ def test_a_batch_killed_on_a_dask_cluster_resumes_to_the_same_bytes(tmp_path, lo
     consistent(out)
     # the cluster's worker processes end with their parent
     time.sleep(1)
-    again = run_cli(*args)
+    again = run_cli(*args, "--json")
     assert again.returncode == 0, again.stderr
     summary = json.loads(again.stdout)
     assert summary["executor"] == "dask" and summary["resumed"] >= 3
@@ -146,7 +146,7 @@ def test_failures_are_listed_and_fail_fast_stops(tmp_path):
     assert p.returncode == 1 and "Traceback" not in p.stderr
     assert "lot 'bowtie' (feature 1): is self-intersecting" in p.stderr and "--fail-fast" in p.stderr
     assert [e["id"] for e in listed(out)] == ["ok-1"]
-    p = run_cli("batch", TINY, "--lots", lots, "-o", out, "--workers", "1")
+    p = run_cli("batch", TINY, "--lots", lots, "-o", out, "--workers", "1", "--json")
     assert p.returncode == 1
     summary = json.loads(p.stdout)
     assert (summary["ok"], summary["failed"], summary["resumed"]) == (2, 1, 1)
