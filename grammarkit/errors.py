@@ -154,6 +154,19 @@ class GrammarkitError(Exception):
     def span(self) -> Span | None:
         return self.diagnostics[0].span
 
+    def __str__(self) -> str:
+        """`file:line:col: message` of the first error (as the CLI prints it, without the
+        source line), and how many more there are; `format()` gives them all."""
+        errors = [d for d in self.diagnostics if d.severity == "error"] or self.diagnostics
+        first = errors[0]
+        span = first.span
+        loc = f"{span}: " if span is not None and span.line else (
+            f"{span.file}: " if span is not None and span.file else "")
+        more = f" (and {len(errors) - 1} more error{'s' if len(errors) > 2 else ''})" \
+            if len(errors) > 1 else ""
+        text = first.message if first.message else (self.args[0] if self.args else "")
+        return f"{loc}{text}{more}"
+
     def format(self, source: str | None = None) -> str:
         return "\n".join(d.format(source) for d in self.diagnostics)
 

@@ -9,6 +9,7 @@ and `manifest.jsonl`. Outputs are checked against the inputs and each other befo
 from __future__ import annotations
 
 import json
+import re
 from pathlib import Path
 from typing import Any, Callable
 
@@ -211,12 +212,36 @@ def _run_single(grammar: Any, file: Path, out: Path, seed: int, attrs: dict[str,
         files[tree] = model.tree_json(indent=1)
     write_files(files)  # one transaction: all of them, or none replaced
     for w in model.warnings:
-        console.print(f"[yellow]warning:[/] {w}", highlight=False)
+        click.echo(warning_text(w), err=True)
     for msg in getattr(model, "messages", ()):  # CGA's print() (split grammars), on stderr
         console.print(f"print: {msg}", highlight=False, markup=False)
     click.echo(f"wrote {out} ({fmt}): {model.triangle_count} triangles, {len(model.parts)} terminals, "
                f"{model.shape_count} shapes" + (f"; preview {preview}" if preview else "")
                + (f"; tree {tree}" if tree else ""))
+
+
+_LOCATED = re.compile(r"^(?P<file>.+?):(?P<line>\d+):(?P<col>\d+): (?P<msg>.*)$", re.S)
+
+
+def warning_text(text: str) -> str:
+    """A derivation warning ("file:line:col: message") in `grammarkit check`'s layout: the
+    location, the source line and a caret under the name it is about."""
+    from ..errors import Diagnostic
+    from ..ir.base import Span
+
+    m = _LOCATED.match(text)
+    if m is None:
+        return Diagnostic("warning", text).format()
+    line, col = int(m["line"]), int(m["col"])
+    span = Span(file=m["file"], line=line, column=col, end_line=line, end_column=col + 1)
+    diag = Diagnostic("warning", m["msg"], span)
+    shown = diag.format()
+    source = shown.split("\n")[1] if "\n" in shown else ""
+    word = re.match(r"[\w.]+", source[4 + col - 1:]) if source else None
+    if word:  # underline the whole name, as check does
+        span = Span(file=m["file"], line=line, column=col, end_line=line, end_column=col + len(word[0]))
+        shown = Diagnostic("warning", m["msg"], span).format()
+    return shown
 
 
 def _image_bytes(png: bytes, path: Path) -> bytes:

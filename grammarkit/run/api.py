@@ -86,6 +86,16 @@ def resolve_backend(grammar: Any, name: str | None, registries: Any) -> BackendS
     """The back end `name`, or the default one for the grammar's family; checks the family."""
     backends = registries.backends
     family = grammar.family
+    if family == "empty":
+        from ..errors import GrammarError
+        from ..ir.base import Span
+
+        source = getattr(grammar, "source_path", None)
+        raise GrammarError("the grammar has no rules and no parts: there is nothing to derive",
+                           Span(file=source, line=1, column=1, end_line=1, end_column=1)
+                           if source else None, code="empty-grammar",
+                           hint="a split grammar starts with a rule, e.g. `Lot --> extrude(10) "
+                                "Mass`; a tiling grammar declares parts, e.g. `part A = box(1, 1, 1)`")
     if name is not None:
         spec = backends.get(name)
         if spec is None:

@@ -81,6 +81,12 @@ def parse_options(model: Any, raw: Mapping[str, Any] | Any | None, *, backend: s
         err = exc.errors()[0]
         loc = err.get("loc") or ("?",)
         name = str(loc[0])
+        if err.get("type") == "missing":
+            field = model.model_fields.get(name)
+            about = f" ({field.description})" if field is not None and field.description else ""
+            flag = name.replace("_", "-")
+            raise OptionError(f"back end {backend!r} needs the option {flag!r}{about}; give "
+                              f"--option {flag}=VALUE") from None
         where = f"--option {given.get(name, name)}"
         raise OptionError(f"{where}: {backend} option {name.replace('_', '-')!r} {_plain(err)}") from None
 
