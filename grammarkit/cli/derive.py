@@ -186,8 +186,8 @@ def _derive(file: Path, out: Path, preview: Path | None, seed: int, sets: tuple[
 def _run_single(grammar: Any, file: Path, out: Path, seed: int, attrs: dict[str, str], fmt: str,
                 preview: Path | None, tree: Path | None, options: dict[str, Any],
                 timeout: float | None, registries: Any, console: Any) -> None:
-    from ..run.api import encode_result, iter_results, preview_png
-    from ..run.writer import check_outputs, write_files
+    from ..run.api import run_backend
+    from ..run.writer import ModelFile
 
     if out.is_dir():
         raise click.BadParameter(f"{str(out)!r} is a folder; give a file name (or -n N for a folder "
@@ -201,22 +201,22 @@ def _run_single(grammar: Any, file: Path, out: Path, seed: int, attrs: dict[str,
             raise click.UsageError("--tree needs a file name for one model, e.g. --tree tree.json")
         if tree.is_dir():
             raise click.BadParameter(f"{str(tree)!r} is a folder; give a file name", param_hint="--tree")
-    check_outputs({"-o": out, "--preview": preview, "--tree": tree}, inputs=[file])
-    (result,) = iter_results(grammar, backend="split", n=1, seed=seed, attrs=attrs, options=options,
-                             timeout=timeout, registries=registries)
-    model = result.model
-    files: dict[Path, bytes | str] = {out: encode_result(result, fmt, registries)}
-    if preview is not None:
-        files[preview] = _image_bytes(preview_png(model), preview)
-    if tree is not None:
-        files[tree] = model.tree_json(indent=1)
-    write_files(files)  # one transaction: all of them, or none replaced
-    for w in model.warnings:
+    attachments = {"png": preview, "tree.json": tree}
+    sink = ModelFile(out, {k: p for k, p in attachments.items() if p is not None}, protected=(file,))
+    entries: list[dict] = []
+    # the one run path (grammarkit.run.run_backend), as folders and batches take it
+    run_backend(grammar, out=sink, backend="split", n=1, seed=seed, attrs=attrs,
+                options={**options, **({"tree": "true"} if tree is not None else {})},
+                workers=1, format=fmt, preview=preview is not None, timeout=timeout,
+                inputs=(file,), registries=registries, on_result=entries.append)
+    (entry,) = entries
+    for w in entry.get("warnings", ()):
         click.echo(warning_text(w), err=True)
-    for msg in getattr(model, "messages", ()):  # CGA's print() (split grammars), on stderr
+    for msg in entry.get("messages", ()):  # CGA's print() (split grammars), on stderr
         console.print(f"print: {msg}", highlight=False, markup=False)
-    click.echo(f"wrote {out} ({fmt}): {model.triangle_count} triangles, {len(model.parts)} terminals, "
-               f"{model.shape_count} shapes" + (f"; preview {preview}" if preview else "")
+    m = entry["metrics"]
+    click.echo(f"wrote {out} ({fmt}): {m['triangles']} triangles, {m['terminals']} terminals, "
+               f"{m['shapes']} shapes" + (f"; preview {preview}" if preview else "")
                + (f"; tree {tree}" if tree else ""))
 
 
@@ -233,32 +233,15 @@ def warning_text(text: str) -> str:
     if m is None:
         return Diagnostic("warning", text).format()
     line, col = int(m["line"]), int(m["col"])
-    span = Span(file=m["file"], line=line, column=col, end_line=line, end_column=col + 1)
-    diag = Diagnostic("warning", m["msg"], span)
-    shown = diag.format()
-    source = shown.split("\n")[1] if "\n" in shown else ""
-    word = re.match(r"[\w.]+", source[4 + col - 1:]) if source else None
+    shown = Diagnostic("warning", m["msg"], Span(file=m["file"], line=line, column=col,
+                                                  end_line=line, end_column=col + 1)).format()
+    source = shown.split("\n")[1][4:] if "\n" in shown else ""
+    word = re.match(r"[\w.]+", source[col - 1:]) if source else None
     if word:  # underline the whole name, as check does
-        span = Span(file=m["file"], line=line, column=col, end_line=line, end_column=col + len(word[0]))
-        shown = Diagnostic("warning", m["msg"], span).format()
+        shown = Diagnostic("warning", m["msg"], Span(file=m["file"], line=line, column=col,
+                                                      end_line=line,
+                                                      end_column=col + len(word[0]))).format()
     return shown
-
-
-def _image_bytes(png: bytes, path: Path) -> bytes:
-    """PNG bytes converted to the format `path`'s suffix names."""
-    if path.suffix.lower() == ".png":
-        return png
-    import io
-
-    from PIL import Image
-
-    fmt = Image.registered_extensions()[path.suffix.lower()]
-    image = Image.open(io.BytesIO(png))
-    if fmt in ("JPEG", "BMP") and image.mode == "RGBA":
-        image = image.convert("RGB")
-    buf = io.BytesIO()
-    image.save(buf, format=fmt)
-    return buf.getvalue()
 
 
 def _run_folder(grammar: Any, file: Path, backend: str, out: Path, n: int, iterations: int,

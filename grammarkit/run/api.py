@@ -19,6 +19,7 @@ from typing import Any, Callable, Iterator, Mapping
 
 from ..errors import GrammarkitError, PluginError
 from .backend import BackendSpec, Request, Result
+from .writer import ModelFile
 
 __all__ = ["RunSummary", "iter_results", "resolve_backend", "run_backend", "FORMAT_VERSION"]
 
@@ -225,14 +226,15 @@ def preview_png(model: Any, size: tuple[int, int] = (640, 640)) -> bytes:
     return buf.getvalue()
 
 
-def run_backend(grammar: Any, *, out: str | Path, backend: str | None = None, n: int = 1,
+def run_backend(grammar: Any, *, out: "str | Path | ModelFile", backend: str | None = None, n: int = 1,
                 seed: int = 0, iterations: int = 1, attrs: Mapping[str, Any] | None = None,
                 options: Any = None, executor: Any = None, workers: int | None = None,
                 format: str | None = None, preview: bool = False, progress: Callable | None = None,
                 timeout: float | None = None, time_limit: float | None = None,
                 overwrite: bool = False, inputs: tuple[Path, ...] = (), registries: Any = None,
                 on_result: Callable[[dict], None] | None = None) -> RunSummary:
-    """Run a back end into the folder `out` (see grammarkit.run.writer for its layout).
+    """Run a back end into the folder `out` (see grammarkit.run.writer for its layout), or
+    write its one result as named files: `out=ModelFile("paris.glb", {"png": "paris.png"})`.
 
     Re-running the same call into the same folder continues after the last complete result;
     a different call is refused unless `overwrite=True`. `inputs` are files no output may
@@ -242,7 +244,7 @@ def run_backend(grammar: Any, *, out: str | Path, backend: str | None = None, n:
     the back end's own cap such as its iterations, or the back end running out of results).
     """
     from ..jsonable import to_jsonable
-    from .writer import OutputFolder, grammar_hash
+    from .writer import ModelFile, OutputFolder, grammar_hash
 
     t0 = time.perf_counter()
     registries = _registries(registries)
@@ -262,8 +264,14 @@ def run_backend(grammar: Any, *, out: str | Path, backend: str | None = None, n:
            "options": request.options.model_dump(mode="json") if request.options is not None else {},
            "n": n}
     extra_inputs = [Path(g.source_path)] if getattr(g, "source_path", None) else []
-    with OutputFolder(Path(out), run, protected=tuple(Path(p) for p in (*inputs, *extra_inputs)),
-                      overwrite=overwrite) as folder:  # locked until the run ends
+    protected = tuple(Path(p) for p in (*inputs, *extra_inputs))
+    if isinstance(out, ModelFile):  # one result as named files: no folder, no manifest
+        out.protected = (*out.protected, *protected)
+        ModelFile.__post_init__(out)  # check the outputs against every input, before any work
+        sink: Any = out
+    else:
+        sink = OutputFolder(Path(out), run, protected=protected, overwrite=overwrite)
+    with sink as folder:  # a folder stays locked until the run ends
         return _write_results(spec, request, folder, registries, n, fmt, preview, on_result, t0,
                               time_limit)
 

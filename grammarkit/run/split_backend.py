@@ -51,6 +51,9 @@ def _model_entry(model: Any, seconds: float) -> tuple[dict, dict]:
     extra = {"attrs": model.attrs, "bindings": model.bindings}
     if model.warnings:
         extra["warnings"] = list(model.warnings)
+    messages = list(getattr(model, "messages", ()) or ())
+    if messages:  # CGA's print(): the command line shows them
+        extra["messages"] = messages
     return metrics, extra
 
 

@@ -39,7 +39,7 @@ from ..fileio import (  # noqa: F401 - re-exported
 )
 from ..jsonable import to_jsonable
 
-__all__ = ["OutputFolder", "RunMismatch", "check_outputs", "grammar_hash", "write_files"]
+__all__ = ["ModelFile", "OutputFolder", "RunMismatch", "check_outputs", "grammar_hash", "write_files"]
 
 MANIFEST = "manifest.jsonl"
 RUN_FILE = "run.json"
@@ -321,3 +321,87 @@ class OutputFolder:
     @property
     def manifest(self) -> Path:
         return self.path / MANIFEST
+
+
+@dataclass
+class ModelFile:
+    """One result written as named files (`grammarkit derive -o paris.glb --preview p.png`):
+    the model and its attachments in one transaction (all replaced, or none), no manifest.
+
+    The same calls as OutputFolder (`add`, `done`, `entries`, `close`), so `run_backend`
+    writes both the same way: the one writer, with two shapes of output.
+
+    path:        the model file.
+    attachments: where each attachment goes, by suffix: {"png": Path("p.png"),
+                 "tree.json": Path("tree.json")}; a PNG is converted to the format its
+                 suffix names (.jpg, .webp, ...).
+    protected:   input files that no output may replace.
+    """
+
+    path: Path
+    attachments: Mapping[str, Path] = field(default_factory=dict)
+    protected: tuple[Path, ...] = ()
+    entries: list[dict] = field(default_factory=list)
+    resumed: int = 0
+    manifest: Path | None = None
+
+    def __post_init__(self) -> None:
+        self.path = Path(self.path)
+        self.attachments = {k: Path(v) for k, v in self.attachments.items()}
+        if self.path.is_dir():
+            raise OutputError(f"{self.path}: is a folder; give a file name (or -n N for a folder "
+                              "of results)")
+        check_outputs({"-o": self.path, **{f"--{'preview' if k == 'png' else k.split('.')[0]}": p
+                                           for k, p in self.attachments.items()}},
+                      inputs=self.protected)
+
+    @property
+    def done(self) -> int:
+        return len(self.entries)
+
+    def add(self, entry: dict, files: Mapping[str, bytes | str]) -> dict:
+        """Write the result's model and the attachments asked for, as one transaction."""
+        if self.entries:
+            raise OutputError(f"{self.path}: holds one result; the run made a second one")
+        model = entry.get("file")
+        out: dict[Path, bytes | str] = {}
+        for name, data in files.items():
+            if name == model:
+                out[self.path] = data
+                continue
+            suffix = name[len(str(entry["id"])) + 1:]
+            target = self.attachments.get(suffix)
+            if target is None:
+                continue  # an attachment nobody asked a file for
+            if suffix == "png" and isinstance(data, bytes):
+                data = image_as(data, target)
+            out[target] = data
+        write_files(out)
+        self.entries.append(entry)
+        return entry
+
+    def close(self) -> None:
+        return None
+
+    def __enter__(self) -> "ModelFile":
+        return self
+
+    def __exit__(self, *exc: Any) -> None:
+        self.close()
+
+
+def image_as(png: bytes, path: Path) -> bytes:
+    """PNG bytes converted to the image format `path`'s suffix names."""
+    if path.suffix.lower() == ".png":
+        return png
+    import io
+
+    from PIL import Image
+
+    fmt = Image.registered_extensions()[path.suffix.lower()]
+    image = Image.open(io.BytesIO(png))
+    if fmt in ("JPEG", "BMP") and image.mode == "RGBA":
+        image = image.convert("RGB")
+    buf = io.BytesIO()
+    image.save(buf, format=fmt)
+    return buf.getvalue()
