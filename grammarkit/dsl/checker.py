@@ -88,6 +88,7 @@ class Checker:
         for s in g.snippets:
             self.check_snippet(s, top_values)
         self.check_snippet_bindings()
+        self.check_asset_dirs()
         self.check_reachability()
         self._unknown_part_uses: dict[str, list[Span | None]] = {}
         self.check_tiling()
@@ -671,6 +672,21 @@ class Checker:
             elif known and v.options and total <= 0:
                 self.bag.error(f"variants {v.object_type}: the weights add up to 0", v.span,
                                code="bad-percent")
+
+    def check_asset_dirs(self) -> None:
+        """`asset_dir` takes one non-empty string literal (a folder, not an expression: it
+        is resolved before any attr has a value)."""
+        for a in self.g.asset_dir_statements:
+            where = a.value.span if a.value.span is not None and a.value.span.line else a.span
+            if a.path is None:
+                self.bag.error("asset_dir takes a folder name in double quotes, e.g. "
+                               '`asset_dir "assets"`', where, code="bad-asset-dir")
+            elif not a.path.strip():
+                self.bag.error("asset_dir names no folder (the path is empty)", where,
+                               code="bad-asset-dir")
+            elif "\0" in a.path:
+                self.bag.error("asset_dir path contains a NUL character", where,
+                               code="bad-asset-dir")
 
     # -- reachability ----------------------------------------------------------------------
     def _successors(self, seq: Seq) -> Iterable[str]:

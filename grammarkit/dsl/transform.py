@@ -14,7 +14,7 @@ from lark import Token, Tree
 
 from ..errors import DiagnosticBag
 from ..ir import (
-    Arg, Attr, Binary, Const, Bool, Branch, Call, Case, CaseArm, Choice, ChoiceArm, ConstraintDef, CountRange,
+    Arg, AssetDir, Attr, Binary, Const, Bool, Branch, Call, Case, CaseArm, Choice, ChoiceArm, ConstraintDef, CountRange,
     Default, DockDef, ExampleDef, Function, Import, InlinePart, NeighborRule, Nil, Num, OpCall, PartDef, Pattern,
     Placement, Push, Ref, Repeat, Rule, Seq, SiteDef, Snippet, Str, Successor, Terminal, Unary, UpDef, Use,
     Variants, VariantOption, Vector,
@@ -109,6 +109,9 @@ class ToIR:
 
     def import_(self, meta, c):
         return Import(path=self.string_value(c[0]), span=self.span(meta))
+
+    def asset_dir(self, meta, c):
+        return AssetDir(value=c[0], span=self.span(meta))
 
     def attr(self, meta, c):
         name = self.name(c[0])
