@@ -461,11 +461,13 @@ class ToIR:
         return tuple(self.name(t) for t in c)
 
     def _int(self, tok: Token) -> int:
-        value = int(str(tok))
-        if value > 10**9:
-            self.bag.error("count is too large", self.tspan(tok), code="bad-number")
+        digits = str(tok).lstrip("0") or "0"
+        # compared as text first: Python refuses to convert more than 4,300 digits (a ValueError)
+        if len(digits) > 10 or int(digits) > 10**9:
+            self.bag.error(f"count is too large (the limit is {10**9:,})", self.tspan(tok),
+                           code="bad-number")
             return 10**9
-        return value
+        return int(digits)
 
     def count_between(self, meta, c):
         lo = self._int(c[1])
