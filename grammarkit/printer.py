@@ -20,7 +20,7 @@ from typing import Any, Iterable
 
 from .errors import GrammarError
 from .ir import (
-    Attr, Binary, Bool, Branch, Call, Case, Choice, Const, ConstraintDef, Default, DockDef, ExampleDef,
+    AssetDir, Attr, Binary, Bool, Branch, Call, Case, Choice, Const, ConstraintDef, Default, DockDef, ExampleDef,
     Function, Grammar, Import, NeighborRule, Nil, Num, OpCall, PartDef, Pattern, Placement, Push, Ref, Repeat,
     Rule, Seq, SiteDef, Snippet, Str, Successor, Terminal, Unary, UpDef, Use, Variants, Vector,
 )
@@ -341,6 +341,8 @@ def _statement(p: _Printer, s: Any) -> list[str]:
         lines.append(_rule(p, s, 0))
     elif isinstance(s, Import):
         lines.append(f"import {format_string(s.path)}")
+    elif isinstance(s, AssetDir):
+        lines.append(f"asset_dir {format_expr(s.value)}")
     elif isinstance(s, Snippet):
         head = f"snippet {_ident(s.name, s)} : {_ident(s.object_type, s)} {{"
         if not s.attrs and not s.rules:

@@ -22,7 +22,7 @@ from ..ir import (
 from ..ir.base import Span
 from ..registry import OperationSpec, Registries
 from .binding import bind_operation, check_block, check_sequence, literal_kind
-from .suggest import closest_first, known_hint
+from .suggest import NearMisses, closest_first, known_hint
 
 # Dotted names the engines provide while deriving (see docs/language.md).
 BUILTIN_REFS = frozenset({
@@ -69,6 +69,7 @@ class Checker:
         # user functions (`func`): name -> arity -> first definition
         self.user_functions: dict[str, dict[int, Function]] = {}
         self._fold_table: FunctionTable | None = None
+        self._near_misses: dict[tuple[int, int], tuple[NearMisses, Any]] = {}
 
     # -- entry -----------------------------------------------------------------------------
     def run(self) -> list[Diagnostic]:
@@ -88,6 +89,7 @@ class Checker:
         for s in g.snippets:
             self.check_snippet(s, top_values)
         self.check_snippet_bindings()
+        self.check_asset_dirs()
         self.check_reachability()
         self._unknown_part_uses: dict[str, list[Span | None]] = {}
         self.check_tiling()
@@ -519,15 +521,37 @@ class Checker:
                 self.bag.error(f"'{name}' is bound to a snippet and takes no arguments", span,
                                code="successor-arity")
             return
+        near = self.rule_near_misses(name, scope)
+        if near:  # a typo of a rule (issue 32): deriving would silently drop that rule's work
+            self.bag.error(f"unknown rule '{name}'; did you mean '{near[0]}'?", span,
+                           hint=f"write `{name}.` to make a leaf named '{name}' on purpose",
+                           code="unknown-rule")
+            return
         self.bag.warning(f"no rule '{name}': the shape becomes a leaf named '{name}'", span,
                          hint="write `" + name + ".` to make a leaf on purpose", code="undefined-successor")
+
+    def rule_near_misses(self, name: str, scope: _Scope) -> list[str]:
+        """Rules (and snippet-bound names) visible in `scope` that `name` is a near miss of."""
+        key = (id(scope.rules), id(scope.outer_rules))
+        finder = self._near_misses.get(key)
+        if finder is None:
+            names = set(scope.rules) | set(scope.outer_rules) | set(self.anchors) | set(self.defaults)
+            finder = self._near_misses[key] = (NearMisses(names), scope)  # scope: keeps the ids alive
+        return finder[0](name)
 
     def check_op(self, op: OpCall, scope: _Scope) -> None:
         spec = self.reg.operations.get(op.name)
         if spec is None:
-            self.bag.error(f"unknown operation '{op.name}'", op.span,
-                           hint=_known_hint("operations", op.name, self.reg.operations),
-                           code="unknown-operation")
+            near = self.rule_near_misses(op.name, scope)
+            if near:  # `Flor(split.index)`: a misspelt rule, not an operation
+                self.bag.error(f"unknown operation or rule '{op.name}'; did you mean the rule "
+                               f"'{near[0]}'?", op.span, code="unknown-operation",
+                               hint=f"'{near[0]}' is a rule of this grammar; no operation is "
+                                    f"called '{op.name}'")
+            else:
+                self.bag.error(f"unknown operation '{op.name}'", op.span,
+                               hint=_known_hint("operations", op.name, self.reg.operations),
+                               code="unknown-operation")
             for a in op.args:
                 if not (isinstance(a.value, Ref) and "." not in a.value.name):
                     self.check_expr(a.value, scope)  # a bare name may be an axis or selector
@@ -671,6 +695,21 @@ class Checker:
             elif known and v.options and total <= 0:
                 self.bag.error(f"variants {v.object_type}: the weights add up to 0", v.span,
                                code="bad-percent")
+
+    def check_asset_dirs(self) -> None:
+        """`asset_dir` takes one non-empty string literal (a folder, not an expression: it
+        is resolved before any attr has a value)."""
+        for a in self.g.asset_dir_statements:
+            where = a.value.span if a.value.span is not None and a.value.span.line else a.span
+            if a.path is None:
+                self.bag.error("asset_dir takes a folder name in double quotes, e.g. "
+                               '`asset_dir "assets"`', where, code="bad-asset-dir")
+            elif not a.path.strip():
+                self.bag.error("asset_dir names no folder (the path is empty)", where,
+                               code="bad-asset-dir")
+            elif "\0" in a.path:
+                self.bag.error("asset_dir path contains a NUL character", where,
+                               code="bad-asset-dir")
 
     # -- reachability ----------------------------------------------------------------------
     def _successors(self, seq: Seq) -> Iterable[str]:

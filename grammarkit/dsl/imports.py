@@ -10,7 +10,7 @@ from pathlib import Path
 from typing import Any
 
 from ..errors import Diagnostic, GrammarError
-from ..ir import Case, Choice, Grammar, Import, OpCall, Push, Repeat, Rule, Seq, Snippet, Successor
+from ..ir import AssetDir, Case, Choice, Grammar, Import, OpCall, Push, Repeat, Rule, Seq, Snippet, Successor
 from ..ir.split import Branch
 from .frontend import parse_source
 from .parser import DEFAULT_MAX_BYTES, read_source
@@ -100,8 +100,23 @@ def _expand(grammar: Grammar, chain: list[str], done: set[str], diagnostics: lis
                                           code="import-error"))
             continue
         chain.append(key)
-        out.extend(_expand(parsed.grammar, chain, done, diagnostics, max_bytes))
+        out.extend(_absolute_asset_dirs(_expand(parsed.grammar, chain, done, diagnostics, max_bytes),
+                                        target.parent))
         chain.pop()
+    return out
+
+
+def _absolute_asset_dirs(statements: list[Any], folder: Path) -> list[Any]:
+    """An imported file's `asset_dir "x"` is relative to that file's folder: once inlined into
+    another file it must not change meaning, so it becomes absolute (Path.absolute keeps
+    symlinks as written, as the folder of the imported file was reached)."""
+    out = []
+    for s in statements:
+        path = s.path if isinstance(s, AssetDir) else None
+        if path and not Path(path).is_absolute():
+            value = s.value.model_copy(update={"value": str((folder / path).absolute())})
+            s = s.model_copy(update={"value": value})
+        out.append(s)
     return out
 
 

@@ -28,7 +28,7 @@ MAX_SYNTAX_ERRORS = 50
 # Keywords of the language. They are reserved everywhere (the transformer rejects them as names)
 # so that the printer never has to guess whether a name would read back as a keyword.
 KEYWORDS = frozenset({
-    "grammar", "import", "attr", "const", "func", "snippet", "use", "as", "default", "for", "variants",
+    "grammar", "import", "asset_dir", "attr", "const", "func", "snippet", "use", "as", "default", "for", "variants",
     "case", "else", "NIL", "true", "false", "part", "site", "at", "facing", "mirror", "dock",
     "rot", "neighbors", "in", "constraint", "example",
 })
@@ -274,7 +274,7 @@ def _parses(group: list[tuple[int, str]]) -> bool:
 # A line that starts, at column 1, like a top-level statement ends an unclosed bracket (used
 # only to resynchronise after a syntax error).
 _STATEMENT_START = re.compile(
-    r"(?:attr|const|func|import|grammar|snippet|use|default|variants|part|site|dock|neighbors|"
+    r"(?:attr|const|func|import|asset_dir|grammar|snippet|use|default|variants|part|site|dock|neighbors|"
     r"constraint|example)\b|[A-Za-z_][A-Za-z0-9_]*[ \t]*(?:\([^()\n]*\))?[ \t]*-->")
 
 

@@ -14,7 +14,7 @@ from lark import Token, Tree
 
 from ..errors import DiagnosticBag
 from ..ir import (
-    Arg, Attr, Binary, Const, Bool, Branch, Call, Case, CaseArm, Choice, ChoiceArm, ConstraintDef, CountRange,
+    Arg, AssetDir, Attr, Binary, Const, Bool, Branch, Call, Case, CaseArm, Choice, ChoiceArm, ConstraintDef, CountRange,
     Default, DockDef, ExampleDef, Function, Import, InlinePart, NeighborRule, Nil, Num, OpCall, PartDef, Pattern,
     Placement, Push, Ref, Repeat, Rule, Seq, SiteDef, Snippet, Str, Successor, Terminal, Unary, UpDef, Use,
     Variants, VariantOption, Vector,
@@ -109,6 +109,9 @@ class ToIR:
 
     def import_(self, meta, c):
         return Import(path=self.string_value(c[0]), span=self.span(meta))
+
+    def asset_dir(self, meta, c):
+        return AssetDir(value=c[0], span=self.span(meta))
 
     def attr(self, meta, c):
         name = self.name(c[0])
@@ -458,11 +461,13 @@ class ToIR:
         return tuple(self.name(t) for t in c)
 
     def _int(self, tok: Token) -> int:
-        value = int(str(tok))
-        if value > 10**9:
-            self.bag.error("count is too large", self.tspan(tok), code="bad-number")
+        digits = str(tok).lstrip("0") or "0"
+        # compared as text first: Python refuses to convert more than 4,300 digits (a ValueError)
+        if len(digits) > 10 or int(digits) > 10**9:
+            self.bag.error(f"count is too large (the limit is {10**9:,})", self.tspan(tok),
+                           code="bad-number")
             return 10**9
-        return value
+        return int(digits)
 
     def count_between(self, meta, c):
         lo = self._int(c[1])

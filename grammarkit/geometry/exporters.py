@@ -20,12 +20,17 @@ glTF / GLB (the layout is described for users in docs/derive.md, "Files"):
 - **Structure.** Below the root, one node per solid (a split model's building, an assembly's
   part `Type.N`); below a split model's node, one node per terminal name (`Window`, `Glass`,
   `Wall`...) whose `extras` hold the terminal, its rules, their source lines (`file:line`),
-  object types, roles, materials and the label index. Each group node's mesh has one
-  primitive per material. All primitives of one solid index ONE shared POSITION accessor, so
-  the solid is stored closed: a reader that merges by accessor (grammarkit) or by position
-  (trimesh after `merge_vertices`, Blender's "merge by distance") gets the watertight
-  manifold back. (trimesh's glTF loader keeps every primitive as its own mesh and never welds
-  them, so `trimesh.load(path, force="mesh")` alone is not closed; see docs/derive.md.)
+  object types, roles, materials and the label index.
+- **Closed solids are one primitive.** A closed solid's triangles are ONE primitive over its
+  one vertex set (no attribute seams), so every reader, `trimesh.load(path, force="mesh")`
+  with nothing else included, gets the watertight manifold, one body per mass. glTF has no
+  per-face attributes, so the terminals are per-face data in extras: the terminal nodes hold
+  no mesh but their `faces` ranges, and the primitive's `extras.grammarkit` holds `runs`
+  ([terminal node, material, first face, count]) and the `materials` they index (see
+  `_one_primitive`); the primitive's own material is the most used one (what other viewers
+  show). The surface layer (open faces, `--surfaces cga`) and textured solids (TEXCOORD_0
+  needs seams) are exempt: they keep one mesh per terminal with a primitive per material,
+  all indexing one shared POSITION accessor.
 - **Per-face labels.** Triangles are written grouped by label in the order of
   `extras.grammarkit.labels`; `face_labels(path)` in `meshio` reads the label of every face.
 
@@ -57,8 +62,9 @@ __all__ = ["OutputError", "Solid", "Material", "atomic_output", "encode", "encod
 from ..fileio import OutputError, atomic_output  # noqa: E402
 
 # Version of grammarkit's glTF layout, stored in the root node's extras (1: the old layout, no
-# rotation, no marker; 2: this one).
-GLTF_FORMAT = 2
+# rotation, no marker; 2: a primitive per terminal and material; 3: this one, a closed solid
+# as one primitive with its per-face data in extras). The readers read 2 and 3.
+GLTF_FORMAT = 3
 # glTF quaternion (x, y, z, w) for -90 degrees about X: (x, y, z) -> (x, z, -y), Z-up to Y-up.
 Z_UP_TO_Y_UP = (-math.sqrt(0.5), 0.0, 0.0, math.sqrt(0.5))
 Z_UP_TO_Y_UP_MATRIX = np.array([[1.0, 0, 0, 0], [0, 0, 1, 0], [0, -1, 0, 0], [0, 0, 0, 1]])
@@ -367,42 +373,46 @@ class _GltfBuilder:
     def material(self, mat: Material) -> int:
         idx = self.material_index.get(mat)
         if idx is None:
-            lin = srgb_to_linear(np.asarray(mat.rgba[:3], dtype=np.float64) / 255.0)
-            glassy = bool(mat.name) and "glass" in mat.name.lower()
-            name = mat.label
-            if mat.texture is not None and not mat.name:  # a textured material is named by its image
-                name = f"{Path(mat.texture).name} #{mat.rgba[0]:02x}{mat.rgba[1]:02x}{mat.rgba[2]:02x}"
-            if mat.name in self.ambiguous:
-                name = "{} #{:02x}{:02x}{:02x}".format(mat.name, *mat.rgba[:3])
-            entry = {"name": name,
-                     "pbrMetallicRoughness": {
-                         "baseColorFactor": [round(float(x), 6) for x in lin] + [round(mat.rgba[3] / 255.0, 6)],
-                         "metallicFactor": 0.0, "roughnessFactor": 0.1 if glassy else 0.8},
-                     "extras": {"srgb": mat.label if not mat.name else "#{:02x}{:02x}{:02x}".format(*mat.rgba[:3])}}
-            if mat.metallic is not None:
-                entry["pbrMetallicRoughness"]["metallicFactor"] = round(float(mat.metallic), 6)
-            if mat.roughness is not None:
-                entry["pbrMetallicRoughness"]["roughnessFactor"] = round(float(mat.roughness), 6)
-            if mat.texture is not None:
-                tex = self.texture(mat.texture)
-                if tex is not None:
-                    entry["pbrMetallicRoughness"]["baseColorTexture"] = {"index": tex}
-                else:
-                    entry["extras"]["missing_texture"] = mat.texture
-                entry["extras"]["colormap"] = Path(mat.texture).name
-            if mat.extras:
-                entry["extras"]["cga"] = {k: v for k, v in mat.extras}
-            if mat.rgba[3] < 255:
-                entry["alphaMode"] = "BLEND"
-            if mat.double_sided:
-                entry["doubleSided"] = True
-                entry["extras"]["surface"] = True
-                name = entry["name"] = f"{name} (surface)"
-            if mat.name:
-                entry["extras"]["material"] = mat.name
-            self.materials.append(entry)
+            self.materials.append(self.material_entry(mat))
             idx = self.material_index[mat] = len(self.materials) - 1
         return idx
+
+    def material_entry(self, mat: Material) -> dict:
+        """The glTF material object of `mat` (not yet part of the document)."""
+        lin = srgb_to_linear(np.asarray(mat.rgba[:3], dtype=np.float64) / 255.0)
+        glassy = bool(mat.name) and "glass" in mat.name.lower()
+        name = mat.label
+        if mat.texture is not None and not mat.name:  # a textured material is named by its image
+            name = f"{Path(mat.texture).name} #{mat.rgba[0]:02x}{mat.rgba[1]:02x}{mat.rgba[2]:02x}"
+        if mat.name in self.ambiguous:
+            name = "{} #{:02x}{:02x}{:02x}".format(mat.name, *mat.rgba[:3])
+        entry = {"name": name,
+                 "pbrMetallicRoughness": {
+                     "baseColorFactor": [round(float(x), 6) for x in lin] + [round(mat.rgba[3] / 255.0, 6)],
+                     "metallicFactor": 0.0, "roughnessFactor": 0.1 if glassy else 0.8},
+                 "extras": {"srgb": mat.label if not mat.name else "#{:02x}{:02x}{:02x}".format(*mat.rgba[:3])}}
+        if mat.metallic is not None:
+            entry["pbrMetallicRoughness"]["metallicFactor"] = round(float(mat.metallic), 6)
+        if mat.roughness is not None:
+            entry["pbrMetallicRoughness"]["roughnessFactor"] = round(float(mat.roughness), 6)
+        if mat.texture is not None:
+            tex = self.texture(mat.texture)
+            if tex is not None:
+                entry["pbrMetallicRoughness"]["baseColorTexture"] = {"index": tex}
+            else:
+                entry["extras"]["missing_texture"] = mat.texture
+            entry["extras"]["colormap"] = Path(mat.texture).name
+        if mat.extras:
+            entry["extras"]["cga"] = {k: v for k, v in mat.extras}
+        if mat.rgba[3] < 255:
+            entry["alphaMode"] = "BLEND"
+        if mat.double_sided:
+            entry["doubleSided"] = True
+            entry["extras"]["surface"] = True
+            name = entry["name"] = f"{name} (surface)"
+        if mat.name:
+            entry["extras"]["material"] = mat.name
+        return entry
 
     def has_texture(self, mat: Material) -> bool:
         """Whether `mat`'s primitives carry TEXCOORD_0 (its texture file can be written)."""
@@ -499,6 +509,13 @@ def _build_gltf(scene: Scene, textures: str = "embed", base: Path | None = None)
         cuts = np.flatnonzero(np.diff(skey)) + 1
         starts = np.concatenate([[0], cuts])
         ends = np.concatenate([cuts, [len(skey)]])
+        if len(starts) > 1 and not solid.extras.get("surface") and not any(m.texture for m in solid.materials):
+            # a closed solid in several groups/materials: ONE primitive (see _one_primitive)
+            node_entry.update(_one_primitive(b, solid, F[order], pos, skey, starts, ends, n_mat, all_labels))
+            if solid.key is not None:
+                shared_mesh[solid.key] = node_entry["mesh"]
+            children.append(b.node(node_entry))
+            continue
         prims_by_group: dict[int, list[dict]] = {}
         textured: list[tuple[int, int, np.ndarray]] = []  # (group, material, face indices)
         for s, e in zip(starts.tolist(), ends.tolist()):
@@ -540,6 +557,54 @@ def _build_gltf(scene: Scene, textures: str = "embed", base: Path | None = None)
     binary = b"".join(b.chunks) + b"\0" * pad
     doc["buffers"][0]["byteLength"] = b.size
     return doc, binary
+
+
+def _one_primitive(b: _GltfBuilder, solid: Solid, faces: np.ndarray, pos: int, skey: np.ndarray,
+                   starts: np.ndarray, ends: np.ndarray, n_mat: int, all_labels: list[str]) -> dict:
+    """The mesh and terminal nodes of a closed solid: its triangles (sorted by group, then
+    material) as one primitive over the solid's one vertex set, so that every glTF reader,
+    trimesh's `load(path, force="mesh")` included, gets the watertight manifold without
+    welding anything. glTF has no per-face attributes and any per-vertex one (a colour, a
+    feature id) would split vertices at its seams, so the per-face data rides in extras:
+
+    - the primitive's `extras.grammarkit.runs`: `[group, material, first face, face count]` for
+      each run of triangles, `group` indexing the solid node's `children`, `material` the
+      primitive's `extras.grammarkit.materials` (glTF material objects, kept in the extras:
+      a material no primitive uses would be an unused object, and indices into the file's
+      own list would break when files are merged); grammarkit's readers colour every face
+      from them. The primitive's own material is the one covering most triangles (what other
+      viewers show);
+    - one child node per terminal without a mesh, its `extras` as before (terminal, rules,
+      sources, ..., `label`) plus `faces`: its `[first face, face count]` ranges."""
+    face_mat = skey % n_mat
+    counts = np.bincount(face_mat, minlength=n_mat)
+    main = int(np.argmax(counts))  # ties: the first material, so the file is deterministic
+    palette = solid.materials or [Material(None, DEFAULT_RGBA)]
+    used = sorted(set((skey[starts] % n_mat).tolist()))
+    material_of = {m: i for i, m in enumerate(used)}
+    runs, ranges = [], {}  # ranges: group -> [[first face, count], ...]
+    for s, e in zip(starts.tolist(), ends.tolist()):
+        g, m = divmod(int(skey[s]), n_mat)
+        ranges.setdefault(g, []).append([s, e - s])
+    kids = []
+    position_of = {}
+    for g in sorted(ranges):
+        gname, gextras = solid.groups[g]
+        extras = dict(gextras)
+        extras["label"] = len(all_labels)
+        extras["faces"] = ranges[g]
+        all_labels.append(gname)
+        position_of[g] = len(kids)
+        kids.append(b.node({"name": gname, "extras": to_jsonable(extras)}))
+    for s, e in zip(starts.tolist(), ends.tolist()):
+        g, m = divmod(int(skey[s]), n_mat)
+        runs.append([position_of[g], material_of[m], s, e - s])
+    acc = b.indices(faces, len(solid.vertices))
+    prim = {"attributes": {"POSITION": pos}, "indices": acc, "mode": 4, "material": b.material(palette[main]),
+            "extras": {"grammarkit": {"materials": [b.material_entry(palette[m]) for m in used],
+                                      "runs": runs}}}
+    b.meshes.append({"name": solid.name, "primitives": [prim]})
+    return {"mesh": len(b.meshes) - 1, "children": kids}
 
 
 def _textured_primitives(b: _GltfBuilder, solid: Solid, F: np.ndarray, textured: list,

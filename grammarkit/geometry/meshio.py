@@ -2,7 +2,7 @@
 
 Used by the split engine's `i("part.glb")`, `grammarkit render` and the tiling readers.
 
-- GLB/glTF written by grammarkit (format 2, marked in the root node's extras): read here
+- GLB/glTF written by grammarkit (format 2 or 3, marked in the root node's extras): read here
   (`read_gltf_solids`): the root's Z-up -> Y-up rotation is undone, so meshes come back in the
   model's Z-up frame; each solid's groups (terminal names) are merged back through their shared
   POSITION accessor into one closed mesh with face colours from the materials, and the per-face
@@ -170,7 +170,7 @@ def _load_obj(path: Path) -> trimesh.Scene:
 
 
 # --------------------------------------------------------------------------------------------
-# grammarkit's own glTF layout (format 2: see grammarkit.geometry.exporters)
+# grammarkit's own glTF layout (formats 2 and 3: see grammarkit.geometry.exporters)
 # --------------------------------------------------------------------------------------------
 _COMPONENTS = {5120: np.int8, 5121: np.uint8, 5122: np.int16, 5123: np.uint16, 5125: np.uint32, 5126: np.float32}
 _WIDTH = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4, "MAT4": 16}
@@ -178,7 +178,7 @@ _WIDTH = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4, "MAT4": 16}
 
 @dataclass
 class GltfSolid:
-    """One solid of a grammarkit GLB/glTF (format 2): a node below the root, its groups merged
+    """One solid of a grammarkit GLB/glTF (format 2 or 3): a node below the root, its groups merged
     back into one mesh through the shared POSITION accessor (so it is closed as derived)."""
 
     name: str
@@ -274,7 +274,7 @@ def _node_matrix(node: dict) -> np.ndarray:
 
 
 def read_gltf_solids(path: str | Path) -> list[GltfSolid] | None:
-    """The solids of a GLB/glTF written by grammarkit (format 2), in the model's Z-up frame,
+    """The solids of a GLB/glTF written by grammarkit (format 2 or 3), in the model's Z-up frame,
     or None for any other glTF file (read those with trimesh). Raises ShapeError naming the
     file when a grammarkit file is damaged."""
     path = Path(path)
@@ -335,7 +335,9 @@ def _solids_from_doc(doc: dict, binary: bytes | None, root: dict, path: Path) ->
     def colour(mi: int | None) -> np.ndarray:
         if mi is None:
             return np.array([200, 200, 200, 255], dtype=np.uint8)
-        mat = materials[mi]
+        return colour_of(materials[mi])
+
+    def colour_of(mat: dict) -> np.ndarray:
         srgb = (mat.get("extras") or {}).get("srgb")
         alpha = mat.get("pbrMetallicRoughness", {}).get("baseColorFactor", [1, 1, 1, 1])[3]
         if isinstance(srgb, str) and len(srgb) == 7:
@@ -355,9 +357,9 @@ def _solids_from_doc(doc: dict, binary: bytes | None, root: dict, path: Path) ->
                     if "mesh" in nodes[k]]
         pos_offset: dict[int, int] = {}
         verts, faces, colors, labels_of, label_names = [], [], [], [], []
+        kid_names = [str(nodes[k].get("name", f"node{k}")) for k in node.get("children", [])]
         for gname, gnode in members:
-            label = len(label_names)
-            label_names.append(gname)
+            label = None  # this member's label index, added when a primitive without runs uses it
             for prim in doc["meshes"][gnode["mesh"]]["primitives"]:
                 if prim.get("mode", 4) != 4:
                     continue
@@ -368,8 +370,19 @@ def _solids_from_doc(doc: dict, binary: bytes | None, root: dict, path: Path) ->
                 idx = accessor(prim["indices"]).reshape(-1, 3).astype(np.int64) if "indices" in prim \
                     else np.arange(len(accessor(pa)), dtype=np.int64).reshape(-1, 3)
                 faces.append(idx + pos_offset[pa])
+                marker = (prim.get("extras") or {}).get("grammarkit") or {}
+                if marker.get("runs"):  # one primitive for a whole closed solid: per-face data in its runs
+                    palette = [colour_of(m) for m in marker.get("materials") or []]
+                    prim_colors, prim_labels = _runs(marker["runs"], len(idx), palette, kid_names, label_names)
+                    colors.append(prim_colors)
+                    labels_of.append(prim_labels)
+                    continue
+                if label is None:
+                    label = len(label_names)
+                    label_names.append(gname)
                 colors.append(np.tile(colour(prim.get("material")), (len(idx), 1)))
                 labels_of.append(np.full(len(idx), label, dtype=np.int64))
+
         if not faces:
             continue
         extras = dict(node.get("extras") or {})
@@ -378,6 +391,28 @@ def _solids_from_doc(doc: dict, binary: bytes | None, root: dict, path: Path) ->
     if not out:
         raise ShapeError(f"{path}: the file contains no triangle meshes")
     return out
+
+
+def _runs(runs: list, n_faces: int, palette: list[np.ndarray], kid_names: list[str],
+          label_names: list[str]) -> tuple[np.ndarray, np.ndarray]:
+    """Per-face colours and labels of a one-primitive solid from its `runs` ([child, material,
+    first face, face count]; see exporters._one_primitive); `palette` holds the colours of the
+    primitive's materials; labels index `label_names`, which gains the children's names."""
+    colors = np.zeros((n_faces, 4), dtype=np.uint8)
+    labels = np.zeros(n_faces, dtype=np.int64)
+    base = len(label_names)
+    label_names.extend(kid_names)
+    covered = 0
+    for child, material, first, count in runs:
+        if not (0 <= first and first + count <= n_faces and 0 <= child < len(kid_names)
+                and 0 <= material < len(palette)):
+            raise ValueError(f"face run {[child, material, first, count]} is out of range")
+        colors[first:first + count] = palette[material]
+        labels[first:first + count] = base + child
+        covered += count
+    if covered != n_faces:
+        raise ValueError(f"the face runs cover {covered} of {n_faces} faces")
+    return colors, labels
 
 
 def _scene_of_solids(solids: list[GltfSolid]) -> trimesh.Scene:
@@ -401,7 +436,7 @@ def face_labels(path: str | Path) -> list[str]:
         raise ShapeError(f"{path}: mesh file not found")
     solids = read_gltf_solids(path)
     if solids is None:
-        raise ShapeError(f"{path}: not a GLB/glTF written by grammarkit (format 2); no face labels")
+        raise ShapeError(f"{path}: not a GLB/glTF written by grammarkit (format 2 or later); no face labels")
     out: list[str] = []
     for s in solids:
         out.extend(s.labels[i] for i in s.face_labels.tolist())

@@ -7,7 +7,7 @@ from .base import Node, Span
 from .expr import PRECEDENCE, UNARY_PRECEDENCE, Binary, Bool, Call, Expr, Num, Ref, Str, Unary, Vector
 from .grammar import SPLIT_KINDS, TILING_KINDS, Grammar, Statement
 from .split import (
-    Arg, Attr, BlockItem, Branch, Case, CaseArm, Choice, ChoiceArm, Const, Default, Function, Import, Item,
+    Arg, AssetDir, Attr, BlockItem, Branch, Case, CaseArm, Choice, ChoiceArm, Const, Default, Function, Import, Item,
     Nil, OpCall, Pattern, Push, Repeat, Rule, Seq, Snippet, Successor, Terminal, Use, Variants,
     VariantOption,
 )

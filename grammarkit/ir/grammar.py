@@ -10,12 +10,12 @@ from typing import Annotated, Literal, Union
 from pydantic import Field
 
 from .base import Node
-from .split import Attr, Const, Default, Function, Import, Rule, Snippet, Use, Variants
+from .split import AssetDir, Attr, Const, Default, Function, Import, Rule, Snippet, Use, Variants
 from .tiling import ConstraintDef, DockDef, ExampleDef, NeighborRule, PartDef, SiteDef, UpDef
 
 Statement = Annotated[
     Union[
-        Attr, Const, Function, Rule, Snippet, Use, Default, Variants, Import,
+        Attr, Const, Function, Rule, Snippet, Use, Default, Variants, Import, AssetDir,
         PartDef, SiteDef, DockDef, NeighborRule, ConstraintDef, ExampleDef, UpDef,
     ],
     Field(discriminator="kind"),
@@ -45,6 +45,12 @@ class Grammar(Node):
             return "split"
         return "empty"
 
+    @property
+    def asset_dirs(self) -> tuple[str, ...]:
+        """The `asset_dir` folders in declaration order, as written (an imported file's are
+        absolute: the import inliner resolves them against that file's folder)."""
+        return tuple(a.path for a in self._of(AssetDir) if a.path)
+
     def _of(self, cls):  # noqa: ANN001 - small typed filter
         return tuple(s for s in self.statements if isinstance(s, cls))
 
@@ -57,6 +63,7 @@ class Grammar(Node):
     defaults = property(lambda self: self._of(Default))
     variants = property(lambda self: self._of(Variants))
     imports = property(lambda self: self._of(Import))
+    asset_dir_statements = property(lambda self: self._of(AssetDir))
     parts = property(lambda self: self._of(PartDef))
     sites = property(lambda self: self._of(SiteDef))
     docks = property(lambda self: self._of(DockDef))

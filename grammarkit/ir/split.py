@@ -13,7 +13,7 @@ from typing import Annotated, Literal, Union
 from pydantic import Field
 
 from .base import Node
-from .expr import Expr
+from .expr import Expr, Str
 
 
 class Arg(Node):
@@ -215,6 +215,25 @@ class Import(Node):
     kind: Literal["import"] = "import"
     path: str
     comments: tuple[str, ...] = ()
+
+
+class AssetDir(Node):
+    """`asset_dir "path"`: a folder where relative asset names (i(), texture(), fileRandom, ...)
+    are looked up, after the grammar file's own folder. `value` is what was written (the
+    checker refuses anything but a non-empty string); `path` is that string."""
+
+    kind: Literal["asset_dir"] = "asset_dir"
+    value: Expr
+    comments: tuple[str, ...] = ()
+
+    @property
+    def path(self) -> str | None:
+        """The folder as written (None when the value is not a string literal)."""
+        return self.value.value if isinstance(self.value, Str) else None
+
+    @classmethod
+    def of(cls, path: str, **kw) -> "AssetDir":
+        return cls(value=Str(value=path), **kw)
 
 
 for _cls in (Branch, Repeat, OpCall, Push, CaseArm, Case, ChoiceArm, Choice, Seq, Rule, Snippet):

@@ -1,7 +1,7 @@
 """Khronos' glTF validator (npm `gltf-validator`, run under node) reports no errors, warnings,
 infos or hints on the GLB and glTF files grammarkit writes for every example grammar and for a
 tiling assembly, and the files carry what docs/derive.md promises (root rotation, linear PBR
-materials, a node per terminal with extras)."""
+materials, one primitive per closed solid, a node per terminal with extras)."""
 from __future__ import annotations
 
 import json
@@ -82,11 +82,16 @@ def test_layout_root_rotation_materials_and_terminal_nodes(written):
     root = doc["nodes"][doc["scenes"][0]["nodes"][0]]
     assert np.allclose(root["rotation"], Z_UP_TO_Y_UP)
     assert root["extras"]["grammarkit"]["up"] == "+Z"
-    names = [m["name"] for m in doc["materials"]]
+    # a closed solid is one primitive: its materials ride in the primitive's extras
+    materials = doc["materials"] + [m for mesh in doc["meshes"] for p in mesh["primitives"]
+                                    for m in p.get("extras", {}).get("grammarkit", {}).get("materials", [])]
+    (building,) = [doc["nodes"][i] for i in root["children"]]
+    palette = doc["meshes"][building["mesh"]]["primitives"][0]["extras"]["grammarkit"]["materials"]
+    names = [m["name"] for m in palette]
     assert len(set(names)) == len(names)  # one material per (name, colour), each named
     assert "zinc" in names and any(n.startswith("glass") for n in names)
-    assert {m["extras"].get("material") for m in doc["materials"]} >= {"glass", "zinc", "limestone"}
-    for m in doc["materials"]:
+    assert {m["extras"].get("material") for m in palette} >= {"glass", "zinc", "limestone"}
+    for m in materials:
         pbr = m["pbrMetallicRoughness"]
         assert pbr["metallicFactor"] == 0.0 and 0.0 < pbr["roughnessFactor"] <= 1.0
         srgb = m["extras"]["srgb"]
@@ -99,10 +104,18 @@ def test_layout_root_rotation_materials_and_terminal_nodes(written):
     assert set(groups) == set(model.face_labels())
     glass = next(e for e in groups.values() if "glass" in e["materials"])
     assert glass["rules"] and all(":" in s for s in glass["sources"]) and glass["roles"]
-    # one POSITION accessor for the whole building: it is stored closed
-    positions = {p["attributes"]["POSITION"] for i in building["children"]
-                 for p in doc["meshes"][doc["nodes"][i]["mesh"]]["primitives"]}
-    assert len(positions) == 1
+    # ONE primitive for the whole building over one vertex set: it is stored closed, and every
+    # reader gets it closed without welding (issue 32); the terminal nodes hold no mesh, their
+    # faces are ranges of that primitive, and the primitive's runs colour every face
+    assert all("mesh" not in doc["nodes"][i] for i in building["children"])
+    (prim,) = doc["meshes"][building["mesh"]]["primitives"]
+    runs = prim["extras"]["grammarkit"]["runs"]
+    n_faces = doc["accessors"][prim["indices"]]["count"] // 3
+    assert sum(r[3] for r in runs) == n_faces == len(model.faces)
+    assert [r[2] for r in runs] == sorted(r[2] for r in runs)
+    ranges = sorted(tuple(f) for i in building["children"] for f in doc["nodes"][i]["extras"]["faces"])
+    assert ranges == [(r[2], r[3]) for r in runs]
+    assert {palette[r[1]]["extras"].get("material") for r in runs} >= {"glass", "zinc", "limestone"}
 
 
 def test_surface_layer_is_its_own_flagged_node(written):
@@ -117,9 +130,11 @@ def test_surface_layer_is_its_own_flagged_node(written):
     assert all(k["extras"]["surface"] is True for k in kids)
     mats = {p["material"] for k in kids for p in doc["meshes"][k["mesh"]]["primitives"]}
     assert all(doc["materials"][m]["doubleSided"] and doc["materials"][m]["extras"]["surface"] for m in mats)
-    # the solid's materials are single-sided and its primitives share one POSITION accessor
-    smats = {p["material"] for i in solid["children"] for p in doc["meshes"][doc["nodes"][i]["mesh"]]["primitives"]}
-    assert not any(doc["materials"][m].get("doubleSided") for m in smats)
+    # the solid's materials are single-sided; it is one primitive (the surface layer is not)
+    (sprim,) = [p for n in [solid] + [doc["nodes"][i] for i in solid.get("children", [])] if "mesh" in n
+                for p in doc["meshes"][n["mesh"]]["primitives"]]
+    smats = sprim.get("extras", {}).get("grammarkit", {}).get("materials", []) + [doc["materials"][sprim["material"]]]
+    assert not any(m.get("doubleSided") for m in smats)
     # read back: the solid alone is watertight, the surface layer is separate
     from grammarkit.geometry.meshio import read_gltf_solids
 

@@ -61,7 +61,7 @@ def test_face_labels_and_colours_survive_the_file(paris, tmp_path):
                         zip(paris.face_labels(), map(tuple, np.asarray(paris.mesh.visual.face_colors)))))
     for k, label, colour in zip(key(mesh.vertices, mesh.faces), labels, map(tuple, mesh.visual.face_colors)):
         assert model_of[k] == (label, colour)
-    assert gltf_root_extras(path)["format"] == 2
+    assert gltf_root_extras(path)["format"] == 3
     with pytest.raises(ShapeError, match="not found"):
         face_labels(tmp_path / "missing.glb")
 

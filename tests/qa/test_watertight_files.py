@@ -79,3 +79,29 @@ def test_hip_roof_on_a_wall_top_and_ledge_under_an_overhang():
         m = grammarkit.derive(t)
         assert _coincident(m.mesh.vertices) == 0
         assert mesh_report(m.mesh).ok and len(m.manifold.decompose()) == 1
+
+
+# -- issue 32 item 2: the GLB as most people load it ---------------------------------------
+# every shipped split grammar (library.grammar only holds snippets for the others to use)
+SHIPPED_SPLIT = sorted([p for p in GRAMMARS.glob("*.grammar") if grammarkit.parse(p).rules]
+                       + [GRAMMARS / "lots" / "block.grammar"])
+
+
+@pytest.mark.parametrize("seed", [0, 3])
+@pytest.mark.parametrize("path", SHIPPED_SPLIT, ids=lambda p: p.stem)
+def test_shipped_glb_is_watertight_as_trimesh_loads_it(tmp_path, path, seed):
+    """`trimesh.load(p, force="mesh")` with nothing else (no merge, no processing) reads the
+    closed solid: one primitive per solid over one vertex set, per-terminal data in extras."""
+    import trimesh
+
+    from grammarkit.geometry.meshio import face_labels
+
+    m = grammarkit.derive(path, seed=seed)
+    glb = m.save(tmp_path / f"{path.stem}.glb")
+    mesh = trimesh.load(glb, force="mesh")
+    assert mesh.is_watertight and mesh.is_winding_consistent, path.stem
+    assert mesh.body_count == len(m.manifold.decompose()), path.stem  # one body per mass
+    assert len(mesh.faces) == len(m.faces)
+    assert math.isclose(abs(mesh.volume), m.manifold.volume(), rel_tol=1e-4)
+    # the terminals are still selectable: every face keeps its terminal
+    assert sorted(face_labels(glb)) == sorted(m.face_labels())
