@@ -35,6 +35,7 @@ from ..ir import split as S
 from ..ir.base import Span
 from ..ir.grammar import Grammar
 from .seeds import label_of
+from .lookup import asset_dirs_of, find_asset, resolving
 from .attrs import AttrInfo, ValueEnv, check_attr_value
 from .static import set_targets, shape_free
 from .steps import case_step, choice_step, make_block, nil_step, op_step, terminal_step
@@ -88,6 +89,7 @@ class CompiledGrammar:
         self.warnings: list[tuple[str, Span | None]] = []
         self.bindings: dict[str, str] = {}  # anchor -> snippet name
         self.base_dir = str(Path(grammar.source_path).parent) if grammar.source_path else None
+        self.asset_dirs = asset_dirs_of(grammar, self.base_dir)  # `asset_dir` statements, absolute
         self._defaults: dict[str, Any] | None = None
         # whether an expression asks inside()/overlaps()/touches(): derivations then keep
         # their terminals as occluders (grammarkit/split/occlusion.py)
@@ -503,11 +505,15 @@ class _Compiler:
         path_arg = 0 if call.name in ("i", "texture") else (
             1 if call.name == "set" and len(fns) > 1 and str(fns[0](None)).startswith("material.")
             and str(fns[0](None)).endswith("map") else None)
-        if path_arg is not None and is_constant(fns[path_arg]) and isinstance(fns[path_arg](None), str) \
-                and fns[path_arg](None) and not fns[path_arg](None).startswith("builtin:"):
+        # (or in one of the grammar's asset_dir folders: grammarkit/split/lookup.py); a computed
+        # name is looked up when the shape is derived
+        if path_arg is not None and path_arg < len(fns):
             base = Path(call.span.file).parent if call.span and call.span.file else (
                 Path(self.out.base_dir) if self.out.base_dir else Path("."))
-            fns[path_arg] = constant(str((base / str(fns[path_arg](None))).resolve()))
+            if not is_constant(fns[path_arg]):
+                fns[path_arg] = resolving(fns[path_arg], base, self.out.asset_dirs)
+            elif isinstance(fns[path_arg](None), str):
+                fns[path_arg] = constant(find_asset(fns[path_arg](None), base, self.out.asset_dirs))
         _raise_first(check_block(call, spec))
         block = None
         if call.block is not None:

@@ -325,8 +325,20 @@ class Model:
 
     @property
     def triangle_count(self) -> int:
-        """Triangles of the solid and of the surface layer."""
-        return len(self._mesh.tri_verts) + len(self._ctx.surface[1])
+        """Every triangle the model holds, both layers: the solid's (`mesh`, `faces`) and the
+        surface layer's (`surface_mesh`, `surface_faces`); what a written file holds too.
+        `solid_triangle_count` and `surface_triangle_count` are the two parts."""
+        return self.solid_triangle_count + self.surface_triangle_count
+
+    @property
+    def solid_triangle_count(self) -> int:
+        """Triangles of the watertight solid (`mesh`); 0 when the model has no solid."""
+        return len(self._mesh.tri_verts)
+
+    @property
+    def surface_triangle_count(self) -> int:
+        """Triangles of the open surface layer (`surface_mesh`)."""
+        return len(self._ctx.surface[1])
 
     # -- the surface layer -----------------------------------------------------------------
     @property
@@ -437,9 +449,15 @@ class Model:
         tags = self.triangle_tags
         palette = np.array([rgba_of(t.color, CUT_COLOR if t.role == "cut" else DEFAULT_COLOR) for t in self.tags]
                            + [rgba_of(None, DEFAULT_COLOR)], dtype=np.uint8)
+        meta = {"name": self.name, "seed": self.seed}
+        if not len(tags):
+            # no solid (a model of face terminals only): an empty mesh without colours (trimesh
+            # makes face colours of shape (0, 5) from an empty array, and such a mesh cannot be copied)
+            return trimesh.Trimesh(vertices=np.zeros((0, 3)), faces=np.zeros((0, 3), dtype=np.int64),
+                                   process=False, metadata=meta)
         colors = palette[tags]  # -1 picks the default colour appended last
         return trimesh.Trimesh(vertices=self.vertices, faces=self.faces, face_colors=colors, process=False,
-                               metadata={"name": self.name, "seed": self.seed})
+                               metadata=meta)
 
     def _uvs(self, V: np.ndarray, F: np.ndarray, tags: np.ndarray, uv_set: int) -> np.ndarray | None:
         """Texture coordinates (n, 3, 2) of triangles `F` (with tags `tags`, -1: none) in uv set
