@@ -74,3 +74,40 @@ def test_a_surface_only_model_has_an_empty_copyable_mesh_and_counts_its_layers()
     assert m.triangle_count == 2
     solid = derive("Lot --> footprint(rect(2, 2)) extrude(2) Mass.\n")
     assert solid.solid_triangle_count == len(solid.mesh.faces) == solid.triangle_count == 12
+
+
+# -- rotate(mode, system, x, y, z) ---------------------------------------------------------
+def _axes(body: str) -> np.ndarray:
+    m = derive(f"Lot --> footprint(rect(4, 2)) extrude(3) {body} Box.\n")
+    return np.array(m.parts[0].axes)
+
+
+def test_rotate_rel_scope_is_r():
+    assert np.allclose(_axes("rotate(rel, scope, 10, 20, 30)"), _axes("r(10, 20, 30)"))
+
+
+def test_rotate_abs_world_sets_the_orientation_whatever_it_was():
+    assert np.allclose(_axes("r(0, 0, 37) rotate(abs, world, 0, 0, 0)"), np.eye(3))
+    # CGA's example: rotate(abs, world, 0, 90, 0) turns the scope's x to the world's -z
+    assert np.allclose(_axes("r(10, 0, 50) rotate(abs, world, 0, 90, 0)"), [[0, 0, -1], [0, 1, 0], [1, 0, 0]])
+    assert np.allclose(_axes("r(0, 0, 37) rotate(abs, object, 0, 0, 0)"), np.eye(3))
+
+
+def test_rotate_rel_world_turns_about_the_worlds_axes_not_the_scopes():
+    # after r(90, 0, 0) the scope is x=(1,0,0), y=(0,0,1), z=(0,-1,0); 90 degrees about the world's z
+    # maps (a, b, c) to (-b, a, c), about the scope's z (the world's -y) it would not
+    assert np.allclose(_axes("r(90, 0, 0) rotate(rel, world, 0, 0, 90)"), [[0, 1, 0], [0, 0, 1], [1, 0, 0]])
+    assert np.allclose(_axes("r(90, 0, 0) rotate(rel, scope, 0, 0, 90)"), [[0, 0, 1], [-1, 0, 0], [0, -1, 0]])
+
+
+def test_rotate_turns_about_the_scope_origin_and_keeps_the_solid_closed():
+    m = derive("Lot --> footprint(rect(4, 2)) extrude(3) rotate(rel, world, 0, 0, 90) Box.\n")
+    assert m.mesh.is_watertight
+    assert np.allclose(m.mesh.bounds, [[-2, 0, 0], [0, 4, 3]], atol=0.01)
+
+
+def test_rotate_rejects_an_unknown_system_with_the_choices():
+    from grammarkit.errors import GrammarError
+
+    with pytest.raises(GrammarError, match="scope|pivot|object|world"):
+        derive("Lot --> footprint(rect(4, 2)) rotate(rel, local, 0, 0, 9) X.\n")

@@ -35,7 +35,7 @@ from .scope_ops import op_align_scope_to_axes, op_align_scope_to_geometry, op_mi
 from .splitting import op_offset, op_repeat, op_split
 from .tags import op_color, op_material, op_print, op_report, op_set, op_trim
 from .texturing import op_delete_uv, op_normalize_uv, op_project_uv, op_rotate_uv, op_scale_uv, op_setup_projection, op_texture, op_tile_uv, op_translate_uv
-from .transforms import op_center, op_r, op_s, op_t
+from .transforms import op_center, op_r, op_rotate, op_s, op_t
 from .insert import fitted_size  # noqa: F401 - public (grammarkit.split.ops.fitted_size)
 from .layout import layout  # noqa: F401 - public (tests, docs/operations.md)
 
@@ -56,6 +56,7 @@ BUILTIN_OPERATIONS: tuple[Callable[..., Any], ...] = (
     op_recess,
     op_t,
     op_r,
+    op_rotate,
     op_s,
     op_center,
     op_insert,

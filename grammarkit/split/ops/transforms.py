@@ -1,4 +1,4 @@
-"""Scope transformations: t, r, s, center."""
+"""Scope transformations: t, r, rotate (CGA's, in any coordinate system), s, center."""
 from __future__ import annotations
 
 from typing import Any
@@ -28,16 +28,61 @@ def op_t(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
 def op_r(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
     rx, ry, rz = (number(v, "r()") for v in args[:3])
     R = rotation(rx, ry, rz)
-    ax = s.ax
     # new axis j = sum_i R[i][j] * old axis i  (the rotation is expressed in scope coordinates)
-    new = tuple(tuple(sum(R[i][j] * ax[i][k] for i in range(3)) for k in range(3)) for j in range(3))
+    return _turned(s, _rotated_frame(R, s.ax), bool(rx or ry or rz))
+
+
+def _rotated_frame(R: tuple, frame: tuple) -> tuple:
+    """The axes (world vectors) `R` makes of `frame`'s: axis j = sum_i R[i][j] * frame axis i."""
+    return tuple(tuple(sum(R[i][j] * frame[i][k] for i in range(3)) for k in range(3)) for j in range(3))
+
+
+def _turned(s: Shape, new: tuple, changed: bool) -> Shape:
+    """The shape with its scope (and the geometry, held in scope coordinates) turned to the
+    axes `new` about the scope origin."""
+    ax = s.ax
     c = s
     c.ax = new  # type: ignore[assignment]
-    if c.on is not None and (rx or ry or rz):
-        c.on = None
+    if c.on is not None and changed:
+        c.on = None  # a turned face is no longer a view of its volume's boundary
     if c.tex is not None:
         moved(c, c.o, ax)
     return c
+
+
+WORLD_FRAME = ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))
+ROTATE_SYSTEMS = ("scope", "pivot", "object", "world")
+
+
+@operation("rotate", (Param("mode", "axis", choices=("abs", "rel")),
+                      Param("system", "axis", choices=ROTATE_SYSTEMS),
+                      Param("x"), Param("y"), Param("z")),
+           doc="CGA's rotate(mode, coordSystem, x, y, z): turn the scope about its origin by angles "
+               "(degrees, x first) given in the scope's, the pivot's, the object's or the world's axes; "
+               "rel adds them to the scope's orientation, abs sets it to them.")
+def op_rotate(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
+    mode, system = str(args[0]), str(args[1])
+    if mode not in ("abs", "rel"):
+        raise ValueError(f"rotate(): mode must be abs or rel, got {mode!r}")
+    if system not in ROTATE_SYSTEMS:
+        raise ValueError(f"rotate(): the coordinate system must be one of {', '.join(ROTATE_SYSTEMS)}, "
+                         f"got {system!r}")
+    rx, ry, rz = (number(v, "rotate() angle") for v in args[2:5])
+    R = rotation(rx, ry, rz)
+    # the initial shape's frame (CGA's object and default pivot) is the world's: grammarkit's
+    # lots are given in world coordinates and nothing moves the pivot
+    frame = s.ax if system == "scope" else WORLD_FRAME
+    if mode == "abs":
+        # the orientation relative to the system is set to R (for the scope system, the scope's
+        # own orientation is the identity, so abs and rel agree)
+        return _turned(s, _rotated_frame(R, frame), True)
+    if system == "scope":
+        return _turned(s, _rotated_frame(R, s.ax), bool(rx or ry or rz))
+    # relative in a fixed frame F (rows: its axes): the world rotation W = F^T R F turns every axis
+    W = [[sum(frame[i][a] * R[i][j] * frame[j][b] for i in range(3) for j in range(3)) for b in range(3)]
+         for a in range(3)]
+    new = tuple(tuple(sum(W[k][m] * axis[m] for m in range(3)) for k in range(3)) for axis in s.ax)
+    return _turned(s, new, bool(rx or ry or rz))
 
 
 @operation("s", (Param("x"), Param("y"), Param("z")), doc="Set the scope size.")
