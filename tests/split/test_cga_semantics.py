@@ -111,3 +111,37 @@ def test_rotate_rejects_an_unknown_system_with_the_choices():
 
     with pytest.raises(GrammarError, match="scope|pivot|object|world"):
         derive("Lot --> footprint(rect(4, 2)) rotate(rel, local, 0, 0, 9) X.\n")
+
+
+# -- extrude / offset on a volume: per face, as CGA ------------------------------------------
+BOX = "Lot --> footprint(rect(4, 2)) extrude(3) "  # faces 4 x 2 (twice), 4 x 3 (twice), 2 x 3 (twice)
+
+
+def test_extrude_on_a_volume_extrudes_every_face_along_its_normal():
+    m = derive(BOX + "extrude(1) Shell.\n")
+    assert m.mesh.is_watertight
+    # six 1 m slabs on the faces: 2 x (8 + 12 + 6) m³, around the (empty) box
+    assert m.mesh.volume == pytest.approx(52.0, rel=5e-3)
+    assert np.allclose(m.mesh.bounds, [[-1, -1, -1], [5, 3, 4]], atol=0.01)
+
+
+def test_extrude_of_a_volume_inwards_leaves_the_hollow_inside():
+    m = derive(BOX + "extrude(-0.5) Walls.\n")
+    assert m.mesh.is_watertight
+    assert m.mesh.volume == pytest.approx(4 * 2 * 3 - 3 * 1 * 2, rel=5e-3)  # the box minus its 3 x 1 x 2 core
+    assert np.allclose(m.mesh.bounds, [[0, 0, 0], [4, 2, 3]], atol=0.01)
+
+
+def test_offset_on_a_volume_offsets_every_face_in_its_plane():
+    inside = derive(BOX + "offset(-0.5) Inside.\n")
+    assert inside.solid_triangle_count == 0
+    assert inside.surface_mesh.area == pytest.approx(2 * (3 * 1 + 3 * 2 + 1 * 2))
+    both = derive(BOX + "offset(-0.5) { inside: I. | border: B. }\n")
+    assert [p.name for p in both.parts] == ["I", "B"]
+    assert both.surface_mesh.area == pytest.approx(2 * (4 * 2 + 4 * 3 + 2 * 3))  # inside + border: every face
+
+
+def test_offset_faces_of_a_volume_can_be_extruded_into_panels():
+    m = derive(BOX + "offset(-0.5) { inside: extrude(0.2) Panel. | border: Frame. }\n")
+    assert m.mesh.is_watertight
+    assert m.mesh.volume == pytest.approx(0.2 * 2 * (3 * 1 + 3 * 2 + 1 * 2), rel=2e-2)

@@ -4,9 +4,12 @@ from __future__ import annotations
 from typing import Any
 
 from ...registry import Param
-from ..shape import FACE, Shape
-from .helpers import AXES, EPS, axis_index, face_only, fp, manifold3d, number, operation, piece
+from ..shape import FACE, VOLUME, Shape
+from .helpers import AXES, EPS, axis_index, fp, lazy_module, manifold3d, number, operation, piece
 from .layout import layout, split_geometry
+
+np = lazy_module("numpy")
+surfaces = lazy_module("grammarkit.geometry.surfaces")
 
 
 @operation("split", (Param("axis", "axis", choices=AXES),), block="sizes",
@@ -50,11 +53,8 @@ def op_repeat(ctx: Any, s: Shape, args: Any, block: Any) -> list:
     return op_split(ctx, s, (args[0],), block)
 
 
-@operation("offset", (Param("distance"),), block="optional-selectors",
-           selectors=("inside", "border"), doc="Inset (negative) a face; inside/border parts.")
-def op_offset(ctx: Any, s: Shape, args: Any, block: Any) -> Any:
-    d = number(args[0], "offset distance")
-    face_only(s, "offset")
+def offset_face(s: Shape, d: float, want_border: bool) -> tuple[Shape | None, list[Shape]]:
+    """A face offset by `d` (negative: inset): the face inside, and the border ring when asked."""
     sx, sy = s.sz[0], s.sz[1]
     inside: Shape | None
     border: list[Shape] = []
@@ -62,7 +62,7 @@ def op_offset(ctx: Any, s: Shape, args: Any, block: Any) -> Any:
         e = -d
         w, h = sx - 2 * e, sy - 2 * e
         inside = s.derived(s.world(e, e, 0.0), (w, h, 0.0), None) if w > EPS and h > EPS else None
-        if block is not None and e > EPS:
+        if want_border and e > EPS:
             if inside is None:
                 border = [s.copy()]
             else:
@@ -74,11 +74,23 @@ def op_offset(ctx: Any, s: Shape, args: Any, block: Any) -> Any:
         whole = fp.cross_section(s.contours())
         grown = whole.offset(d, manifold3d.JoinType.Miter, 2.0)
         inside = None if grown.is_empty() else piece(s, grown, FACE)
-        if block is not None and abs(d) > EPS:
+        if want_border and abs(d) > EPS:
             ring = (whole - grown) if d < 0 else (grown - whole)
             ring_face = None if ring.is_empty() else piece(s, ring, FACE)
             if ring_face is not None:
                 border = [ring_face]
+    return inside, border
+
+
+@operation("offset", (Param("distance"),), block="optional-selectors",
+           selectors=("inside", "border"),
+           doc="Inset (negative) a face; inside/border parts. On a volume, every face in its own plane (CGA).")
+def op_offset(ctx: Any, s: Shape, args: Any, block: Any) -> Any:
+    d = number(args[0], "offset distance")
+    if s.kind == FACE:
+        inside, border = offset_face(s, d, block is not None)
+    else:
+        inside, border = _offset_faces(s, d, block is not None)
     if block is None:
         return inside
     out = []
@@ -88,3 +100,43 @@ def op_offset(ctx: Any, s: Shape, args: Any, block: Any) -> Any:
         elif slot.sel == "border":
             out.extend((b.copy() if i else b, slot) for i, b in enumerate(border))
     return out
+
+
+def _offset_faces(s: Shape, d: float, want_border: bool) -> tuple[Shape | None, list[Shape]]:
+    """CGA's offset on a volume: every face (comp(f)'s faces) offset in its own plane. The
+    insides together (and the borders together) are the new geometry, an open mesh in the
+    shape's scope (a surface part, as an open inserted asset is; comp(f) and extrude take its
+    faces one by one)."""
+    from .faces import faces_of
+
+    insides, borders = [], []
+    for _, f in faces_of(s):
+        if f.sz[0] <= EPS or f.sz[1] <= EPS:
+            continue
+        inside, border = offset_face(f, d, want_border)
+        if inside is not None:
+            insides.append(inside)
+        borders.extend(border)
+    mesh_inside = _faces_mesh(s, insides)
+    mesh_border = _faces_mesh(s, borders) if want_border else None
+    return mesh_inside, [] if mesh_border is None else [mesh_border]
+
+
+def _faces_mesh(s: Shape, faces: list[Shape]) -> Shape | None:
+    """Face shapes as one open mesh shape in `s`'s scope (its bounding box the new scope)."""
+    if not faces:
+        return None
+    A = np.asarray(s.ax, dtype=np.float64)
+    parts, tris, n = [], [], 0
+    for f in faces:
+        V, F = surfaces.face_triangles(f.o, f.ax, f.sz, f.poly)
+        parts.append((V - np.asarray(s.o, dtype=np.float64)) @ A.T)  # world -> s's scope
+        tris.append(F + n)
+        n += len(V)
+    V, F = np.concatenate(parts), np.concatenate(tris)
+    if not len(F):
+        return None
+    lo = V.min(axis=0)
+    size = V.max(axis=0) - lo
+    mesh = surfaces.SurfaceMesh(V - lo, F)
+    return s.derived(s.world(*lo.tolist()), tuple(size.tolist()), None, VOLUME, solid=mesh)
