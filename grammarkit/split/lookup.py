@@ -16,10 +16,29 @@ def asset_dirs_of(grammar: Any, base_dir: str | None) -> tuple[str, ...]:
     return tuple(str((base / d).resolve()) for d in getattr(grammar, "asset_dirs", ()) or ())
 
 
+# answers per (name, folder, asset_dirs): a computed name (a texture set per shape) is looked
+# up thousands of times a derivation, so each is asked of the file system once per process (as
+# the texture check and the asset loader do: a file appearing later is not looked for again)
+_FOUND: dict[tuple, str] = {}
+MAX_FOUND = 4096
+
+
 def find_asset(name: str, base: Path, asset_dirs: tuple[str, ...]) -> str:
     """The absolute path of asset `name` (absolute names and `builtin:` ones as they are)."""
     if not name or name.startswith("builtin:"):
         return name
+    key = (name, base, asset_dirs)
+    hit = _FOUND.get(key)
+    if hit is not None:
+        return hit
+    path = _search(name, base, asset_dirs)
+    if len(_FOUND) >= MAX_FOUND:
+        _FOUND.clear()
+    _FOUND[key] = path
+    return path
+
+
+def _search(name: str, base: Path, asset_dirs: tuple[str, ...]) -> str:
     if Path(name).is_absolute():
         return str(Path(name).resolve())
     first = (base / name).resolve()
