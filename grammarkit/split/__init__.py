@@ -271,7 +271,40 @@ def derive(grammar: Any, *, seed: int = 0, attrs: Mapping[str, Any] | None = Non
 def variations(grammar: Any, n: int, *, seed: int = 0, attrs: Mapping[str, Any] | None = None,
                limits: Limits | None = None, start: int = 0, registries: Any = None
                ) -> Iterator[tuple[Any, Model]]:
-    """(Variation, Model) pairs; see grammarkit.split.variation.variations."""
-    from .variation import variations as _variations
-    return _variations(grammar, n, seed=seed, attrs=attrs, limits=limits, start=start,
-                       registries=_registries(registries))
+    """Yield `n` (Variation, Model) pairs: variations start, start+1, ... (each depends only on
+    `seed` and its index, so workers can derive disjoint index ranges). What varies and how it
+    is drawn: grammarkit.split.variation."""
+    return _variations(grammar, n, seed, attrs, limits, start, _registries(registries))
+
+
+def _variations(grammar: Any, n: int, seed: int, attrs: Mapping[str, Any] | None, limits: Limits | None,
+                start: int, registries: Any) -> Iterator[tuple[Any, Model]]:
+    import random
+
+    from .variation import Variation, sample_attrs, snippet_weights
+
+    for what, v, lo in (("n", n, 0), ("start", start, 0), ("seed", seed, None)):
+        if isinstance(v, bool) or not isinstance(v, int) or (lo is not None and v < lo):
+            raise DerivationError(f"variations(): {what}= must be an integer"
+                                  + (f" >= {lo}" if lo is not None else "") + f", got {v!r}",
+                                  None, code="bad-argument")
+    g = load_grammar(grammar, registries)
+    base = compile(g, registries=registries)
+    tables = snippet_weights(g, registries.functions, base.default_values())
+    snippets = {s.name: s for s in g.snippets}
+    fixed = as_mapping(attrs, "attrs")
+    for i in range(start, start + n):
+        rng = random.Random(hash((seed, i)) & ((1 << 64) - 1))
+        choices: dict[str, str] = {}
+        for anchor, snip in sorted(base.bindings.items()):
+            otype = snippets[snip].object_type if snip in snippets else None
+            table = tables.get(otype or "")
+            if table:
+                names = [s for s, _ in table]
+                choices[anchor] = rng.choices(names, weights=[w for _, w in table])[0]
+        compiled = compile(g, choices or None, registries=registries)
+        sampled = sample_attrs(compiled, rng, fixed)
+        run_seed = rng.getrandbits(32)
+        model = derive(g, seed=run_seed, attrs=sampled, limits=limits, choices=choices or None,
+                       registries=registries)
+        yield Variation(i, run_seed, model.attrs, dict(compiled.bindings)), model

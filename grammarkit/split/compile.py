@@ -23,22 +23,22 @@ both refuse the same text with the same codes.
 """
 from __future__ import annotations
 
-import math
-import random
 import weakref
-from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Mapping
 
 from ..dsl.binding import bind_operation, check_block, check_sequence, parse_color
-from ..errors import GrammarError, GrammarkitError
+from ..errors import GrammarError
 from ..expr_eval import FunctionTable, compile_expr, constant, is_constant
 from ..ir import expr as E
 from ..ir import split as S
 from ..ir.base import Span
 from ..ir.grammar import Grammar
 from .seeds import label_of
-from .shape import Shape, fail
+from .lookup import asset_dirs_of, find_asset, resolving
+from .attrs import AttrInfo, ValueEnv, check_attr_value
+from .static import set_targets, shape_free
+from .steps import case_step, choice_step, make_block, nil_step, op_step, terminal_step
 
 BUILTIN_NAMES = {
     "scope.sx": 0, "scope.sy": 1, "scope.sz": 2,
@@ -73,38 +73,6 @@ class Slot:
         self.label, self.span = label, span
 
 
-@dataclass
-class AttrInfo:
-    """A user-settable parameter: a grammar attr or an attr of a bound snippet copy."""
-
-    key: str  # "height" or "Roof.roof_deg"
-    name: str
-    attr: S.Attr
-    scope: str | None  # anchor of the snippet copy, None for the grammar's own attrs
-    snippet: str | None
-    default: Callable = field(repr=False, default=None)  # type: ignore[assignment]
-    lo: Callable | None = field(repr=False, default=None)
-    hi: Callable | None = field(repr=False, default=None)
-    choices: tuple[Callable, ...] | None = field(repr=False, default=None)
-
-
-class ValueEnv:
-    """What attr and const expressions are evaluated on: no scope, the derivation's values so
-    far (`values`), and a generator seeded by the run seed (for `rand` in attr defaults)."""
-
-    sz = (0.0, 0.0, 0.0)
-    o = (0.0, 0.0, 0.0)
-    params: tuple = ()
-    si, st = 0, 1
-
-    def __init__(self, seed: int, values: dict | None = None):
-        self._rng = random.Random(seed ^ 0x5EED)
-        self.values: dict[str, Any] = {} if values is None else values
-
-    def rng(self) -> random.Random:
-        return self._rng
-
-
 class CompiledGrammar:
     """The runnable form of a split grammar (one snippet binding, one set of registries).
     Immutable once compiled: per-derivation values live in the derivation (see module doc)."""
@@ -121,6 +89,7 @@ class CompiledGrammar:
         self.warnings: list[tuple[str, Span | None]] = []
         self.bindings: dict[str, str] = {}  # anchor -> snippet name
         self.base_dir = str(Path(grammar.source_path).parent) if grammar.source_path else None
+        self.asset_dirs = asset_dirs_of(grammar, self.base_dir)  # `asset_dir` statements, absolute
         self._defaults: dict[str, Any] | None = None
         # whether an expression asks inside()/overlaps()/touches(): derivations then keep
         # their terminals as occluders (grammarkit/split/occlusion.py)
@@ -199,53 +168,6 @@ class CompiledGrammar:
         return {k: values[k] for k in self.attrs}
 
 
-def check_attr_value(info: AttrInfo, value: Any, env: Any = None) -> Any:
-    """Convert and check a user value against the attr's type, range or enum (`env` holds the
-    other values the attr's default and bounds may refer to)."""
-    env = env or ValueEnv(0)
-    default = info.default(env)
-    if isinstance(value, str) and not isinstance(default, str):
-        text = value.strip()
-        if isinstance(default, bool):
-            if text.lower() not in ("true", "false"):
-                raise GrammarError(f"attr {info.key!r} is a boolean; got {value!r}", info.attr.span)
-            value = text.lower() == "true"
-        else:
-            try:
-                value = float(text)
-            except ValueError:
-                raise GrammarError(f"attr {info.key!r} is a number; got {value!r}", info.attr.span,
-                                   code="bad-attr-value") from None
-            if value.is_integer() and isinstance(default, int):
-                value = int(value)
-    # the value must have the default's type: a number (finite), a boolean or a string
-    if isinstance(default, bool):
-        if not isinstance(value, bool):
-            raise GrammarError(f"attr {info.key!r} is a boolean; got {value!r}", info.attr.span,
-                               code="bad-attr-value")
-    elif isinstance(default, (int, float)):
-        if isinstance(value, bool) or not isinstance(value, (int, float)):
-            raise GrammarError(f"attr {info.key!r} is a number; got {value!r}", info.attr.span,
-                               code="bad-attr-value")
-        if not math.isfinite(value):
-            raise GrammarError(f"attr {info.key!r} must be a finite number; got {value!r}",
-                               info.attr.span, code="bad-attr-value")
-    elif isinstance(default, str) and not isinstance(value, str):
-        raise GrammarError(f"attr {info.key!r} is a string; got {value!r}", info.attr.span,
-                           code="bad-attr-value")
-    if info.lo is not None:
-        lo, hi = info.lo(env), info.hi(env)  # type: ignore[misc]
-        if not isinstance(value, (int, float)) or isinstance(value, bool) or not (lo <= value <= hi):
-            raise GrammarError(f"attr {info.key!r} = {value!r} is outside its range [{lo:g}, {hi:g}]",
-                               info.attr.span, code="attr-out-of-range")
-    if info.choices is not None:
-        options = [c(env) for c in info.choices]
-        if value not in options:
-            raise GrammarError(f"attr {info.key!r} = {value!r} is not one of {options}",
-                               info.attr.span, code="attr-not-in-enum")
-    return value
-
-
 # ---------------------------------------------------------------------------------------------
 def compile_grammar(grammar: Grammar, registries: Any, choices: Mapping[str, str] | None = None,
                     start: str | None = None) -> CompiledGrammar:
@@ -307,7 +229,7 @@ class _Compiler:
         self.grammar_attrs = {a.name for a in grammar.attrs}
         # attrs that `set(attr, value)` changes somewhere: their value depends on the shape, so
         # expressions reading them are not shape-free (split layouts are not cached for them)
-        self.set_attrs = frozenset(_set_targets(grammar))
+        self.set_attrs = frozenset(set_targets(grammar))
         self.pending: list[tuple[CRule, S.Rule, _Scope]] = []
         # user functions (`func`): bodies see the grammar's attrs, consts and the built-in values
         # of the shape the calling expression is evaluated on; compiled once, at their first call
@@ -411,7 +333,7 @@ class _Compiler:
         e = self._occlusion_refs(e)
         f = compile_expr(e, self._resolver(scope, params), self.functions, user=self.user)
         try:
-            f._shape_free = _shape_free(e, params, self.set_attrs, self.user_names)  # type: ignore[attr-defined]
+            f._shape_free = shape_free(e, params, self.set_attrs, self.user_names)  # type: ignore[attr-defined]
         except AttributeError:  # a shared constant closure: constants are shape-free anyway
             pass
         return f
@@ -487,9 +409,9 @@ class _Compiler:
         if isinstance(item, S.Successor):
             return self._successor(item.name, item.args, item.span, scope, params, last)
         if isinstance(item, S.Terminal):
-            return _terminal_step(item.name, last)
+            return terminal_step(item.name, last)
         if isinstance(item, S.Nil):
-            return _nil_step
+            return nil_step
         if isinstance(item, S.Push):
             body = self._seq(item.body, scope, params, rule)
 
@@ -501,12 +423,12 @@ class _Compiler:
             arms = tuple((self._expr(a.cond, scope, params), self._seq(a.body, scope, params, rule))
                          for a in item.arms)
             other = self._seq(item.otherwise, scope, params, rule) if item.otherwise is not None else None
-            return _case_step(arms, other)
+            return case_step(arms, other)
         if isinstance(item, S.Choice):
             arms = tuple((self._expr(a.percent, scope, params), self._seq(a.body, scope, params, rule),
                           a.span) for a in item.arms)
             other = self._seq(item.otherwise, scope, params, rule) if item.otherwise is not None else None
-            return _choice_step(arms, other, item.span)
+            return choice_step(arms, other, item.span)
         raise GrammarError(f"unexpected item {type(item).__name__}", getattr(item, "span", None))
 
     def _successor(self, name: str, args: tuple, span: Span | None, scope: _Scope,
@@ -514,7 +436,7 @@ class _Compiler:
         target = self._lookup(name, scope, span)
         if target is None:
             self.out.warnings.append((f"no rule for {name!r}: it becomes a leaf", span))
-            return _terminal_step(name, last)
+            return terminal_step(name, last)
         if len(args) != len(target.params):
             raise GrammarError(f"rule '{name}' takes {len(target.params)} argument(s), got {len(args)}",
                                span, code="successor-arity")
@@ -568,9 +490,9 @@ class _Compiler:
         if apply is None:
             raise GrammarError(f"operation {call.name!r} (plugin {spec.plugin!r}) has no implementation",
                                call.span, code="operation-without-apply")
-        # a plugin's operation is named with its plugin in errors (built-ins are LazyApply)
-        plugin = "" if hasattr(apply, "target") else (spec.plugin or "?")
-        apply = apply.target() if hasattr(apply, "target") else apply
+        # a plugin's operation is named with its plugin in errors (built-ins carry their spec,
+        # grammarkit.split.ops.helpers.operation)
+        plugin = "" if hasattr(apply, "spec") else (spec.plugin or "?")
         fns = self._args(call, spec, scope, params)
         if call.name == "set" and fns:
             fns[0] = constant(self._set_key(call, scope))
@@ -583,16 +505,20 @@ class _Compiler:
         path_arg = 0 if call.name in ("i", "texture") else (
             1 if call.name == "set" and len(fns) > 1 and str(fns[0](None)).startswith("material.")
             and str(fns[0](None)).endswith("map") else None)
-        if path_arg is not None and is_constant(fns[path_arg]) and isinstance(fns[path_arg](None), str) \
-                and fns[path_arg](None) and not fns[path_arg](None).startswith("builtin:"):
+        # (or in one of the grammar's asset_dir folders: grammarkit/split/lookup.py); a computed
+        # name is looked up when the shape is derived
+        if path_arg is not None and path_arg < len(fns):
             base = Path(call.span.file).parent if call.span and call.span.file else (
                 Path(self.out.base_dir) if self.out.base_dir else Path("."))
-            fns[path_arg] = constant(str((base / str(fns[path_arg](None))).resolve()))
+            if not is_constant(fns[path_arg]):
+                fns[path_arg] = resolving(fns[path_arg], base, self.out.asset_dirs)
+            elif isinstance(fns[path_arg](None), str):
+                fns[path_arg] = constant(find_asset(fns[path_arg](None), base, self.out.asset_dirs))
         _raise_first(check_block(call, spec))
         block = None
         if call.block is not None:
             block = self._block(call, spec, scope, params, rule, index)
-        return _op_step(apply, tuple(fns), block, call.span, call.name, plugin)
+        return op_step(apply, tuple(fns), block, call.span, call.name, plugin)
 
     def _occlusion_refs(self, e: Any) -> Any:
         """CGA's occlusion queries `inside("intra", "label")` as references the resolver binds
@@ -663,7 +589,7 @@ class _Compiler:
                 else:  # check_block made sure the key is one of the spec's selectors
                     out.append(Slot("sel", sel=it.key.name, body=body, label=lab, span=it.span))
             return tuple(out)
-        return _make_block(build(call.block or (), ""))
+        return make_block(build(call.block or (), ""))
 
     def _repeat(self, call: S.OpCall, pat: S.Pattern, scope: _Scope, params: tuple[str, ...],
                 rule: CRule, index: int) -> Callable:
@@ -688,68 +614,7 @@ class _Compiler:
         if pat.tail is not None:
             slots.append(Slot("float", size=size_fn, body=succ_body(pat.tail),
                               label=label_of(rule.key, index, "pattern-tail") << 12, span=span))
-        apply = spec.apply.target() if hasattr(spec.apply, "target") else spec.apply
-        return _op_step(apply, (axis_fn, size_fn, sep_fn), _make_block(slots), call.span, "repeat")
-
-
-def _shape_free(e: Any, params: tuple[str, ...], mutable: frozenset = frozenset(),
-                user: frozenset = frozenset()) -> bool:
-    """True if an expression reads only attrs, consts and literals (no scope, split index, rule
-    parameter, rand, or attr that `set()` changes): its value is the same for every shape of
-    one derivation. A call of a user function (`user`: their names) counts as shape-dependent
-    (its body may read the scope)."""
-    if isinstance(e, E.Ref):
-        return (e.name not in params and e.name not in mutable
-                and not e.name.startswith(("scope.", "split.", "comp.", "geometry.", "occlusion:")))
-    if isinstance(e, E.Call):
-        return e.func != "rand" and e.func not in user and all(_shape_free(a, params, mutable, user)
-                                                               for a in e.args)
-    if isinstance(e, E.Unary):
-        return _shape_free(e.operand, params, mutable, user)
-    if isinstance(e, E.Binary):
-        return _shape_free(e.left, params, mutable, user) and _shape_free(e.right, params, mutable, user)
-    if isinstance(e, E.Vector):
-        return all(_shape_free(a, params, mutable, user) for a in e.items)
-    return True
-
-
-def _set_targets(node: Any) -> set[str]:
-    """Names of the attrs that `set(name, value)` calls anywhere in `node` change."""
-    out: set[str] = set()
-    if isinstance(node, S.OpCall) and node.name == "set" and node.args and isinstance(node.args[0].value, E.Ref):
-        out.add(node.args[0].value.name)
-    if isinstance(node, (list, tuple)):
-        for x in node:
-            out |= _set_targets(x)
-    elif hasattr(node, "__pydantic_fields__") or hasattr(type(node), "model_fields"):
-        for name in type(node).model_fields:
-            v = getattr(node, name, None)
-            if isinstance(v, (list, tuple)) or hasattr(type(v), "model_fields"):
-                out |= _set_targets(v)
-    return out
-
-
-def _block_is_fixed(items: tuple) -> bool:
-    for it in items:
-        if it.mode == "repeat":
-            if not _block_is_fixed(it.items):
-                return False
-        elif it.size is not None and not getattr(it.size, "_shape_free", False):
-            return False
-    return True
-
-
-class Block(tuple):
-    """The compiled slots of an operation block; `fixed` says whether every size is the same
-    for all shapes of a derivation (then split layouts can be cached per length)."""
-
-    fixed: bool = False
-
-
-def _make_block(slots: Any) -> Block:
-    b = Block(slots)
-    b.fixed = _block_is_fixed(b)
-    return b
+        return op_step(spec.apply, (axis_fn, size_fn, sep_fn), make_block(slots), call.span, "repeat")
 
 
 def _raise_first(problems: list) -> None:
@@ -757,100 +622,6 @@ def _raise_first(problems: list) -> None:
     if problems:
         d = problems[0]
         raise GrammarError(d.message, d.span, hint=d.hint, code=d.code)
-
-
-# -- step factories -------------------------------------------------------------------------------
-
-def _nil_step(ctx: Any, s: Any) -> None:
-    return None
-
-
-def _terminal_step(name: str, last: bool) -> Callable:
-    if last:
-        def term_last(ctx: Any, s: Any) -> None:
-            ctx.leaf(s, name)
-            return None
-        return term_last
-
-    def term(ctx: Any, s: Any) -> Any:
-        ctx.leaf(s.copy(), name)
-        return s
-    return term
-
-
-def _op_step(apply: Callable, fns: tuple, block: tuple | None, span: Span | None, name: str,
-             plugin: str = "") -> Callable:
-    const = [f(None) for f in fns] if all(is_constant(f) for f in fns) else None
-    who = f"{name}() of plugin {plugin!r}" if plugin else f"{name}()"
-
-    def step(ctx: Any, s: Any) -> Any:
-        try:
-            # operations see the derivation's OperationContext only, never the Derivation
-            r = apply(ctx.context, s, const if const is not None else [f(s) for f in fns], block)
-        except GrammarkitError as exc:
-            if exc.span is not None or span is None:
-                raise
-            # an error from a helper that knows no grammar location (a bad mesh file for i()):
-            # same class, located at the operation
-            raise type(exc)(f"in rule {s.rule.name!r} (shape #{s.node}): {who}: {exc}", span,
-                            code=exc.diagnostics[0].code, hint=exc.diagnostics[0].hint) from None
-        except (ValueError, TypeError, ArithmeticError, IndexError) as exc:
-            msg = str(exc)
-            raise fail(s, msg if msg.startswith(f"{name}(") and not plugin else f"{who}: {msg}",
-                       span) from None
-        except (Exception, SystemExit) as exc:  # noqa: BLE001 - a plugin's operation crashed (or
-            # called sys.exit): report it located, no traceback, no silent exit
-            raise fail(s, f"{who} failed: {type(exc).__name__}: {exc}", span) from None
-        if type(r) is list:
-            # (shape, slot) pairs, or (shape, slot, index, total) when the operation numbers
-            # its parts itself (comp: comp.index counts every face, not only the selected)
-            if not all(type(c) is tuple and len(c) in (2, 4) and isinstance(c[0], Shape) for c in r):
-                raise fail(s, f"{who} returned a list that is not of (shape, slot) pairs", span)
-            ctx.spawn(s, r, name)
-            return None
-        if r is not None and not isinstance(r, Shape):
-            raise fail(s, f"{who} returned {type(r).__name__} {_short(r)}, not a shape, a list of "
-                       "(shape, slot) pairs or None", span)
-        return r
-    return step
-
-
-def _short(value: Any) -> str:
-    text = repr(value)
-    return text if len(text) <= 40 else text[:37] + "..."
-
-
-def _case_step(arms: tuple, other: tuple | None) -> Callable:
-    def case(ctx: Any, s: Any) -> Any:
-        for cond, body in arms:
-            if cond(s):
-                return ctx.run_inline(s, body)
-        if other is not None:
-            return ctx.run_inline(s, other)
-        return s
-    return case
-
-
-def _choice_step(arms: tuple, other: tuple | None, span: Span | None) -> Callable:
-    def choice(ctx: Any, s: Any) -> Any:
-        u = s.rng().random() * 100.0
-        acc = 0.0
-        chosen = None
-        for pct, body, aspan in arms:
-            p = pct(s)
-            if isinstance(p, bool) or not isinstance(p, (int, float)) or p < 0 or not math.isfinite(p):
-                raise fail(s, f"a choice percentage must be a number >= 0, got {p!r}", aspan or span)
-            acc += p
-            if chosen is None and u < acc:
-                chosen = body
-        if acc > 100.0 + 1e-9:
-            raise fail(s, f"choice percentages add up to {acc:g} > 100", span)
-        if chosen is None:
-            chosen = other
-        if chosen is None:
-            return s  # the remaining probability: no arm applies, the shape goes on unchanged
-        return ctx.run_inline(s, chosen)
-    return choice
 
 
 __all__ = ["AttrInfo", "CRule", "CompiledGrammar", "Slot", "ValueEnv", "check_attr_value", "compile_grammar"]

@@ -27,6 +27,7 @@ from ..geometry.solids import frame_matrix as frame
 from .seeds import M64, label_of, mix  # noqa: F401 - label_of re-exported
 from ..geometry.surfaces import SurfaceMesh
 from .shape import FACE, Shape, fail  # noqa: F401 - fail re-exported
+from .scope_solid import local_solid
 
 Manifold = manifold3d.Manifold
 
@@ -507,35 +508,3 @@ def welded_frame(o: tuple, ax: tuple, sz: tuple, weld: float = WELD) -> list[lis
     oz = o[2] + a2 * sh[0] + b2 * sh[1] + c2 * sh[2]
     return [[a0 * f[0], b0 * f[1], c0 * f[2], ox], [a1 * f[0], b1 * f[1], c1 * f[2], oy],
             [a2 * f[0], b2 * f[1], c2 * f[2], oz]]
-
-
-def local_solid(s: Shape) -> tuple[Any, int, int]:
-    """The solid of a volume shape in scope coordinates, its original ID and a triangle estimate."""
-    sx, sy, sz = s.sz
-    if s.solid is not None:
-        solid = s.solid
-        oid = solid.original_id()
-        if oid < 0:
-            solid = solid.as_original()
-            oid = solid.original_id()
-        return solid, oid, solid.num_tri()  # a roof or an inserted mesh: count what it brings
-    if sz <= 1e-9 or sx <= 1e-9 or sy <= 1e-9:
-        return None, -1, 0
-    if s.poly is None:
-        solid = Manifold.cube((sx, sy, sz))
-        return solid, solid.original_id(), 12
-    solid = Manifold.extrude(cross_section(s.poly), sz)
-    return solid, solid.original_id(), 4 * sum(len(c) for c in s.poly)
-
-
-def rotation(rx: float, ry: float, rz: float) -> tuple:
-    """Rotation matrix (rows) for XYZ Euler angles in degrees, applied x first."""
-    cx, sx_ = math.cos(math.radians(rx)), math.sin(math.radians(rx))
-    cy, sy_ = math.cos(math.radians(ry)), math.sin(math.radians(ry))
-    cz, sz_ = math.cos(math.radians(rz)), math.sin(math.radians(rz))
-    # R = Rz * Ry * Rx
-    return (
-        (cz * cy, cz * sy_ * sx_ - sz_ * cx, cz * sy_ * cx + sz_ * sx_),
-        (sz_ * cy, sz_ * sy_ * sx_ + cz * cx, sz_ * sy_ * cx - cz * sx_),
-        (-sy_, cy * sx_, cy * cx),
-    )

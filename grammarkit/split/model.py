@@ -4,8 +4,7 @@ from __future__ import annotations
 
 import json
 import math
-import os
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from functools import cached_property
 from typing import Any
 
@@ -15,13 +14,10 @@ import numpy as np
 from ..errors import DerivationError
 from .engine import WELD, Derivation, Tag
 from .pinches import coincident_groups, separate
+from .scene import CUT_COLOR, DEFAULT_COLOR, UNTAGGED, rgba_of, export_scene
 
 Manifold = manifold3d.Manifold
 
-DEFAULT_COLOR = "#b8b4ac"
-CUT_COLOR = "#3a4450"
-# the group name of triangles no terminal claims (none in practice; kept so that every face has a label)
-UNTAGGED = "untagged"
 
 __all__ = ["Model", "Part", "TreeNode", "compose"]
 
@@ -257,28 +253,6 @@ def _drop_slivers(body: Any) -> Any:
     return keep[0] if len(keep) == 1 else Manifold.compose(keep)
 
 
-def _rgba(hex_color: str | None, default: str) -> tuple[int, int, int, int]:
-    h = (hex_color or default).lstrip("#")
-    return (int(h[0:2], 16), int(h[2:4], 16), int(h[4:6], 16), 255)
-
-
-def _material(name: str | None, rgba: tuple, cga: tuple) -> Any:
-    """The exporters' Material for a terminal's name, colour and CGA material attributes
-    (`set(material.*)`, `texture()`: grammarkit.split.texturing)."""
-    from ..geometry.exporters import Material
-
-    if not cga:
-        return Material(name, rgba)
-    d = dict(cga)
-    if "opacity" in d:
-        rgba = (*rgba[:3], int(round(d.pop("opacity") * 255)))
-    texture = d.pop("colormap", None)
-    metallic, roughness = d.pop("metallic", None), d.pop("roughness", None)
-    double_sided = bool(d.pop("doubleSided", False))
-    return Material(name, rgba, double_sided=double_sided, texture=texture, metallic=metallic,
-                    roughness=roughness, extras=tuple(sorted(d.items())))
-
-
 class Model:
     """One derived building.
 
@@ -351,8 +325,20 @@ class Model:
 
     @property
     def triangle_count(self) -> int:
-        """Triangles of the solid and of the surface layer."""
-        return len(self._mesh.tri_verts) + len(self._ctx.surface[1])
+        """Every triangle the model holds, both layers: the solid's (`mesh`, `faces`) and the
+        surface layer's (`surface_mesh`, `surface_faces`); what a written file holds too.
+        `solid_triangle_count` and `surface_triangle_count` are the two parts."""
+        return self.solid_triangle_count + self.surface_triangle_count
+
+    @property
+    def solid_triangle_count(self) -> int:
+        """Triangles of the watertight solid (`mesh`); 0 when the model has no solid."""
+        return len(self._mesh.tri_verts)
+
+    @property
+    def surface_triangle_count(self) -> int:
+        """Triangles of the open surface layer (`surface_mesh`)."""
+        return len(self._ctx.surface[1])
 
     # -- the surface layer -----------------------------------------------------------------
     @property
@@ -378,7 +364,7 @@ class Model:
 
         if not len(self.surface_faces):
             return None
-        palette = np.array([_rgba(t.color, CUT_COLOR if t.role == "cut" else DEFAULT_COLOR) for t in self.tags],
+        palette = np.array([rgba_of(t.color, CUT_COLOR if t.role == "cut" else DEFAULT_COLOR) for t in self.tags],
                            dtype=np.uint8)
         return trimesh.Trimesh(vertices=self.surface_vertices, faces=self.surface_faces,
                                face_colors=palette[self.surface_tags], process=False,
@@ -461,11 +447,17 @@ class Model:
         import trimesh
 
         tags = self.triangle_tags
-        palette = np.array([_rgba(t.color, CUT_COLOR if t.role == "cut" else DEFAULT_COLOR) for t in self.tags]
-                           + [_rgba(None, DEFAULT_COLOR)], dtype=np.uint8)
+        palette = np.array([rgba_of(t.color, CUT_COLOR if t.role == "cut" else DEFAULT_COLOR) for t in self.tags]
+                           + [rgba_of(None, DEFAULT_COLOR)], dtype=np.uint8)
+        meta = {"name": self.name, "seed": self.seed}
+        if not len(tags):
+            # no solid (a model of face terminals only): an empty mesh without colours (trimesh
+            # makes face colours of shape (0, 5) from an empty array, and such a mesh cannot be copied)
+            return trimesh.Trimesh(vertices=np.zeros((0, 3)), faces=np.zeros((0, 3), dtype=np.int64),
+                                   process=False, metadata=meta)
         colors = palette[tags]  # -1 picks the default colour appended last
         return trimesh.Trimesh(vertices=self.vertices, faces=self.faces, face_colors=colors, process=False,
-                               metadata={"name": self.name, "seed": self.seed})
+                               metadata=meta)
 
     def _uvs(self, V: np.ndarray, F: np.ndarray, tags: np.ndarray, uv_set: int) -> np.ndarray | None:
         """Texture coordinates (n, 3, 2) of triangles `F` (with tags `tags`, -1: none) in uv set
@@ -556,94 +548,7 @@ class Model:
         """The building for the exporters (`grammarkit.geometry.exporters.Scene`): one solid,
         its triangles grouped by terminal name, a material per (material name, colour), and
         per group the rules, source lines and semantic tags (docs/derive.md, "Files")."""
-        from ..geometry.exporters import Material, Scene, Solid
-
-        raw = self._ctx.tags  # plain lists [name, rule, otype, color, material, node, role, texturing]
-        nodes = self._ctx.nodes
-        group_of_name: dict[str, int] = {}
-        material_index: dict[Material, int] = {}
-        materials: list[Material] = []
-        info: list[dict] = []
-        # Tags repeat (every window of a facade has its own): work on distinct ones only.
-        kind_of: dict[tuple, int] = {}
-        tag_kind = np.empty(len(raw) + 1, dtype=np.int64)
-        for i, t in enumerate(raw):
-            span = nodes[t[5]][7] if 0 <= t[5] < len(nodes) else None
-            key = (t[0], t[1], t[2], t[3], t[4], t[6], span.file if span else None, span.line if span else None,
-                   t[7].mat if t[7] is not None else ())
-            k = kind_of.get(key)
-            if k is None:
-                k = kind_of[key] = len(kind_of)
-            tag_kind[i] = k
-        untagged = (UNTAGGED, None, None, None, None, "untagged", None, None, ())
-        tag_kind[-1] = kind_of.setdefault(untagged, len(kind_of))
-        kind_group = np.empty(len(kind_of), dtype=np.int64)
-        kind_material = np.empty(len(kind_of), dtype=np.int64)
-        for (name, rule, otype, color, mat_name, role, file, line, cga_mat), k in kind_of.items():
-            # a textured terminal without a colour is white, as CGA's default: glTF multiplies the
-            # texture by the base colour
-            textured = color is None and any(k == "colormap" for k, _ in cga_mat)
-            rgba = _rgba(color, "#ffffff" if textured else CUT_COLOR if role == "cut" else DEFAULT_COLOR)
-            g = group_of_name.get(name)
-            if g is None:
-                g = group_of_name[name] = len(info)
-                info.append({"terminal": name, "rules": set(), "sources": set(), "object_types": set(),
-                             "roles": set(), "materials": set()})
-            mat = _material(mat_name, rgba, cga_mat)
-            m = material_index.get(mat)
-            if m is None:
-                m = material_index[mat] = len(materials)
-                materials.append(mat)
-            kind_group[k], kind_material[k] = g, m
-            if rule is not None:
-                d = info[g]
-                d["rules"].add(rule)
-                d["roles"].add(role)
-                d["materials"].add(mat.label)
-                if otype:
-                    d["object_types"].add(otype)
-                if line:
-                    d["sources"].add(f"{os.path.basename(file or self.name)}:{line}")
-        tag_group, tag_material = kind_group[tag_kind], kind_material[tag_kind]
-        name = self.name or "building"
-        solids = []
-
-        def group_list(face_group: np.ndarray, surface: bool) -> list:
-            counts = np.bincount(face_group, minlength=len(info))
-            out = []
-            for g, d in enumerate(info):
-                extras = {k: (sorted(v) if isinstance(v, set) else v) for k, v in d.items()}
-                extras["triangles"] = int(counts[g])
-                if surface:
-                    extras["surface"] = True
-                out.append((d["terminal"], extras))
-            return out
-        if self.faces.shape[0]:
-            tri_tags = self.triangle_tags  # -1 (untagged) picks the entry appended last
-            face_group = tag_group[tri_tags]
-            solids.append(Solid(name, self.vertices, self.faces, face_group, group_list(face_group, False),
-                                tag_material[tri_tags], materials,
-                                extras={"grammar": self.name, "seed": self.seed}, uv=self.triangle_uvs))
-        if len(self.surface_faces):
-            # the surface layer: its own node, flagged as a surface (no inside, not part of the
-            # solid's watertight guarantee), double-sided materials (docs/language.md, "Solids and surfaces")
-            stags = self.surface_tags
-            face_group = tag_group[stags]
-            used = np.unique(tag_material[stags])
-            remap = np.zeros(len(materials), dtype=np.int64)
-            remap[used] = np.arange(len(used))
-            smats = [replace(materials[m], double_sided=True) for m in used.tolist()]
-            solids.append(Solid(f"{name} surfaces", self.surface_vertices, self.surface_faces, face_group,
-                                group_list(face_group, True), remap[tag_material[stags]], smats,
-                                extras={"grammar": self.name, "seed": self.seed, "surface": True},
-                                uv=self.surface_uvs))
-        extras = {"grammar": self.name, "seed": self.seed,
-                  "attrs": {k: v for k, v in self.attrs.items() if isinstance(v, (int, float, str, bool))},
-                  "bindings": dict(self.bindings),
-                  "materials": sorted({t[4] for t in raw if t[4]})}
-        if self._ctx.reports:
-            extras["reports"] = self.reports  # CGA's reports, in the building node's extras
-        return Scene(name, solids, extras)
+        return export_scene(self)
 
     def save(self, path: Any, format: str | None = None, textures: str = "embed") -> Any:
         """Write the model through grammarkit's exporters (format from `format` or the suffix:

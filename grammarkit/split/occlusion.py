@@ -31,7 +31,7 @@ from ..geometry.footprints import cross_section
 from ..geometry.solids import frame_matrix
 from .shape import FACE, Shape
 
-__all__ = ["OCCLUSION_FUNCTIONS", "Occlusion", "TOLERANCE", "active", "op_label", "query"]
+__all__ = ["OCCLUSION_FUNCTIONS", "Occlusion", "TOLERANCE", "active", "query"]
 
 Manifold = manifold3d.Manifold
 TOLERANCE = 1e-3
@@ -54,7 +54,7 @@ def set_active(derivation: Any) -> Any:
 def _solid(s: Shape, grow: float, thick: float) -> Any:
     """The shape's geometry in world coordinates, grown (grow > 0) or shrunk by `grow` on every
     side; a face as a slab of half-thickness `thick`. None without area or volume."""
-    from .engine import local_solid
+    from .scope_solid import local_solid
 
     sx, sy, sz = s.sz
     if s.kind == FACE:
@@ -178,15 +178,3 @@ def query(kind: str, s: Shape, target: str = "intra", label: str | None = None) 
     if overlapping:
         return False
     return any(_volume(grown ^ b) > 1e-15 for b in found)
-
-
-def op_label(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
-    """`label("name")`: the shape (as it is now) becomes an occluder named `name` for the
-    occlusion queries of shapes derived later."""
-    name = args[0]
-    if not isinstance(name, str) or not name:
-        raise ValueError(f"label(): the label must be a non-empty string, got {name!r}")
-    derivation = active()
-    if derivation is not None:
-        derivation.occluder(s, name)
-    return s

@@ -14,12 +14,11 @@ from __future__ import annotations
 
 import random
 from dataclasses import dataclass
-from typing import Any, Iterator, Mapping
+from typing import Any, Mapping
 
-from ..errors import DerivationError, GrammarError
+from ..errors import GrammarError
 from ..expr_eval import fold_constant
 from .compile import CompiledGrammar, ValueEnv
-from .engine import Limits
 
 
 @dataclass(frozen=True)
@@ -33,7 +32,7 @@ class Variation:
         return {"index": self.index, "seed": self.seed, "attrs": self.attrs, "bindings": self.bindings}
 
 
-def _weights(grammar: Any, functions: Any, values: Mapping[str, Any]) -> dict[str, list[tuple[str, float]]]:
+def snippet_weights(grammar: Any, functions: Any, values: Mapping[str, Any]) -> dict[str, list[tuple[str, float]]]:
     from ..expr_eval import NOT_CONSTANT
 
     tables: dict[str, list[tuple[str, float]]] = {}
@@ -72,38 +71,3 @@ def sample_attrs(compiled: CompiledGrammar, rng: random.Random, fixed: Mapping[s
         elif info.choices is not None:
             out[key] = rng.choice([c(env) for c in info.choices])
     return out
-
-
-def variations(grammar: Any, n: int, *, seed: int = 0, attrs: Mapping[str, Any] | None = None,
-               limits: Limits | None = None, start: int = 0, registries: Any
-               ) -> Iterator[tuple[Variation, Any]]:
-    """Yield `n` (Variation, Model) pairs: variations start, start+1, ... (each depends only on
-    `seed` and its index, so workers can derive disjoint index ranges)."""
-    from . import as_mapping, derive, load_grammar
-    from . import compile as compile_split
-
-    for what, v, lo in (("n", n, 0), ("start", start, 0), ("seed", seed, None)):
-        if isinstance(v, bool) or not isinstance(v, int) or (lo is not None and v < lo):
-            raise DerivationError(f"variations(): {what}= must be an integer"
-                                  + (f" >= {lo}" if lo is not None else "") + f", got {v!r}",
-                                  None, code="bad-argument")
-    g = load_grammar(grammar, registries)
-    base = compile_split(g, registries=registries)
-    tables = _weights(g, registries.functions, base.default_values())
-    snippets = {s.name: s for s in g.snippets}
-    fixed = as_mapping(attrs, "attrs")
-    for i in range(start, start + n):
-        rng = random.Random(hash((seed, i)) & ((1 << 64) - 1))
-        choices: dict[str, str] = {}
-        for anchor, snip in sorted(base.bindings.items()):
-            otype = snippets[snip].object_type if snip in snippets else None
-            table = tables.get(otype or "")
-            if table:
-                names = [s for s, _ in table]
-                choices[anchor] = rng.choices(names, weights=[w for _, w in table])[0]
-        compiled = compile_split(g, choices or None, registries=registries)
-        sampled = sample_attrs(compiled, rng, fixed)
-        run_seed = rng.getrandbits(32)
-        model = derive(g, seed=run_seed, attrs=sampled, limits=limits, choices=choices or None,
-                       registries=registries)
-        yield Variation(i, run_seed, model.attrs, dict(compiled.bindings)), model

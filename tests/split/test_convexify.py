@@ -7,7 +7,7 @@ import pytest
 import grammarkit
 from grammarkit.cga import translate_cga
 from grammarkit.errors import DerivationError
-from grammarkit.split.convexify import convex_pieces
+from grammarkit.split.ops.convexify import convex_pieces
 
 ELL = ((0.0, 0.0), (20.0, 0.0), (20.0, 8.0), (8.0, 8.0), (8.0, 16.0), (0.0, 16.0))
 YOU = ((0, 0), (30, 0), (30, 20), (20, 20), (20, 8), (10, 8), (10, 20), (0, 20))

@@ -10,8 +10,10 @@ from pathlib import Path
 from grammarkit import hookspecs
 
 ROOT = Path(__file__).resolve().parents[2]
-SOURCES = [ROOT / "grammarkit" / "split" / "ops.py", ROOT / "grammarkit" / "split" / "comp.py",
-           ROOT / "tests" / "fixtures" / "split_op_plugin" / "split_op_plugin.py"]
+OPS = ROOT / "grammarkit" / "split" / "ops"
+SOURCES = [OPS / f"{name}.py" for name in ("helpers", "layout", "create", "splitting", "roofs", "transforms",
+                                           "insert", "tags", "comp", "faces")]
+SOURCES.append(ROOT / "tests" / "fixtures" / "split_op_plugin" / "split_op_plugin.py")
 
 # how the sources name the objects of each protocol
 SHAPES = {"s", "shape", "c", "face", "top", "bottom", "inside", "raised", "post", "piece", "b", "f"}

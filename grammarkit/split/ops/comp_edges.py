@@ -32,11 +32,13 @@ from __future__ import annotations
 import math
 from typing import Any
 
-import numpy as np
 
-from ..geometry.planar import planar_faces
-from ..geometry.surfaces import SurfaceMesh
-from .shape import FACE, Shape
+from ..shape import FACE, Shape
+from .helpers import lazy_module
+
+np = lazy_module("numpy")
+planar = lazy_module("grammarkit.geometry.planar")
+surfaces = lazy_module("grammarkit.geometry.surfaces")
 
 __all__ = ["EDGE_SELECTORS", "edge_components", "face_edge_components", "op_comp_edges", "op_comp_face_edges",
            "op_comp_vertices", "vertex_components"]
@@ -55,10 +57,10 @@ def _faces(s: Shape) -> list[tuple[np.ndarray, list[np.ndarray]]]:
     if s.kind == FACE:
         return [(np.array([0.0, 0.0, 1.0]), [np.array([(x, y, 0.0) for x, y in c]) for c in s.contours()])]
     solid = s.solid
-    if isinstance(solid, SurfaceMesh):
+    if isinstance(solid, surfaces.SurfaceMesh):
         V, F = solid.V, solid.F
     else:
-        from .engine import local_solid
+        from ..scope_solid import local_solid
 
         m, _oid, _n = local_solid(s)
         if m is None:
@@ -68,7 +70,7 @@ def _faces(s: Shape) -> list[tuple[np.ndarray, list[np.ndarray]]]:
         F = np.asarray(mesh.tri_verts, dtype=np.int64).reshape(-1, 3)
     if len(F) > MAX_TRIANGLES:
         raise ValueError(f"a mesh with {len(F)} triangles (more than {MAX_TRIANGLES}): simplify the asset")
-    return [(pf.normal, pf.loops) for pf in planar_faces(V, F)]
+    return [(pf.normal, pf.loops) for pf in planar.planar_faces(V, F)]
 
 
 def _names(n: np.ndarray) -> set[str]:
@@ -162,7 +164,7 @@ def face_edge_components(s: Shape) -> list[tuple[set[str], Shape]]:
     direction, y the face's normal (the component's y-normal, classified as for comp(e)),
     z = x × y (pointing out of the face). `border`/`inside` and the roof names are those of
     the edge itself (as comp(e) names it)."""
-    from .comp import faces_of
+    from .faces import faces_of
 
     M = np.asarray(s.ax, dtype=np.float64)  # rows: scope axes in world coordinates
     so = np.asarray(s.o, dtype=np.float64)

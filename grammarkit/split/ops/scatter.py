@@ -25,11 +25,13 @@ from __future__ import annotations
 import math
 from typing import Any
 
-import manifold3d
-import numpy as np
 
-from ..geometry.surfaces import SurfaceMesh
-from .shape import FACE, Shape
+from ...registry import Param
+from ..shape import FACE, Shape
+from .helpers import lazy_module, manifold3d, operation
+
+np = lazy_module("numpy")
+surfaces = lazy_module("grammarkit.geometry.surfaces")
 
 __all__ = ["DOMAINS", "DISTRIBUTIONS", "MEANS", "MAX_POINTS", "op_scatter", "scatter_points"]
 
@@ -48,10 +50,10 @@ def _triangles(s: Shape) -> tuple[np.ndarray, np.ndarray]:
         pts2 = np.concatenate(rings)
         V = np.column_stack([pts2, np.zeros(len(pts2))])
         F = tris
-    elif isinstance(s.solid, SurfaceMesh):
+    elif isinstance(s.solid, surfaces.SurfaceMesh):
         V, F = np.asarray(s.solid.V, dtype=np.float64), np.asarray(s.solid.F, dtype=np.int64)
     else:
-        from .engine import local_solid
+        from ..scope_solid import local_solid
 
         m, _oid, _n = local_solid(s)
         if m is None:
@@ -68,9 +70,9 @@ def _triangles(s: Shape) -> tuple[np.ndarray, np.ndarray]:
 
 def _closed_solid(s: Shape) -> Any:
     """The shape's closed solid (manifold3d) in scope coordinates, or None (a face, an open mesh)."""
-    if s.kind == FACE or isinstance(s.solid, SurfaceMesh):
+    if s.kind == FACE or isinstance(s.solid, surfaces.SurfaceMesh):
         return None
-    from .engine import local_solid
+    from ..scope_solid import local_solid
 
     m, _oid, _n = local_solid(s)
     return m if m is not None and m.volume() > 1e-12 else None
@@ -209,6 +211,15 @@ def _frame_on(s: Shape, nrm: np.ndarray) -> tuple:
     return tuple(tuple(float(v) for v in (a @ M)) for a in (x, y, z))
 
 
+@operation("scatter", (Param("domain", "axis", choices=("surface", "volume", "scope")), Param("count"),
+                       Param("distribution", "axis", choices=("uniform", "gaussian")),
+                       Param("mean", "axis", required=False, default="center",
+                             choices=("center", "front", "back", "left", "right", "top", "bottom")),
+                       Param("stddev", required=False, default=0.16,
+                             doc="times the scope's size on each axis (CGA's '0.16)")),
+           block="selectors", selectors=("all",),
+           doc="Random point shapes (zero-size scopes) on the surface, in the volume or in the "
+               "scope of the shape, uniform or gaussian; `{ all: Rule }` derives each point.")
 def op_scatter(ctx: Any, s: Shape, args: Any, block: Any) -> list:
     domain, count, distribution, mean, stddev = str(args[0]), args[1], str(args[2]), str(args[3]), args[4]
     if domain not in DOMAINS:

@@ -15,10 +15,12 @@ from __future__ import annotations
 import math
 from typing import Any
 
-import manifold3d
-import numpy as np
 
-from .shape import FACE, Shape
+from ...registry import Param
+from ..shape import FACE, Shape
+from .helpers import lazy_module, manifold3d, operation
+
+np = lazy_module("numpy")
 
 __all__ = ["convex_pieces", "op_convexify"]
 
@@ -84,6 +86,10 @@ def convex_pieces(contours: tuple, max_length: float = 0.0) -> list[list[tuple[f
     return [[(float(P[k][0]), float(P[k][1])) for k in loop] for _pid, loop in sorted(pieces.items())]
 
 
+@operation("convexify", (Param("max_length", required=False, default=0.0,
+                               doc="keep only split lines shorter than this (0: all)"),),
+           doc="Split a face's geometry into convex faces (Hertel-Mehlhorn); comp(f) hands "
+               "them out one by one.")
 def op_convexify(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
     """`convexify(max_length = 0)`: the face's geometry as convex pieces (one shape; `comp(f)`
     gives each piece its own face). A volume is left as it is, with a warning."""

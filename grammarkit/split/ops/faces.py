@@ -32,15 +32,15 @@ from __future__ import annotations
 import math
 from typing import Any
 
-import manifold3d
-import numpy as np
 
-from ..geometry import footprints as fp
-from ..geometry.planar import planar_faces
-from ..geometry.surfaces import SurfaceMesh
-from .shape import FACE, VOLUME, Shape
+from ..shape import FACE, Shape
+from .helpers import fp, lazy_module, manifold3d, piece
 
-__all__ = ["faces_of", "op_comp"]
+np = lazy_module("numpy")
+planar = lazy_module("grammarkit.geometry.planar")
+surfaces = lazy_module("grammarkit.geometry.surfaces")
+
+__all__ = ["faces_of"]
 
 _SIN1 = math.sin(math.radians(1.0))
 _COS45 = math.cos(math.radians(45.0))
@@ -151,7 +151,7 @@ def _trims(s: Shape, contour: Any, dirs: list, i: int) -> tuple:
 def _mesh_faces(s: Shape) -> list[tuple[frozenset, Shape]]:
     """The planar faces of a general solid or an open mesh, in the volume's frame."""
     solid = s.solid
-    if isinstance(solid, SurfaceMesh):
+    if isinstance(solid, surfaces.SurfaceMesh):
         V, F = solid.V, solid.F
     else:
         mesh = solid.to_mesh()
@@ -163,7 +163,7 @@ def _mesh_faces(s: Shape) -> list[tuple[frozenset, Shape]]:
     on = (s.gid, (s.o, s.ax, s.sz))
     M = np.asarray(s.ax, dtype=np.float64)  # rows: scope axes in world coordinates
     out: list[tuple[frozenset, Shape]] = []
-    for pf in planar_faces(V, F):
+    for pf in planar.planar_faces(V, F):
         nrm = pf.normal
         if abs(nrm[2]) >= math.cos(math.radians(1.0)):
             # horizontal: keep the volume's axes (the bottom looks down, y flipped)
@@ -225,11 +225,10 @@ def _face_pieces(s: Shape) -> list[Shape]:
 
     if any(signed(c) <= 0 for c in poly):
         return [s.copy()]
-    from .lots import _fitted
-
     out = []
     for c in poly:
-        f = _fitted(s, manifold3d.CrossSection([[list(p) for p in c]], manifold3d.FillRule.Positive))
+        cs = manifold3d.CrossSection([[list(p) for p in c]], manifold3d.FillRule.Positive)
+        f = None if cs.is_empty() else piece(s, cs, FACE)
         if f is not None:
             out.append(f)
     return out
@@ -242,33 +241,3 @@ def faces_of(s: Shape) -> list[tuple[frozenset, Shape]]:
     if s.solid is not None:
         return _mesh_faces(s)
     return _box_faces(s)
-
-
-def op_comp(ctx: Any, s: Shape, args: Any, block: Any) -> list:
-    mode = str(args[0])
-    if mode in ("e", "fe", "v"):  # edges, face edges, vertices (grammarkit/split/comp_edges.py)
-        from .comp_edges import op_comp_edges, op_comp_face_edges, op_comp_vertices
-
-        fn = {"e": op_comp_edges, "fe": op_comp_face_edges, "v": op_comp_vertices}[mode]
-        out = fn(ctx, s, args, block)
-        for slot in block:
-            if slot.sel == "volume":
-                out.append((s.copy(), slot, 0, 1))
-                break
-        return out
-    if mode != "f":
-        raise ValueError(f"comp({mode}) is not supported")
-    parts = faces_of(s)
-    total = len(parts)
-    out = []
-    for idx, (sel, face) in enumerate(parts):
-        for slot in block:
-            k = slot.sel
-            if k == idx if type(k) is int else k in sel:
-                out.append((face, slot, idx, total))
-                break
-    for slot in block:
-        if slot.sel == "volume":
-            out.append((s.copy(), slot, 0, 1))
-            break
-    return out

@@ -25,10 +25,12 @@ from __future__ import annotations
 import math
 from typing import Any
 
-import numpy as np
 
-from ..geometry import footprints as fp
-from .shape import FACE, VOLUME, Shape
+from ...registry import Param
+from ..shape import FACE, VOLUME, Shape
+from .helpers import fp, lazy_module, operation
+
+np = lazy_module("numpy")
 
 __all__ = ["op_align_scope_to_geometry", "op_align_scope_to_axes", "op_mirror", "op_mirror_scope",
            "op_reverse_normals", "op_rotate_scope", "reframe", "turn_scope"]
@@ -101,8 +103,8 @@ def _is_signed_permutation(A: Mat) -> bool:
 def _as_mesh(s: Shape) -> Any:
     """The geometry of `s` in its scope coordinates as a manifold3d solid (a volume) or an
     open SurfaceMesh (a face, a volume without thickness, an open insert)."""
-    from ..geometry.surfaces import SurfaceMesh, face_triangles
-    from .engine import local_solid
+    from ...geometry.surfaces import SurfaceMesh, face_triangles
+    from ..scope_solid import local_solid
 
     if s.solid is not None:
         return s.solid
@@ -173,7 +175,7 @@ def _flat_outline(mesh: Any) -> Any:
     outer contours, clockwise holes), or None if it is not such a face."""
     import manifold3d
 
-    from ..geometry.surfaces import SurfaceMesh
+    from ...geometry.surfaces import SurfaceMesh
 
     if not isinstance(mesh, SurfaceMesh) or len(mesh.F) == 0 or np.abs(mesh.V[:, 2]).max() > 1e-7:
         return None
@@ -205,11 +207,14 @@ def _cross(a: Any, b: Any) -> tuple[float, float, float]:
 
 
 # -- rotateScope ---------------------------------------------------------------------------------
+@operation("rotateScope", (Param("x"), Param("y"), Param("z")),
+           doc="Turn the scope (not the geometry) by x, y, z degrees about its own axes, x "
+               "first; the scope becomes the geometry's bounding box in the turned axes.")
 def op_rotate_scope(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
     """`rotateScope(x, y, z)`: turn the scope (not the geometry) by these angles in degrees
     about its own axes, x first (the convention of `r()`); the scope becomes the geometry's
     bounding box in the turned axes."""
-    from .engine import rotation
+    from .helpers import rotation
 
     angles = []
     for v in args[:3]:
@@ -256,6 +261,9 @@ def align_axes(s: Shape, axis: str = "xyz") -> Mat:
     return tuple(new)  # type: ignore[return-value]
 
 
+@operation("alignScopeToAxes", (Param("axis", "any", required=False, default="xyz"),),
+           doc="Turn the scope so its axes (\"xyz\", the default) or one of them (\"x\", "
+               "\"y\", \"z\") are parallel to the world's; the geometry stays.")
 def op_align_scope_to_axes(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
     """`alignScopeToAxes()` (all three scope axes parallel to the world's) or
     `alignScopeToAxes("x"|"y"|"z")`: that scope axis along the world axis, the next one
@@ -267,7 +275,7 @@ def op_align_scope_to_axes(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
 # -- alignScopeToGeometry ------------------------------------------------------------------------
 def _faces(s: Shape) -> list[Shape]:
     """The faces of the geometry in CGA's comp(f) order (a face: itself)."""
-    from .comp import _box_faces, _face_pieces, _mesh_faces
+    from .faces import _box_faces, _mesh_faces
 
     if s.kind == FACE:
         return [s]
@@ -311,6 +319,11 @@ def _pick_edge(f: Shape, edge: Any) -> int | None:
     return int(edge) % n
 
 
+@operation("alignScopeToGeometry", (Param("edge", "any", required=False, default=0),
+                                    Param("face", "any", required=False, default=0)),
+           doc="Turn the scope so z is the normal of a face of the geometry (face: an index, "
+               "\"largest\", \"lowest\", \"any\"; a face shape: itself) and x runs along "
+               "an edge of it (an index, \"longest\", \"lowest\"); the geometry stays.")
 def op_align_scope_to_geometry(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
     """`alignScopeToGeometry(edge, face)`: z along the normal of face `face` of the geometry
     (a face: itself; a volume: its faces in comp(f) order, `"largest"`, `"lowest"` (the lowest
@@ -373,6 +386,9 @@ def _flags(args: Any, what: str) -> tuple[bool, bool, bool]:
     return tuple(out)  # type: ignore[return-value]
 
 
+@operation("mirrorScope", (Param("x", "any"), Param("y", "any"), Param("z", "any")),
+           doc="Reverse the flagged scope axes (two of them: scopes stay right-handed), the "
+               "origin moved to the other side; the geometry stays.")
 def op_mirror_scope(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
     """`mirrorScope(x, y, z)`: the flagged scope axes reversed, the origin moved to the other
     side of the box along them; the geometry stays. Two flags (a half turn about the third
@@ -390,6 +406,9 @@ def op_mirror_scope(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
     return reframe(s, A)
 
 
+@operation("mirrorGeometry", (Param("x", "any"), Param("y", "any"), Param("z", "any")),
+           doc="Reflect the geometry across the scope's mid-planes along the flagged axes "
+               "(CGA's mirror); the scope stays (a solid stays watertight).")
 def op_mirror(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
     """`mirrorGeometry(x, y, z)` (CGA's `mirror`; `mirror` is a reserved word of grammarkit's
     language): the geometry reflected across the mid-planes of the scope along the flagged axes;
@@ -420,13 +439,15 @@ def op_mirror(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
     return c
 
 
+@operation("reverseNormals", (),
+           doc="Turn a face (or an open mesh) to look the other way; a closed volume keeps its outside.")
 def op_reverse_normals(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
     """CGA's `reverseNormals`: a face turned to look the other way (x kept, y and z reversed:
     the scope is mirrored across its x axis, the outline stays in place); an open mesh's
     triangles flipped. A closed volume keeps its outside (turning it inside out would break
     the solid), with a warning."""
-    from ..geometry.surfaces import SurfaceMesh
-    from .shape import FACE
+    from ...geometry.surfaces import SurfaceMesh
+    from ..shape import FACE
 
     if isinstance(s.solid, SurfaceMesh):
         c = s.copy()

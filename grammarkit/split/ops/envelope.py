@@ -24,12 +24,13 @@ from __future__ import annotations
 import math
 from typing import Any, Callable
 
-import manifold3d
 
-from ..geometry import footprints as fp
-from ..geometry.roofs import keep_below_plane
 from .lots import SIDES, edge_side, edges, per_edge_value
-from .shape import FACE, VOLUME, Shape
+from ...registry import Param
+from ..shape import FACE, VOLUME, Shape
+from .helpers import fp, lazy_module, manifold3d, operation
+
+geometry_roofs = lazy_module("grammarkit.geometry.roofs")
 
 __all__ = ["envelope_solid", "op_envelope", "op_envelope_per_edge"]
 
@@ -71,7 +72,7 @@ def envelope_solid(contours: tuple, max_height: float, sides: list[tuple[float, 
             if ln < EPS:
                 continue
             nx, ny = -(by - ay) / ln, (bx - ax) / ln  # inward: the face lies left of its edges
-            solid = keep_below_plane(solid, nx, ny, nx * ax + ny * ay, math.tan(math.radians(angle)),
+            solid = geometry_roofs.keep_below_plane(solid, nx, ny, nx * ax + ny * ay, math.tan(math.radians(angle)),
                                      max(base, MIN_BASE))
     return solid.simplify(1e-6)
 
@@ -97,6 +98,16 @@ def _envelope(s: Shape, direction: Any, max_height: Any, side_of: Callable[[int,
                      solid=solid.translate((-x0, -y0, -z0)))
 
 
+@operation("envelope", (Param("direction", "axis", choices=("normal", "worldUp")), Param("max_height"),
+                        Param("front_base"), Param("front_angle"),
+                        Param("back_base", required=False, default=0.0),
+                        Param("back_angle", required=False, default=90.0),
+                        Param("right_base", required=False, default=0.0),
+                        Param("right_angle", required=False, default=90.0),
+                        Param("left_base", required=False, default=0.0),
+                        Param("left_angle", required=False, default=90.0)),
+           doc="The zoning envelope of a face: extruded to max_height, each side vertical up to "
+               "its base height, then leaning inwards at its angle (degrees; 90: vertical).")
 def op_envelope(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
     """`envelope(direction, max_height, front_base, front_angle, back_base, back_angle,
     right_base, right_angle, left_base, left_angle)`."""
@@ -111,6 +122,13 @@ def op_envelope(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
     return _envelope(s, args[0], args[1], side_of)
 
 
+@operation("envelopePerEdge", (Param("direction", "axis", choices=("normal", "worldUp")), Param("max_height"),
+                               Param("base_height", "expr",
+                                     doc="evaluated on every edge (comp.index, comp.sel, scope.sx), "
+                                         "or an array of one value per edge"),
+                               Param("angle", "expr", doc="likewise, degrees (90: vertical)")),
+           doc="envelope() with the base height and angle given per edge (CGA's "
+               "envelope(direction, maxHeight, baseHeights, angles)).")
 def op_envelope_per_edge(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
     """`envelopePerEdge(direction, max_height, base_height, angle)`: the base height and angle
     evaluated for every edge (or taken from arrays of one value per edge)."""

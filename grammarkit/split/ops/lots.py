@@ -22,12 +22,15 @@ the remainder is the same wherever `remainder:` stands (as in CGA).
 from __future__ import annotations
 
 import math
-from typing import Any, Callable
+from typing import TYPE_CHECKING, Any, Callable
 
-import manifold3d
 
-from ..geometry import footprints as fp
-from .shape import FACE, Shape
+from ...registry import Param
+from ..shape import FACE, Shape
+from .helpers import fp, manifold3d, operation, piece
+
+if TYPE_CHECKING:  # pragma: no cover
+    from manifold3d import CrossSection
 
 __all__ = ["SETBACK_SELECTORS", "SHAPE_SELECTORS", "op_inner_rectangle", "op_setback", "op_setback_per_edge",
            "op_setback_to_area", "edge_shape", "edge_side", "per_edge_value", "op_shape_l", "op_shape_o", "op_shape_u"]
@@ -36,7 +39,6 @@ EPS = 1e-9
 SETBACK_SELECTORS = ("front", "back", "left", "right", "top", "bottom", "side", "south", "north", "west", "east",
                      "all", "remainder", "<index>")
 SHAPE_SELECTORS = ("shape", "remainder")
-CrossSection = manifold3d.CrossSection
 
 
 # -- edges -------------------------------------------------------------------------------------
@@ -130,11 +132,11 @@ def setback_geometry(s: Shape, dist: list[float]) -> tuple[CrossSection, list[Cr
                 continue
             p, q = ring[i], ring[(i + 1) % n]
             quad = [list(p), list(q), list(ends[(i + 1) % n]), list(starts[i])]
-            band = CrossSection([quad], manifold3d.FillRule.NonZero) ^ face
+            band = manifold3d.CrossSection([quad], manifold3d.FillRule.NonZero) ^ face
             bands.append(None if band.is_empty() else band)
         k += n
     used = [b for b in bands if b is not None]
-    remainder = face - CrossSection.batch_boolean(used, manifold3d.OpType.Add) if used else face
+    remainder = face - manifold3d.CrossSection.batch_boolean(used, manifold3d.OpType.Add) if used else face
     # where bands overlap (distances larger than the face allows) an edge keeps what earlier
     # edges did not take
     taken: CrossSection | None = None
@@ -177,9 +179,7 @@ def _edge_face(s: Shape, cs: CrossSection, p: tuple, q: tuple) -> Shape | None:
 
 def _fitted(s: Shape, cs: CrossSection) -> Shape | None:
     """A face from a CrossSection in `s`'s scope coordinates, keeping `s`'s axes."""
-    from .ops import _piece
-
-    return None if cs.is_empty() else _piece(s, cs, FACE)
+    return None if cs.is_empty() else piece(s, cs, FACE)
 
 
 def _distance(v: Any, what: str) -> float:
@@ -210,8 +210,8 @@ def _setback(s: Shape, block: Any, dist_of: Callable[[int, tuple, tuple], float]
     rest = [slot for slot in block if slot.sel == "remainder"]
     if rest:
         pieces = [p for p in _pieces(remainder)]
-        for j, piece in enumerate(pieces):
-            c = _fitted(s, piece)
+        for j, part in enumerate(pieces):
+            c = _fitted(s, part)
             if c is not None:
                 out.append((c, rest[0], j, len(pieces)))
     return out
@@ -222,6 +222,8 @@ def _pieces(cs: CrossSection) -> list[CrossSection]:
     return [p for p in cs.decompose() if p.area() > 1e-9] if not cs.is_empty() else []
 
 
+@operation("setback", (Param("distance"),), block="selectors", selectors=SETBACK_SELECTORS,
+           doc="Move the selected edges of a face inwards: a face per edge, and the remainder.")
 def op_setback(ctx: Any, s: Shape, args: Any, block: Any) -> list:
     """`setback(d) { front: A | remainder: B }`: the selected edges moved in by d."""
     d = _distance(args[0], "setback() distance")
@@ -266,6 +268,9 @@ def per_edge_value(f: Callable, s: Shape, i: int, p: tuple, q: tuple, n: int, wh
     return v
 
 
+@operation("setbackPerEdge", (Param("distance", "expr"),), block="selectors", selectors=SETBACK_SELECTORS,
+           doc="setback() with the distance evaluated on every edge (comp.index: the edge's index, "
+               "comp.sel: its side), or an array of one distance per edge.")
 def op_setback_per_edge(ctx: Any, s: Shape, args: Any, block: Any) -> list:
     """`setbackPerEdge(expr) { ... }`: the distance evaluated for every edge on the edge itself
     (`edge_shape`: `scope.sx` is its length, `comp.index` its index, `comp.sel` its side), or
@@ -279,6 +284,8 @@ def op_setback_per_edge(ctx: Any, s: Shape, args: Any, block: Any) -> list:
     return _setback(s, block, dist, "setbackPerEdge")
 
 
+@operation("setbackToArea", (Param("area"),), block="selectors", selectors=SETBACK_SELECTORS,
+           doc="setback() with the distance that leaves a remainder of the given area.")
 def op_setback_to_area(ctx: Any, s: Shape, args: Any, block: Any) -> list:
     """`setbackToArea(area) { ... }`: the selected edges moved in by one distance such that the
     remainder has the given area (bisection)."""
@@ -310,7 +317,7 @@ def _shape_op(name: str, sides: tuple[str, ...]):
             dist.append(next((widths[side] for side in sides if side in names), 0.0))
         remainder, bands = setback_geometry(s, dist)
         used = [b for b in bands if b is not None]
-        wing = CrossSection.batch_boolean(used, manifold3d.OpType.Add) if used else CrossSection()
+        wing = manifold3d.CrossSection.batch_boolean(used, manifold3d.OpType.Add) if used else manifold3d.CrossSection()
         out = []
         for slot in block:
             if slot.sel == "shape":
@@ -319,8 +326,8 @@ def _shape_op(name: str, sides: tuple[str, ...]):
                 pieces = _pieces(remainder)
             else:
                 continue
-            for j, piece in enumerate(pieces):
-                c = _fitted(s, piece)
+            for j, part in enumerate(pieces):
+                c = _fitted(s, part)
                 if c is not None:
                     out.append((c, slot, j, len(pieces)))
         return out
@@ -330,9 +337,13 @@ def _shape_op(name: str, sides: tuple[str, ...]):
     return op
 
 
-op_shape_l = _shape_op("shapeL", ("front", "left"))
-op_shape_u = _shape_op("shapeU", ("front", "right", "left"))
-op_shape_o = _shape_op("shapeO", ("front", "right", "back", "left"))
+op_shape_l = operation("shapeL", (Param("front_width"), Param("left_width")), block="selectors",
+           selectors=("shape", "remainder"), doc="An L-shaped footprint: front and left wings.")(_shape_op("shapeL", ("front", "left")))
+op_shape_u = operation("shapeU", (Param("front_width"), Param("right_width"), Param("left_width")), block="selectors",
+           selectors=("shape", "remainder"), doc="A U-shaped footprint: front, right and left wings.")(_shape_op("shapeU", ("front", "right", "left")))
+op_shape_o = operation("shapeO", (Param("front_width"), Param("right_width"), Param("back_width"), Param("left_width")),
+           block="selectors", selectors=("shape", "remainder"),
+           doc="An O-shaped footprint: wings along all four sides around a court.")(_shape_op("shapeO", ("front", "right", "back", "left")))
 
 
 # -- innerRectangle ----------------------------------------------------------------------------
@@ -372,7 +383,7 @@ def largest_rectangle(contours: tuple, c: float, sn: float) -> tuple[float, floa
             break
         if not (inside[(x0, y0)] and inside[(x1, y0)] and inside[(x0, y1)] and inside[(x1, y1)]):
             continue
-        rect = CrossSection.square((x1 - x0, y1 - y0)).translate((x0, y0))
+        rect = manifold3d.CrossSection.square((x1 - x0, y1 - y0)).translate((x0, y0))
         if (rect - turned).area() < 1e-7 * max(a, 1.0):
             best, best_area = (x0, y0, x1, y1), a
             break
@@ -397,6 +408,10 @@ def _inside(x: float, y: float, rings: list) -> bool:
     return odd
 
 
+@operation("innerRectangle", (Param("align", "axis", required=False, default="scope",
+                                    choices=("scope", "edge")),),
+           block="selectors", selectors=("shape", "remainder"),
+           doc="The largest rectangle in a face (aligned to the scope or to an edge), and the rest.")
 def op_inner_rectangle(ctx: Any, s: Shape, args: Any, block: Any) -> list:
     """`innerRectangle(scope | edge) { shape: A | remainder: B }`: the largest rectangle in the
     face, aligned to the scope (or, `edge`, to whichever edge gives the largest one)."""
@@ -432,13 +447,13 @@ def op_inner_rectangle(ctx: Any, s: Shape, args: Any, block: Any) -> list:
             out.append((s.derived(s.world(ox, oy, 0.0), (x1 - x0, y1 - y0, 0.0), None, FACE, ax=(nx, ny, ez)),
                         slot, 0, 1))
         elif slot.sel == "remainder":
-            rect = CrossSection([[[ox, oy], [ox + (x1 - x0) * c, oy + (x1 - x0) * sn],
+            rect = manifold3d.CrossSection([[[ox, oy], [ox + (x1 - x0) * c, oy + (x1 - x0) * sn],
                                   [ox + (x1 - x0) * c - (y1 - y0) * sn, oy + (x1 - x0) * sn + (y1 - y0) * c],
                                   [ox - (y1 - y0) * sn, oy + (y1 - y0) * c]]], manifold3d.FillRule.NonZero)
             rest = fp.cross_section(contours) - rect
             pieces = _pieces(rest)
-            for j, piece in enumerate(pieces):
-                f = _fitted(s, piece)
+            for j, part in enumerate(pieces):
+                f = _fitted(s, part)
                 if f is not None:
                     out.append((f, slot, j, len(pieces)))
     return out

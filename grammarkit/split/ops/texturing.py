@@ -23,7 +23,9 @@ import math
 from functools import lru_cache
 from typing import Any
 
-from .shape import Shape
+from ...registry import Param
+from ..shape import Shape
+from .helpers import hex_color, operation
 
 __all__ = ["AXES", "MATERIAL_KEYS", "Texturing", "moved", "op_delete_uv", "op_normalize_uv", "op_project_uv",
            "op_rotate_uv", "op_scale_uv", "op_setup_projection", "op_texture", "op_tile_uv", "op_translate_uv",
@@ -101,6 +103,12 @@ def _finite(v: Any, what: str) -> float:
     return float(v)
 
 
+@operation("setupProjection", (Param("uvset"), Param("axes", "axis", choices=AXES),
+                               Param("width"), Param("height"),
+                               Param("width_offset", required=False, default=0.0),
+                               Param("height_offset", required=False, default=0.0)),
+           doc="A planar texture projection for a uv set: origin and u/v axes of the scope or "
+               "the world, a texture tile of width x height world units.")
 def op_setup_projection(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
     """`setupProjection(uvset, scope.xy, w, h, wo = 0, ho = 0)`: a planar projection for uv
     set `uvset` from the scope's (or the world's) origin along two of its axes, a texture
@@ -131,6 +139,8 @@ def op_setup_projection(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
     return c
 
 
+@operation("projectUV", (Param("uvset"),),
+           doc="Bake the uv set's projection into the shape's texture coordinates.")
 def op_project_uv(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
     """`projectUV(uvset)`: bake the projection of `uvset` into the shape's geometry."""
     k = _uv_set(args[0], "projectUV()")
@@ -161,6 +171,8 @@ def _uv_affine(s: Shape, k: int, op: str, a: tuple) -> Shape:
     return c
 
 
+@operation("translateUV", (Param("uvset"), Param("u"), Param("v")),
+           doc="Shift the texture coordinates of a uv set (texture units).")
 def op_translate_uv(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
     """`translateUV(uvset, du, dv)`: add (du, dv) to the texture coordinates (texture units)."""
     k = _uv_set(args[0], "translateUV()")
@@ -168,6 +180,8 @@ def op_translate_uv(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
     return _uv_affine(s, k, "translateUV()", ((1.0, 0.0, du), (0.0, 1.0, dv)))
 
 
+@operation("scaleUV", (Param("uvset"), Param("u"), Param("v")),
+           doc="Scale the texture coordinates of a uv set.")
 def op_scale_uv(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
     """`scaleUV(uvset, fu, fv)`: multiply the texture coordinates by (fu, fv)."""
     k = _uv_set(args[0], "scaleUV()")
@@ -175,6 +189,8 @@ def op_scale_uv(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
     return _uv_affine(s, k, "scaleUV()", ((fu, 0.0, 0.0), (0.0, fv, 0.0)))
 
 
+@operation("rotateUV", (Param("uvset"), Param("angle")),
+           doc="Turn the texture coordinates of a uv set about the uv origin (degrees).")
 def op_rotate_uv(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
     """`rotateUV(uvset, degrees)`: turn the texture coordinates about the uv origin."""
     k = _uv_set(args[0], "rotateUV()")
@@ -183,6 +199,7 @@ def op_rotate_uv(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
     return _uv_affine(s, k, "rotateUV()", ((c, -sn, 0.0), (sn, c, 0.0)))
 
 
+@operation("deleteUV", (Param("uvset"),), doc="Remove the texture coordinates of a uv set.")
 def op_delete_uv(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
     """`deleteUV(uvset)`: the shape has no texture coordinates in that set any more."""
     k = _uv_set(args[0], "deleteUV()")
@@ -192,6 +209,8 @@ def op_delete_uv(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
     return c
 
 
+@operation("texture", (Param("path", "string"),),
+           doc="The colour texture (CGA's material.colormap) of the shape; makes no UVs.")
 def op_texture(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
     """`texture(path)`: CGA's short form of `set(material.colormap, path)` (no UVs made)."""
     return set_material(ctx, s, "material.colormap", args[0])
@@ -208,7 +227,6 @@ def set_material(ctx: Any, s: Shape, key: str, value: Any) -> Shape:
     """`set(material.<key>, value)`: a CGA material attribute of the shape (and what is
     derived from it). `name` and the colour are grammarkit's `material()`/`color()` tags; the
     rest is kept per shape and becomes the glTF material (docs/cga.md, "Texturing")."""
-    from .ops import _hex_color
 
     sub = key[len("material."):]
     c = s
@@ -216,7 +234,7 @@ def set_material(ctx: Any, s: Shape, key: str, value: Any) -> Shape:
         c.material = str(value)
         return c
     if sub in ("color.rgb", "color"):
-        c.color = _hex_color(value)
+        c.color = hex_color(value)
         return c
     if sub in ("color.r", "color.g", "color.b"):
         x = _unit(value, key)
@@ -286,7 +304,7 @@ def _world_points(s: Shape) -> list[tuple]:
     mesh or its footprint prism)."""
     if s.kind == "F":
         return [s.world(x, y, 0.0) for c in s.contours() for x, y in c]
-    from ..geometry.surfaces import SurfaceMesh
+    from ...geometry.surfaces import SurfaceMesh
 
     if isinstance(s.solid, SurfaceMesh):
         return [s.world(*map(float, v)) for v in s.solid.V]
@@ -310,6 +328,9 @@ def _uv_range(s: Shape, m: Mat) -> tuple[tuple[float, float], tuple[float, float
     return out[0], out[1]
 
 
+@operation("tileUV", (Param("uvset"), Param("width"), Param("height")),
+           doc="Rescale the texture coordinates so a texture tile spans width x height world "
+               "units (negative: mirrored; 0: the axis is left as it is).")
 def op_tile_uv(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
     """`tileUV(uvset, w, h)`: rescale the texture coordinates so that one texture tile spans
     `w` x `h` world units along u and v (negative: mirrored; 0: that axis is left as it is).
@@ -332,6 +353,9 @@ NORMALIZE_AXES = ("uv", "u", "v")
 NORMALIZE_MODES = ("separatePerFace", "collectiveAllFaces")
 
 
+@operation("normalizeUV", (Param("uvset"), Param("axes", "axis", choices=("uv", "u", "v")),
+                           Param("mode", "axis", choices=("separatePerFace", "collectiveAllFaces"))),
+           doc="Shift and scale the texture coordinates to span [0, 1] over the shape.")
 def op_normalize_uv(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
     """`normalizeUV(uvset, uv|u|v, separatePerFace|collectiveAllFaces)`: shift and scale the
     texture coordinates so they span [0, 1] over the shape's geometry along u and/or v. A

@@ -18,10 +18,11 @@ import math
 from bisect import bisect_right
 from typing import Any
 
-import manifold3d
 
-from ..geometry import footprints as fp
-from .shape import FACE, Shape
+from ...registry import Param
+from ..shape import FACE, Shape
+from .helpers import axis_index, fp, manifold3d, operation
+from .layout import layout, split_geometry
 
 __all__ = ["op_split_area", "AreaProfile"]
 
@@ -79,11 +80,17 @@ class AreaProfile:
         return b0 + min(max(u, 0.0), 1.0) * h
 
 
+@operation("splitArea", (Param("axis", "axis", choices=("x", "y")),
+                         Param("adjust_mode", "axis", required=False, default="adjust",
+                               choices=("adjust", "noAdjust"),
+                               doc="adjust: each part's scope fits its geometry; noAdjust: the "
+                                   "parts' scopes tile the parent's")),
+           block="sizes",
+           doc="Split a face along an axis into parts of the given areas (absolute, 'relative, "
+               "~floating, repeat groups: split's sizes, in area units).")
 def op_split_area(ctx: Any, s: Shape, args: Any, block: Any) -> list:
     """`splitArea(axis, adjust_mode) { area: A | ... }`: parts of the given areas."""
-    from .ops import _axis, _split_geometry, layout
-
-    a = _axis(args[0])
+    a = axis_index(args[0])
     mode = str(args[1]) if len(args) > 1 else "adjust"
     if mode not in ("adjust", "noAdjust"):
         raise ValueError(f"splitArea adjust mode must be adjust or noAdjust, got {mode!r}")
@@ -102,7 +109,7 @@ def op_split_area(ctx: Any, s: Shape, args: Any, block: Any) -> list:
         t0, t1 = profile.position(start), profile.position(start + size)
         if t1 - t0 <= EPS:
             continue
-        c = _split_geometry(s, a, t0, t1 - t0)
+        c = split_geometry(s, a, t0, t1 - t0)
         if c is None:
             continue
         if mode == "noAdjust":
