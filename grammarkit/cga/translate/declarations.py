@@ -95,6 +95,10 @@ class DeclarationsMixin:
         """The imported file: the path relative to this file's folder, else (CityEngine's
         project paths like /ESRI.lib/rules/...) a file of that name beside this one."""
         base = Path(self.filename).parent if self.filename else Path(".")
+        if self.project is not None and self.project.root is not None:
+            found = self.project.resolve(path, relative_to=base)
+            if found is not None:
+                return found
         for cand in (base / path.lstrip("/"), base / Path(path).name):
             if cand.is_file():
                 return cand
@@ -114,7 +118,8 @@ class DeclarationsMixin:
         if not parsed.ok:
             return None, "the file has syntax errors (import it on its own to see them)"
         child = type(self)(parsed.tree, str(path), parsed.source, asset_dirs=self.asset_dirs,
-                           missing_assets=self.missing_assets, operations=self.operations)
+                           missing_assets=self.missing_assets, operations=self.operations,
+                           project=self.project, style=self.style)
         child._import_chain = (*chain, key)  # type: ignore[attr-defined]
         child.collect()
         return child, ""

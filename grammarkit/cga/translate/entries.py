@@ -119,8 +119,9 @@ class EntriesMixin:
         return out
 
     # -- assets -----------------------------------------------------------------------------------------
-    def asset(self, path: str, span: Span | None) -> bool:
-        """Record an asset; True if it was found."""
+    def asset(self, path: str, span: Span | None, computed: bool = False) -> bool:
+        """Record an asset; True if it was found. `computed`: the name is the value of an
+        expression with the attrs' default values (other values may name other files)."""
         found = None
         candidates = []
         rel = path.lstrip("/")
@@ -128,14 +129,31 @@ class EntriesMixin:
         candidates.append(base / path)
         for d in (base, base.parent, *self.asset_dirs):
             candidates.extend([d / rel, d / "assets" / rel])
-        for c in candidates:
+        if self.project is not None and self.project.root is not None:
+            # CityEngine's lookup: the rule file's folder, the project and its assets/, the
+            # imported projects (cga/project.py); then the extra folders
+            found = self.project.resolve(path, relative_to=base)
+            candidates = [d / rel for d in self.asset_dirs] + [d / "assets" / rel for d in self.asset_dirs]
+        for c in candidates if found is None else ():
             if c.is_file():
                 found = c
                 break
         if path not in self._seen_assets:
             self._seen_assets.add(path)
-            self.report.assets.append({"path": path, "found": found is not None,
-                                       "resolved": str(found) if found else None,
-                                       "line": span.line if span else None})
+            entry = {"path": path, "found": found is not None, "resolved": str(found) if found else None,
+                     "line": span.line if span else None}
+            if computed:
+                entry["computed"] = True
+            self.report.assets.append(entry)
         return found is not None
+
+    def computed_asset(self, text: str, span: Span | None) -> None:
+        """Record an asset name that is computed at derive time (not known statically): the
+        report says so (found: null) instead of claiming it was found."""
+        key = "<computed> " + text
+        if key in self._seen_assets:
+            return
+        self._seen_assets.add(key)
+        self.report.assets.append({"path": text, "found": None, "computed": True, "resolved": None,
+                                   "line": span.line if span else None})
 

@@ -55,8 +55,10 @@ class Translator(DeclarationsMixin, ValuesMixin, FunctionsMixin, BodyMixin, Entr
 
     def __init__(self, tree: Tree, filename: str | None, source: str, *,
                  asset_dirs: tuple[Path, ...] = (), missing_assets: str = "keep",
-                 operations: frozenset[str] = frozenset()):
+                 operations: frozenset[str] = frozenset(), project: Any = None, style: str | None = None):
         self.tree = tree
+        self.project = project  # cga.project.Project: CityEngine's lookup of assets and imports
+        self.style = style      # the CGA style whose attrs and rules are used (None: Default)
         self.filename = filename
         self.source = source
         self.report = ImportReport(filename)

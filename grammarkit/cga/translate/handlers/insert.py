@@ -11,6 +11,7 @@ from ....ir import (
     Str,
 )
 from ....ir.base import Span
+from ....printer import format_expr
 from ...expressions import Untranslatable, translate_expr
 from ..context import (
     HandlerContext,
@@ -64,7 +65,9 @@ def _h_i(h: HandlerContext):
         # evaluates it at derive time too; a value known from the attrs' defaults is looked up
         # (and, with missing_assets="drop", left out when missing) like a literal
         known = known_file_name(h.t, path)
-        if known is not None and not h.t.asset(known, h.span) and h.t.missing_assets == "drop":
+        if known is None:
+            h.t.computed_asset(format_expr(path), h.span)
+        if known is not None and not h.t.asset(known, h.span, computed=True) and h.t.missing_assets == "drop":
             raise Untranslatable("asset:missing", f"asset {known!r} was not found (the i() is "
                                  "left out; --missing-assets keep keeps it)", h.span)
         call = OpCall(name="i", args=(Arg(value=path),), span=h.span)

@@ -17,6 +17,7 @@ from ....ir import (
     Str,
     Unary,
 )
+from ....printer import format_expr
 from ... import frames
 from ...expressions import ExprContext, Untranslatable, translate_expr
 from ..context import (
@@ -74,7 +75,9 @@ def _h_set(h: HandlerContext):
         if target.endswith("map"):
             known = value.value if isinstance(value, Str) else known_file_name(h.t, value)
             if known:
-                h.t.asset(known, h.span)  # listed in the report; a literal is made relative on writing
+                h.t.asset(known, h.span, computed=not isinstance(value, Str))
+            elif not isinstance(value, Str):
+                h.t.computed_asset(format_expr(value), h.span)
         return [OpCall(name="set", args=(Arg(value=Ref(name=target)), Arg(value=value)), span=h.span)], None
     if target and len(h.args) == 2:
         kinds = {v.name: v.kind for v in h.t.values}
@@ -191,6 +194,8 @@ def _h_texture(h: HandlerContext):
     # a computed file name is evaluated at derive time (relative to the grammar's folder)
     known = path.value if isinstance(path, Str) else known_file_name(h.t, path)
     if known:
-        h.t.asset(known, h.span)  # listed in the report; a literal is made relative on writing
+        h.t.asset(known, h.span, computed=not isinstance(path, Str))
+    elif not isinstance(path, Str):
+        h.t.computed_asset(format_expr(path), h.span)
     return [OpCall(name="texture", args=(Arg(value=path),), span=h.span)], None
 
