@@ -1,6 +1,8 @@
 """Rule bodies: items, case and stochastic tails, operation calls (dispatched to the handlers)."""
 from __future__ import annotations
 
+import dataclasses
+
 from typing import Any
 
 from lark import Token, Tree
@@ -58,7 +60,7 @@ class BodyMixin:
                              counting=counting)
         self._record("rule", r.name, "translated", r.span, counting=counting)
         rctx = RuleCtx(key, gk, params, counting)
-        items = self._body(r.body.children, frame, rctx)
+        items = self._body(r.body.children, frame, rctx)  # frame H: see RuleCtx.horizontal
         if not items:
             items = [Terminal(name=gk, span=r.span)]
         return Rule(name=gk, params=tuple(params.values()), body=Seq(items=tuple(items)), span=r.span)
@@ -66,6 +68,8 @@ class BodyMixin:
     def _body(self, nodes: list, frame: str, rctx: RuleCtx) -> list:
         """A rule body / arm / entry (items, then maybe a case or stochastic tail)."""
         out: list = []
+        if frame == "H":  # a horizontal face: frame Z for its own scope (see RuleCtx.horizontal)
+            frame, rctx = "Z", dataclasses.replace(rctx, horizontal=True)
         i = 0
         while i < len(nodes):
             node = nodes[i]
@@ -82,6 +86,10 @@ class BodyMixin:
             items = self._item(node, frame, rctx, out)
             if self.frame_change is not None:  # alignScopeToGeometry(yUp | zUp, ...)
                 frame, self.frame_change = self.frame_change, None
+            if rctx.horizontal and frame == "Z" and any(isinstance(it, OpCall) and it.name == "extrude"
+                                                        for it in items):
+                # CGA scopes a volume extruded from a horizontal face as a lot's: y up (frame Y)
+                frame, rctx = "Y", dataclasses.replace(rctx, horizontal=False)
             is_last = i == len(nodes) - 1
             for it in items:
                 if isinstance(it, OpCall) and it.block is not None and not is_last:
@@ -89,6 +97,26 @@ class BodyMixin:
                 out.append(it)
             i += 1
         return out
+
+    def _successor_frame(self, frame: str, rctx: RuleCtx, key: tuple[str, int]) -> str:
+        """The frame a called rule receives: H while the shape is still a horizontal face and
+        the rule (or one it calls) extrudes it (else H and Z translate alike: no copy)."""
+        return "H" if rctx.horizontal and frame == "Z" and self._may_extrude(key[0]) else frame
+
+    def _may_extrude(self, name: str) -> bool:
+        memo = self.__dict__.setdefault("_extrude_memo", {})
+        if name not in memo:
+            memo[name] = False  # a cycle of calls reads False while it is being decided
+            names = {k[0] for k in self.rules}
+            found = False
+            for key, r in self.rules.items():
+                if key[0] != name or not isinstance(r.body, Tree):
+                    continue
+                toks = [t.value for t in r.body.scan_values(lambda v: isinstance(v, Token))]
+                if "extrude" in toks or any(t in names and t != name and self._may_extrude(t) for t in toks):
+                    found = True
+            memo[name] = found
+        return memo[name]
 
     def _tail(self, block: Tree, frame: str, rctx: RuleCtx) -> list:
         span = self._span(block)
@@ -163,7 +191,7 @@ class BodyMixin:
         if kind == "name":
             if (name, 0) in self.rules:
                 self._record("successor", name, "translated", span, counting=counting)
-                return [Successor(name=self._rule_name((name, 0), frame), span=span)]
+                return [Successor(name=self._rule_name((name, 0), self._successor_frame(frame, rctx, (name, 0))), span=span)]
             if name in BARE_OPS:
                 return self._op(name, [], None, False, node, frame, rctx, out)
             prefix = name.split(".", 1)[0]
@@ -190,7 +218,7 @@ class BodyMixin:
                              counting=counting)
                 return []
             self._record("successor", name, "translated", span, counting=counting)
-            return [Successor(name=self._rule_name(key, frame), args=values, span=span)]
+            return [Successor(name=self._rule_name(key, self._successor_frame(frame, rctx, key)), args=values, span=span)]
         if kind == "call" and "." in name and name.split(".", 1)[0] in self.imports:
             self._record("successor", name, "dropped", span, feature="import",
                          message=f"{name}(...) is a rule of an imported file", counting=counting)

@@ -30,6 +30,10 @@ class RuleCtx:
     gk: str
     params: dict[str, str]
     counting: bool
+    # the shape is a horizontal face (a roof or top face, CGA's comp(f) top/bottom/horizontal
+    # of a lot-like volume): a volume extruded from it is scoped like a lot's (frame Y), so its
+    # `top` is the cap, not the side that `top` is on a volume extruded from a facade
+    horizontal: bool = False
 
 
 class TranslatorAPI(Protocol):

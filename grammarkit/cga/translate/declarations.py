@@ -7,6 +7,7 @@ from typing import Any
 from lark import Token, Tree
 
 from ...errors import Diagnostic
+from ...ir.base import Span
 from ..expressions import (
     Function,
     unquote,
@@ -25,12 +26,27 @@ class DeclarationsMixin:
 
     # -- declarations ---------------------------------------------------------------------------
     def collect(self) -> None:
+        current = "Default"  # the style the declarations belong to (CGA: Default until `style`)
+        styles: dict[str, Any] = {"Default": None}
+        wanted = self.style or "Default"
         for node in self.tree.children:
             if node.data == "version":
                 self.report.ignored["version"] += 1
                 continue
             annotations = [c for c in node.children if isinstance(c, Tree) and c.data == "annotation"]
             decl = node.children[-1]
+            if decl.data == "style_stmt":
+                names = [t.value for t in decl.children if isinstance(t, Token) and t.type == "NAME"]
+                current = names[0]
+                styles[current] = (self._span(decl), names[1] if len(names) > 1 else None)
+                for a in annotations:
+                    self.report.ignored[a.children[0].value] += 1
+                continue
+            if current != "Default" and not self._style_applies(current, wanted, styles):
+                self.report.ignored[f"style {current}"] += 1  # a declaration of another style
+                continue
+            if current != "Default" and self._override(decl, annotations):
+                continue
             if decl.data == "import_stmt":
                 self._collect_import(decl, annotations)
                 continue
@@ -59,6 +75,68 @@ class DeclarationsMixin:
             else:
                 self.values.append(ValueDef("attr" if kind == "attr_decl" else "const", name,
                                             decl.children[-1], span, annotations))
+
+        self._check_style(wanted, styles)
+
+    @staticmethod
+    def _style_applies(current: str, wanted: str, styles: dict) -> bool:
+        """Whether declarations of style `current` apply when `wanted` is chosen (the chosen
+        style and the styles it extends)."""
+        seen = set()
+        name: Any = wanted
+        while name and name != "Default" and name not in seen:
+            if name == current:
+                return True
+            seen.add(name)
+            info = styles.get(name)
+            name = info[1] if info else None
+        return False
+
+    def _check_style(self, wanted: str, styles: dict) -> None:
+        if wanted != "Default" and wanted not in styles:
+            self.diagnostics.append(Diagnostic(
+                "error", f"no style {wanted!r} in this file; its styles are: " + ", ".join(styles),
+                Span(file=self.filename, line=1, column=1), code="cga-no-style"))
+        for name, info in styles.items():
+            if info is None:
+                continue
+            status = "translated" if self._style_applies(name, wanted, styles) else "ignored"
+            if status == "translated":
+                self._record("style", name, "translated", info[0])
+            else:
+                self.report.ignored["style"] += 1
+
+    def _override(self, decl: Tree, annotations: list) -> bool:
+        """A declaration of the chosen style: it replaces the Default style's declaration of
+        the same name (an attr keeps the Default's annotations unless it has its own); True
+        if it replaced one, False if it is new (then it is collected as usual)."""
+        kind = decl.data
+        if kind not in ("attr_decl", "const_decl", "rule_decl", "func_decl"):
+            return False
+        head_tok = decl.children[1] if kind in ("attr_decl", "const_decl") else decl.children[0]
+        m = HEAD.match(head_tok.value)
+        name, params = m.group(1), params_of(m.group(2))
+        if kind == "rule_decl":
+            key = (name, len(params))
+            old = self.rules.get(key)
+            if old is None:
+                return False
+            self.rules[key] = RuleDef(name, params, decl.children[1], self._span(head_tok),
+                                      old.start or any(a.children[0].value == "@StartRule" for a in annotations),
+                                      annotations or old.annotations)
+            return True
+        if kind == "func_decl" or m.group(2) is not None:
+            key = (name, len(params))
+            if key not in self.functions:
+                return False
+            self.functions[key] = Function(name, params, decl.children[-1])
+            return True
+        for i, v in enumerate(self.values):
+            if v.name == name and not v.imported:
+                self.values[i] = ValueDef(v.kind, name, decl.children[-1], self._span(head_tok),
+                                          annotations or v.annotations)
+                return True
+        return False
 
     def _collect_import(self, decl: Tree, annotations: list) -> None:
         kids = [c for c in decl.children if isinstance(c, Token)]
@@ -119,7 +197,7 @@ class DeclarationsMixin:
             return None, "the file has syntax errors (import it on its own to see them)"
         child = type(self)(parsed.tree, str(path), parsed.source, asset_dirs=self.asset_dirs,
                            missing_assets=self.missing_assets, operations=self.operations,
-                           project=self.project, style=self.style)
+                           project=self.project)  # an import uses its own default style
         child._import_chain = (*chain, key)  # type: ignore[attr-defined]
         child.collect()
         return child, ""

@@ -97,7 +97,8 @@ class EntriesMixin:
                 body_frame = "Z"
             else:
                 mapped = frames.comp_selectors(frame, sel) if sel else None
-                body_frame = "Z"
+                # a lot-like volume's top and bottom are horizontal faces (RuleCtx.horizontal)
+                body_frame = "H" if frame == "Y" and sel in ("top", "bottom", "horizontal") else "Z"
             body = self._body(entry.children[-1].children, body_frame, rctx) or [
                 Terminal(name=rctx.gk, span=span)]
             if mapped is None:
