@@ -4,7 +4,7 @@
     result = grammarkit.cga.translate_cga("building.cga")          # + text, report, ok
 
 One module per concern: `cga.lark` (the grammar), `parser` (text -> tree, located syntax
-errors), `expressions` and `translate` (tree -> IR), `frames` (CGA's axes -> grammarkit's),
+errors), `expressions` and the `translate` package (tree -> IR: a translator of mixins, one handler module per operation family), `frames` (CGA's axes -> grammarkit's),
 `report` (what happened to each construct), `importer` (print + check, nothing half-done).
 See docs/cga.md.
 """

@@ -7,7 +7,7 @@ consts and rule parameters, `scope.*` (through the frame's axis mapping, see fra
 (`name(params) = expr`): a function is inlined at each call with its arguments substituted
 (parenthesised by the IR, so precedence is kept), which is exact for CGA's pure functions;
 a recursive one (directly or through others) cannot be inlined and becomes a grammarkit
-function `func name(params) = expr` instead (`ExprContext.emitted`, see translate.py), called
+function `func name(params) = expr` instead (`ExprContext.emitted`, see translate/recursion.py), called
 by name.
 
 What does not map raises `Untranslatable` naming the missing feature; the caller decides
@@ -63,7 +63,7 @@ class Untranslatable(Exception):
 
 
 def span_of(node: Any, filename: str | None) -> Span | None:
-    # nodes of an imported file carry that file's name (translate.py: _merge_import)
+    # nodes of an imported file carry that file's name (translate/declarations.py: _merge_import)
     if isinstance(node, Token):
         filename = getattr(node, "cga_file", filename)
     else:
@@ -347,51 +347,5 @@ def _inline(fn: Function, args: list[Any], span: Span | None, ctx: ExprContext) 
 
 # -- static values (for choosing a fallback) --------------------------------------------------
 
-def static_value(e: Any, env: dict[str, Any], depth: int = 0) -> Any:
-    """The value of an IR expression from constants and `env` (attr defaults), or None."""
-    if depth > 64:
-        return None
-    if isinstance(e, (Num, Str, Bool)):
-        return e.value
-    if isinstance(e, Ref):
-        v = env.get(e.name)
-        return static_value(v, env, depth + 1) if v is not None else None
-    if isinstance(e, Unary):
-        v = static_value(e.operand, env, depth + 1)
-        if v is None:
-            return None
-        if e.op == "-" and isinstance(v, (int, float)) and not isinstance(v, bool):
-            return -v
-        if e.op == "!" and isinstance(v, bool):
-            return not v
-        return v if e.op == "+" else None
-    if isinstance(e, Binary):
-        a = static_value(e.left, env, depth + 1)
-        b = static_value(e.right, env, depth + 1)
-        if a is None or b is None:
-            return None
-        try:
-            return _BIN_EVAL[e.op](a, b)
-        except (TypeError, ZeroDivisionError, ValueError, OverflowError):
-            return None
-    if isinstance(e, Call) and e.func in ("min", "max") and e.args:
-        vals = [static_value(a, env, depth + 1) for a in e.args]
-        if any(v is None for v in vals):
-            return None
-        try:
-            return min(vals) if e.func == "min" else max(vals)
-        except TypeError:
-            return None
-    return None
-
-
-_BIN_EVAL: dict[str, Callable[[Any, Any], Any]] = {
-    "+": lambda a, b: a + b, "-": lambda a, b: a - b, "*": lambda a, b: a * b,
-    "/": lambda a, b: a / b, "%": lambda a, b: a % b, "^": lambda a, b: a ** b,
-    "==": lambda a, b: a == b, "!=": lambda a, b: a != b, "<": lambda a, b: a < b,
-    "<=": lambda a, b: a <= b, ">": lambda a, b: a > b, ">=": lambda a, b: a >= b,
-    "&&": lambda a, b: bool(a) and bool(b), "||": lambda a, b: bool(a) or bool(b),
-}
-
-__all__ = ["ExprContext", "Function", "Untranslatable", "is_text", "translate_expr", "static_value", "span_of",
+__all__ = ["ExprContext", "Function", "Untranslatable", "is_text", "translate_expr", "span_of",
            "children", "call_args", "unquote", "gk_name"]

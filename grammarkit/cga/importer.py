@@ -9,7 +9,6 @@ the CGA text has errors or the translation does not check.
 """
 from __future__ import annotations
 
-import os
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -17,6 +16,7 @@ from typing import Any
 from ..errors import Diagnostic, GrammarError
 from ..ir import Grammar
 from ..ir.base import Span
+from .assets import place_assets
 from .parser import DEFAULT_MAX_BYTES, decode_cga, parse_cga, read_cga
 from .report import ImportReport
 
@@ -64,7 +64,8 @@ def _operation_names() -> frozenset[str]:
 
 def translate_cga(source: "str | Path | bytes", *, filename: str | None = None,
                   output: "str | Path | None" = None, asset_dirs: tuple = (),
-                  missing_assets: str = "keep", max_bytes: int = DEFAULT_MAX_BYTES) -> ImportResult:
+                  missing_assets: str = "keep", max_bytes: int = DEFAULT_MAX_BYTES,
+                  project: Any = None, style: str | None = None) -> ImportResult:
     """Translate CGA (text, bytes or a path) to a checked grammar. Never raises for bad input.
 
     output:         where the grammar will be written (asset paths are made relative to it).
@@ -73,6 +74,10 @@ def translate_cga(source: "str | Path | bytes", *, filename: str | None = None,
     missing_assets: "keep" (default): `i()` of an asset that is not found is kept (the report
                     lists it; derivation will fail until the file is there); "drop": such an
                     `i()` is left out with a warning.
+    project:        a `cga.project.Project` (from `open_input`: a .cga in a CityEngine project,
+                    a project folder, an .rpk): assets and imports are looked up as CityEngine
+                    does, and the grammar gets the project's folders as `asset_dir` lines.
+    style:          the CGA style to translate (default: the Default style).
     """
     if missing_assets not in MISSING_ASSETS:
         raise ValueError(f"missing_assets must be one of {MISSING_ASSETS}, got {missing_assets!r}")
@@ -88,7 +93,8 @@ def translate_cga(source: "str | Path | bytes", *, filename: str | None = None,
     from .translate import Translator
     translator = Translator(parsed.tree, fname, parsed.source,
                             asset_dirs=tuple(Path(d) for d in asset_dirs),
-                            missing_assets=missing_assets, operations=_operation_names())
+                            missing_assets=missing_assets, operations=_operation_names(),
+                            project=project, style=style)
     try:
         grammar = translator.translate()
     except RecursionError:
@@ -99,7 +105,9 @@ def translate_cga(source: "str | Path | bytes", *, filename: str | None = None,
     result.diagnostics.extend(sorted(translator.diagnostics, key=_position))
     if any(d.severity == "error" for d in translator.diagnostics):
         return result
-    grammar = _relocate_assets(grammar, translator.report, output)
+    dirs = project.search_dirs() if project is not None and project.root is not None else ()
+    grammar = place_assets(grammar, translator.report, output, dirs,
+                           project.workspace_projects() if dirs else None)
     result.grammar = grammar
     from ..printer import print_grammar
     try:
@@ -114,38 +122,6 @@ def translate_cga(source: "str | Path | bytes", *, filename: str | None = None,
 def _position(d: Diagnostic) -> tuple:
     s = d.span
     return (s.line, s.column) if s else (0, 0)
-
-
-def _relocate_assets(grammar: Grammar, report: ImportReport, output: "str | Path | None") -> Grammar:
-    """Point `i()` and texture paths of found assets at the files, relative to the output grammar."""
-    found = {a["path"]: a["resolved"] for a in report.assets if a["found"]}
-    if not found:
-        return grammar
-    out_dir = Path(output).resolve().parent if output else Path.cwd()
-    mapping = {p: Path(os.path.relpath(Path(r).resolve(), out_dir)).as_posix() for p, r in found.items()}
-    data = grammar.model_dump(mode="python")
-
-    def walk(node: Any) -> Any:
-        if isinstance(node, dict):
-            if node.get("kind") == "op" and node.get("args") and (
-                    node.get("name") in ("i", "texture") or _is_material_map(node)):
-                arg = node["args"][0 if node.get("name") != "set" else 1]["value"]
-                if arg.get("kind") == "str" and arg["value"] in mapping:
-                    arg["value"] = mapping[arg["value"]]
-            return {k: walk(v) for k, v in node.items()}
-        if isinstance(node, (list, tuple)):  # pydantic dumps tuple fields (blocks) as tuples
-            return [walk(v) for v in node]
-        return node
-    return Grammar.model_validate(walk(data))
-
-
-def _is_material_map(node: dict) -> bool:
-    """`set(material.colormap, "file")` and the other texture maps."""
-    if node.get("name") != "set" or len(node["args"]) != 2:
-        return False
-    target = node["args"][0]["value"]
-    name = target.get("name", "") if isinstance(target, dict) else ""
-    return name.startswith("material.") and name.endswith("map")
 
 
 def _check(result: ImportResult, out_text: str, output: "str | Path | None") -> None:

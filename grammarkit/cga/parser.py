@@ -13,7 +13,12 @@ from importlib import resources
 from pathlib import Path
 
 from lark import Lark, Token, Tree
-from lark.exceptions import LarkError, UnexpectedCharacters, UnexpectedEOF, UnexpectedToken
+from lark.exceptions import (
+    LarkError,
+    UnexpectedCharacters,
+    UnexpectedEOF,
+    UnexpectedToken,
+)
 
 from ..errors import Diagnostic
 from ..ir.base import Span
@@ -150,7 +155,7 @@ _WORDS = {
     "NAME": "a name", "NUMBER": "a number", "STRING": 'a string (like "text")',
     "RULE_HEAD": "a rule (like Lot -->)", "FUNC_HEAD": "a definition (like name = value)",
     "ANNOTATION": "an annotation (like @Range)", "PERCENT_COLON": "'%:'", "$END": "end of file",
-    "ATTR": "'attr'", "CONST": "'const'", "CASE": "'case'", "ELSE": "'else'", "NIL": "'NIL'",
+    "ATTR": "'attr'", "STYLE": "'style'", "EXTENDS": "'extends'", "CONST": "'const'", "CASE": "'case'", "ELSE": "'else'", "NIL": "'NIL'",
     "TRUE": "'true'", "FALSE": "'false'", "STAR": "'*'", "EQ_OP": "'=='", "CMP_OP": "'<'",
     "PLUS": "'+'", "MINUS": "'-'", "SLASH": "'/'", "MODULO": "'%'",
 }

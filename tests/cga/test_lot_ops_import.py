@@ -1,4 +1,4 @@
-"""CGA roof options, comp(fe), splitArea and envelope -> grammarkit (translate_lot_ops.py):
+"""CGA roof options, comp(fe), splitArea and envelope -> grammarkit (translate/handlers/roofs.py, mass.py):
 the translated text, and the imported rules deriving what CGA's would."""
 from __future__ import annotations
 
@@ -80,7 +80,7 @@ def test_comp_fe_and_other_comp_modes():
     assert line(r, "Lot") == "Lot --> comp(fe) { 0: A. | all: B. }"
     m = derive(r)
     assert [p.size[0] for p in m.parts] == pytest.approx([20, 16, 20, 16])
-    r = imported("Lot --> extrude(3) comp(f) { top: T | side: S }\n")  # still translate.py's
+    r = imported("Lot --> extrude(3) comp(f) { top: T | side: S }\n")  # comp(f) as before
     assert "comp(f) { top: T. | side: S. }" in line(r, "Lot")
 
 

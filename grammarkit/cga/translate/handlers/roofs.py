@@ -1,36 +1,30 @@
-"""Translation handlers of CGA's lot, roof and face-edge operations that live outside
-translate.py (same signature as translate.py's handlers: `(t, args, block, star, frame, rctx,
-ctx, span, out) -> (items, block_out)`).
-
-translate.py merges `LOT_HANDLERS` into its handler table after its own entries, so an entry
-here replaces translate.py's handler of the same CGA operation.
-
-- `roofGable`, `roofHip`, `roofShed` with all of CGA's forms: `byAngle`/`byHeight`, the two
-  overhangs of the gable, `even` and the edge index (grammarkit/split/ops.py).
-- `comp(fe)` (face edges; grammarkit/split/comp_edges.py); other comp modes go to
-  translate.py's handler.
-- `splitArea(axis) { area: A | ~area: B }*` (grammarkit/split/area_split.py).
-- `envelope(direction, maxHeight, ...)` (grammarkit/split/envelope.py).
-"""
+"""CGA's roofGable, roofHip, roofShed with all their forms, and envelope()."""
 from __future__ import annotations
 
-from typing import Any, Callable
+import math
+from typing import Any
 
 from lark import Tree
 
-from ..ir import Arg, Binary, Bool, Call, Num, OpCall, Ref, Repeat, Str, Vector
-from .expressions import Untranslatable, translate_expr
-
-
-def _name(tree: Any) -> str | None:
-    if isinstance(tree, Tree) and tree.data == "ref":
-        return tree.children[0].value
-    return None
-
-
-def _need(args: list, lo: int, hi: int, name: str, span: Any) -> None:
-    if not lo <= len(args) <= hi:
-        raise Untranslatable(f"op:{name}/{len(args)}", f"{name}() with {len(args)} arguments is not supported", span)
+from ....ir import (
+    Arg,
+    Binary,
+    Bool,
+    Call,
+    Num,
+    OpCall,
+    Ref,
+    Str,
+    Vector,
+)
+from ... import frames
+from ...expressions import Untranslatable, translate_expr
+from ..context import (
+    HandlerContext,
+    axis_name,
+    need,
+    register,
+)
 
 
 # -- roofs -------------------------------------------------------------------------------------
@@ -39,15 +33,13 @@ def _on_roof(overhang: Any, angle: Any) -> Any:
     if isinstance(overhang, Num) and overhang.value == 0:
         return overhang
     if isinstance(overhang, Num) and isinstance(angle, Num):
-        import math
-
         return Num(value=overhang.value * math.cos(math.radians(angle.value)))
     return Binary(op="*", left=overhang, right=Call(func="cos", args=(angle,)))
 
 
 def _roof_value(gk: str, args: list, ctx: Any, span: Any) -> tuple[Any, str, list]:
     """(angle or height, value type, the remaining CGA arguments)."""
-    kind = _name(args[0]) if args else None
+    kind = axis_name(args[0]) if args else None
     if kind in ("byAngle", "byHeight"):
         if len(args) < 2:
             raise Untranslatable(f"op:{gk}", f"{gk}({kind}) without a value", span)
@@ -89,99 +81,58 @@ def _roof_call(gk: str, value: Any, vt: str, named: list, span: Any, notes: list
     return [call], ((f"{gk}:options", "; ".join(notes)) if notes else None)
 
 
-def _h_roof_gable(t, args, block, star, frame, rctx, ctx, span, out):
+@register("roofGable")
+def _h_roof_gable(h: HandlerContext):
     """roofGable(angle, overhangX, overhangY, even, index) / (byHeight, h, overhangX, overhangY, even)."""
-    value, vt, rest = _roof_value("roofGable", args, ctx, span)
-    _need(rest, 0, 4 if _name(args[0]) not in ("byAngle", "byHeight") else 3, "roofGable", span)
+    value, vt, rest = _roof_value("roofGable", h.args, h.ctx, h.span)
+    need(rest, 0, 4 if axis_name(h.args[0]) not in ("byAngle", "byHeight") else 3, "roofGable", h.span)
     notes: list = []
     named: list = []
     if len(rest) >= 1:
-        named.append(Arg(name="overhang", value=_overhang(translate_expr(rest[0], ctx), vt, value, notes)))
+        named.append(Arg(name="overhang", value=_overhang(translate_expr(rest[0], h.ctx), vt, value, notes)))
     if len(rest) >= 2:
-        named.append(Arg(name="overhang_y", value=_overhang(translate_expr(rest[1], ctx), vt, value, notes)))
-    index = _index_arg(rest[3], ctx, notes, "roofGable") if len(rest) >= 4 else None
+        named.append(Arg(name="overhang_y", value=_overhang(translate_expr(rest[1], h.ctx), vt, value, notes)))
+    index = _index_arg(rest[3], h.ctx, notes, "roofGable") if len(rest) >= 4 else None
     if index is not None:  # CGA ignores even with an index
         named.append(index)
     elif len(rest) >= 3:
-        e = _even(rest[2], ctx)
+        e = _even(rest[2], h.ctx)
         if e is not None:
             named.append(e)
     if index is None:
         # CGA orients an unindexed gable itself (along the long sides of a rectangle), not
         # along a scope axis: grammarkit's ridge=auto
         named.append(Arg(name="ridge", value=Ref(name="auto")))
-    return _roof_call("roofGable", value, vt, named, span, notes)
+    return _roof_call("roofGable", value, vt, named, h.span, notes)
 
 
-def _h_roof_hip(t, args, block, star, frame, rctx, ctx, span, out):
+@register("roofHip")
+def _h_roof_hip(h: HandlerContext):
     """roofHip(angle, overhang, even) / roofHip(byHeight, h, overhang, even)."""
-    value, vt, rest = _roof_value("roofHip", args, ctx, span)
-    _need(rest, 0, 2, "roofHip", span)
+    value, vt, rest = _roof_value("roofHip", h.args, h.ctx, h.span)
+    need(rest, 0, 2, "roofHip", h.span)
     notes: list = []
     named: list = []
     if len(rest) >= 1:
-        named.append(Arg(name="overhang", value=_overhang(translate_expr(rest[0], ctx), vt, value, notes)))
+        named.append(Arg(name="overhang", value=_overhang(translate_expr(rest[0], h.ctx), vt, value, notes)))
     if len(rest) >= 2:
-        e = _even(rest[1], ctx)
+        e = _even(rest[1], h.ctx)
         if e is not None:
             named.append(e)
-    return _roof_call("roofHip", value, vt, named, span, notes)
+    return _roof_call("roofHip", value, vt, named, h.span, notes)
 
 
-def _h_roof_shed(t, args, block, star, frame, rctx, ctx, span, out):
+@register("roofShed")
+def _h_roof_shed(h: HandlerContext):
     """roofShed(angle, index) / roofShed(byHeight, h, index): the low edge is edge `index`
     (CGA's default: edge 0)."""
-    value, vt, rest = _roof_value("roofShed", args, ctx, span)
-    _need(rest, 0, 1, "roofShed", span)
+    value, vt, rest = _roof_value("roofShed", h.args, h.ctx, h.span)
+    need(rest, 0, 1, "roofShed", h.span)
     notes: list = []
-    index = _index_arg(rest[0], ctx, notes, "roofShed") if rest else Arg(name="index", value=Num(value=0.0))
-    return _roof_call("roofShed", value, vt, [index] if index is not None else [], span, notes)
+    index = _index_arg(rest[0], h.ctx, notes, "roofShed") if rest else Arg(name="index", value=Num(value=0.0))
+    return _roof_call("roofShed", value, vt, [index] if index is not None else [], h.span, notes)
 
 
-# -- comp(fe) ----------------------------------------------------------------------------------
-def _h_comp(t, args, block, star, frame, rctx, ctx, span, out):
-    """`comp(fe) { ... }`: face edges, with comp(e)'s selectors; other modes: translate.py."""
-    if not (args and _name(args[0]) == "fe" and len(args) == 1):
-        from .translate import _h_comp as base
-
-        return base(t, args, block, star, frame, rctx, ctx, span, out)
-    if block is None:
-        raise Untranslatable("op:comp", "comp() without a block", span)
-    entries = t.comp_entries(block, frame, rctx, "components")
-    if not entries:
-        raise Untranslatable("comp:no-selector", "none of its selectors is supported", span)
-    return [OpCall(name="comp", args=(Arg(value=Ref(name="fe")),), block=tuple(entries), span=span)], None
-
-
-# -- splitArea -----------------------------------------------------------------------------------
-def _h_split_area(t, args, block, star, frame, rctx, ctx, span, out):
-    """`splitArea(axis[, adjustMode]) { area: A | ... }*`: split's entries, in area units; the
-    axis mapped per frame as split's (CGA's z on a lot is grammarkit's y, parts reversed)."""
-    from . import frames
-    from .translate import _reversed
-
-    if block is None:
-        raise Untranslatable("op:splitArea", "splitArea() without a block", span)
-    _need(args, 1, 2, "splitArea", span)
-    a = _name(args[0])
-    if a not in ("x", "y", "z"):
-        raise Untranslatable("splitArea:axis", f"splitArea axis {a!r}", span)
-    gk_axis, reverse = frames.axis(frame, a)
-    if gk_axis == "z":
-        raise Untranslatable("splitArea:axis", f"splitArea({a}) across the face (its normal)", span)
-    call_args: list = [Arg(value=Ref(name=gk_axis))]
-    if len(args) == 2:
-        mode = _name(args[1])
-        if mode not in ("adjust", "noAdjust"):
-            raise Untranslatable("splitArea:adjust", f"splitArea adjust mode {mode!r}", span)
-        if mode == "noAdjust":
-            call_args.append(Arg(name="adjust_mode", value=Ref(name=mode)))
-    items = t.split_entries(block, frame, rctx, ctx)
-    if star:
-        items = [Repeat(items=tuple(items), span=span)]
-    if reverse:
-        items = _reversed(items)
-    return [OpCall(name="splitArea", args=tuple(call_args), block=tuple(items), span=span)], None
 
 
 # -- envelope ------------------------------------------------------------------------------------
@@ -214,14 +165,13 @@ def _is_comp_fe(tree: Any) -> bool:
     name = next((c.value for c in tree.children if not isinstance(c, Tree)), None)
     args = [c for c in tree.children if isinstance(c, Tree) and c.data == "args"]
     inner = [a for a in args[0].children if isinstance(a, Tree)] if args else []
-    return name == "comp" and len(inner) == 1 and _name(inner[0]) == "fe"
+    return name == "comp" and len(inner) == 1 and axis_name(inner[0]) == "fe"
 
 
 def _comp_fe_values(tree: Tree, frame: str, ctx: Any, span: Any, notes: list) -> Any:
     """CGA's comp function `comp(fe) { sel: v | ... }` (an array: for each face edge the value
     of the first entry whose selector takes it) as one expression evaluated per edge:
     `select(comp.sel == "front", v1, select(comp.index == 2, v2, ...))`."""
-    from . import frames
 
     block = next(c for c in tree.children if isinstance(c, Tree) and c.data == "block")
     arms: list = []
@@ -240,7 +190,7 @@ def _comp_fe_values(tree: Tree, frame: str, ctx: Any, span: Any, notes: list) ->
                 raise Untranslatable("envelope:comp-selector", f"comp(fe) index {key.children[0].value}", span)
             arms.append((Binary(op="==", left=Ref(name="comp.index"), right=Num(value=k)), value))
             continue
-        sel = _name(key)
+        sel = axis_name(key)
         mapped, approx = frames.edge_selectors(frame, sel) if sel else (None, None)
         if mapped is None or any(m not in _SEL_SIDES for m in mapped):
             raise Untranslatable("envelope:comp-selector", f"comp(fe) selector {sel!r} in a per-edge value", span)
@@ -285,34 +235,35 @@ def _per_edge_arg(tree: Any, frame: str, ctx: Any, span: Any, notes: list) -> An
     return translate_expr(tree, ctx)
 
 
-def _h_envelope(t, args, block, star, frame, rctx, ctx, span, out):
+@register("envelope")
+def _h_envelope(h: HandlerContext):
     """envelope(direction, maxHeight, frontBase, frontAngle [, backBase, backAngle [, sideBase,
     sideAngle | , rightBase, rightAngle, leftBase, leftAngle]]) -> envelope; street.* sides are
     the lot's front/back/right/left (grammarkit lots have no street attributes, as CGA's
     fallback). envelope(direction, maxHeight, baseHeights, angles) -> envelopePerEdge."""
-    if len(args) not in (4, 6, 8, 10):
-        raise Untranslatable(f"envelope:{len(args)}", f"envelope() with {len(args)} arguments", span)
-    direction = _name(args[0])
+    if len(h.args) not in (4, 6, 8, 10):
+        raise Untranslatable(f"envelope:{len(h.args)}", f"envelope() with {len(h.args)} arguments", h.span)
+    direction = axis_name(h.args[0])
     if direction not in ("normal", "world.up"):
-        raise Untranslatable("envelope:direction", f"envelope direction {direction!r}", span)
+        raise Untranslatable("envelope:direction", f"envelope direction {direction!r}", h.span)
     gk_direction = Arg(value=Ref(name="normal" if direction == "normal" else "worldUp"))
-    per_edge = len(args) == 4 and any(_is_comp_fe(a) or (isinstance(a, Tree) and a.data == "array")
-                                      for a in args[2:])
+    per_edge = len(h.args) == 4 and any(_is_comp_fe(a) or (isinstance(a, Tree) and a.data == "array")
+                                      for a in h.args[2:])
     if per_edge:
         notes: list = []
-        base = _per_edge_arg(args[2], frame, ctx, span, notes)
-        angle = _per_edge_arg(args[3], frame, ctx, span, notes)
-        call = OpCall(name="envelopePerEdge", args=(gk_direction, Arg(value=translate_expr(args[1], ctx)),
-                                                    Arg(value=base), Arg(value=angle)), span=span)
+        base = _per_edge_arg(h.args[2], h.frame, h.ctx, h.span, notes)
+        angle = _per_edge_arg(h.args[3], h.frame, h.ctx, h.span, notes)
+        call = OpCall(name="envelopePerEdge", args=(gk_direction, Arg(value=translate_expr(h.args[1], h.ctx)),
+                                                    Arg(value=base), Arg(value=angle)), span=h.span)
         return [call], (("envelope:options", "; ".join(dict.fromkeys(notes))) if notes else None)
-    if frame != "Y":
+    if h.frame != "Y":
         # CGA classifies a face's edges in the object's frame (street.* falls back to object.*),
         # which a face of a volume does not have here: exact when every side has the same values
-        bases, angles = args[2::2], args[3::2]
-        if not (len(args) in (8, 10) and all(b == bases[0] for b in bases) and all(a == angles[0] for a in angles)):
+        bases, angles = h.args[2::2], h.args[3::2]
+        if not (len(h.args) in (8, 10) and all(b == bases[0] for b in bases) and all(a == angles[0] for a in angles)):
             raise Untranslatable("envelope:face", "envelope() on a face of a volume with different values "
-                                 "per side (CGA classifies its edges in the object's frame)", span)
-    vals = [translate_expr(a, ctx) for a in args[1:]]
+                                 "per side (CGA classifies its edges in the object's frame)", h.span)
+    vals = [translate_expr(a, h.ctx) for a in h.args[1:]]
     max_height, rest = vals[0], vals[1:]
     if len(rest) == 6:  # front, back, side (both right and left)
         rest = rest + rest[4:6]
@@ -320,12 +271,7 @@ def _h_envelope(t, args, block, star, frame, rctx, ctx, span, out):
              "left_base", "left_angle")
     call_args = [gk_direction, Arg(value=max_height)]
     call_args += [Arg(name=n, value=v) for n, v in zip(names, rest)]
-    return [OpCall(name="envelope", args=tuple(call_args), span=span)], (
+    return [OpCall(name="envelope", args=tuple(call_args), span=h.span)], (
         "envelope:street", "street.front/back/left/right are the lot's front/back/left/right edges "
-        "(grammarkit lots have no street attributes)") if frame == "Y" else None
+        "(grammarkit lots have no street attributes)") if h.frame == "Y" else None
 
-
-LOT_HANDLERS: dict[str, Callable[..., Any]] = {
-    "roofGable": _h_roof_gable, "roofHip": _h_roof_hip, "roofShed": _h_roof_shed, "comp": _h_comp,
-    "splitArea": _h_split_area, "envelope": _h_envelope,
-}

@@ -1,0 +1,209 @@
+"""CityEngine's own runtime as the reference: each corpus rule package through `import-cga` +
+`grammarkit.derive`, and (when PyPRT is installed) through PyPRT, on the same lots.
+
+    python benchmarks/bench_prt.py                      # grammars/cga/packages/*.rpk
+    python benchmarks/bench_prt.py --extra a.rpk b.rpk  # also packages kept out of the repository
+    python benchmarks/bench_prt.py --record tests/cga/data/prt_reference.json
+
+PyPRT (`pip install pyprt`) is Esri's, under Esri's terms: never a dependency of grammarkit,
+only this optional reference. Without it the PRT columns are empty.
+
+Lots: the 20 x 12 m rectangle and `lshape(20, 12, 8, 5)`, default attributes, seed 0. PRT gets
+the lot as `InitialShape([x0, 0, -y0, ...])` (CGA's y up, the street along -z) and its output
+is turned to z-up with (X, Y, Z) -> (X, -Z, Y).
+
+Per package and lot: derives yes/no (else the first line of the error), the largest
+difference of the bounding boxes' corners (m), terminals (grammarkit) and faces (PRT),
+triangles of each, whether each is watertight (trimesh, vertices welded by position) and how
+many connected bodies it has, and the time ratio grammarkit / PRT: medians of alternating runs
+in one process (grammarkit: `derive` of the already parsed grammar up to the finished mesh;
+PRT: `generate_model` with the PyEncoder, geometry only).
+
+`--record` writes PRT's bounding boxes as reference numbers for tests/cga (which cannot need
+PyPRT).
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import statistics
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+PACKAGES = ROOT / "grammars" / "cga" / "packages"
+LOTS = {"rect": [(0.0, 0.0), (20.0, 0.0), (20.0, 12.0), (0.0, 12.0)]}
+
+
+def _lots() -> dict:
+    from grammarkit.functions import lshape
+    return {**LOTS, "lshape": [tuple(map(float, p)) for p in lshape(20, 12, 8, 5)]}
+
+
+def import_package(rpk: Path, workdir: Path):
+    """import-cga of the package as it comes -> (parsed grammar, error)."""
+    import grammarkit
+    from grammarkit.cga import translate_cga
+    from grammarkit.cga.project import ProjectError, open_input
+
+    out = workdir / rpk.stem / f"{rpk.stem}.grammar"
+    out.parent.mkdir(parents=True, exist_ok=True)
+    try:
+        project = open_input(rpk, extract_to=out.parent / (rpk.name + ".d"))
+    except ProjectError as exc:
+        return None, str(exc)
+    result = translate_cga(project.rule_file, output=out, project=project)
+    if not result.ok:
+        first = next((d.message for d in result.diagnostics if d.severity == "error"), "does not check")
+        return None, f"import: {first}"
+    out.write_text(result.text, encoding="utf-8")
+    return grammarkit.parse(result.text, filename=str(out)), None
+
+
+def _mesh_stats(vertices: np.ndarray, faces: np.ndarray) -> tuple[bool, int]:
+    import trimesh
+    if len(faces) == 0:
+        return False, 0
+    m = trimesh.Trimesh(vertices, faces, process=True)  # welds by position
+    bodies = len(m.split(only_watertight=False))
+    return bool(m.is_watertight), bodies
+
+
+def gk_run(grammar, lot) -> dict:
+    import grammarkit
+    t = time.perf_counter()
+    model = grammarkit.derive(grammar, seed=0, lot=lot)
+    dt = time.perf_counter() - t
+    solid_v, solid_f = np.asarray(model.mesh.vertices), np.asarray(model.mesh.faces)
+    sv = np.asarray(model.surface_vertices) if model.surface_vertices is not None else np.zeros((0, 3))
+    sf = np.asarray(model.surface_faces) if model.surface_faces is not None else np.zeros((0, 3), int)
+    verts = np.vstack([solid_v.reshape(-1, 3), sv.reshape(-1, 3)])
+    faces = np.vstack([solid_f.reshape(-1, 3), sf.reshape(-1, 3) + len(solid_v)])
+    bbox = [verts.min(axis=0).tolist(), verts.max(axis=0).tolist()] if len(verts) else None
+    tight, bodies = _mesh_stats(verts, faces)
+    terminals = sum(1 for _ in model.parts) if hasattr(model, "parts") else None
+    return {"time": dt, "bbox": bbox, "triangles": int(len(faces)), "terminals": terminals,
+            "watertight": tight, "bodies": bodies}
+
+
+def prt_run(pyprt, rpk: Path, lot) -> dict:
+    coords = []
+    for x, y in lot:
+        coords += [x, 0.0, -y]
+    gen = pyprt.ModelGenerator([pyprt.InitialShape(coords)])
+    t = time.perf_counter()
+    models = gen.generate_model([{}], str(rpk.resolve()), "com.esri.pyprt.PyEncoder",
+                                {"emitReport": False, "emitGeometry": True})
+    dt = time.perf_counter() - t
+    verts, tris, nfaces = [], [], 0
+    base = 0
+    for m in models:
+        v = np.asarray(m.get_vertices(), float).reshape(-1, 3)
+        v = np.stack([v[:, 0], -v[:, 2], v[:, 1]], axis=1)  # y-up -> z-up
+        idx = m.get_indices()
+        k = 0
+        for n in m.get_faces():
+            poly = idx[k:k + n]
+            k += n
+            nfaces += 1
+            tris += [(base + poly[0], base + poly[j], base + poly[j + 1]) for j in range(1, n - 1)]
+        verts.append(v)
+        base += len(v)
+    allv = np.vstack(verts) if verts else np.zeros((0, 3))
+    faces = np.asarray(tris, int).reshape(-1, 3)
+    bbox = [allv.min(axis=0).tolist(), allv.max(axis=0).tolist()] if len(allv) else None
+    tight, bodies = _mesh_stats(allv, faces)
+    return {"time": dt, "bbox": bbox, "triangles": int(len(faces)), "faces": nfaces,
+            "watertight": tight, "bodies": bodies}
+
+
+def bbox_diff(a, b) -> float | None:
+    if a is None or b is None:
+        return None
+    return float(np.abs(np.asarray(a) - np.asarray(b)).max())
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--extra", nargs="*", type=Path, default=[], help="more .rpk packages")
+    ap.add_argument("--runs", type=int, default=5, help="alternating timed runs per lot (median)")
+    ap.add_argument("--record", type=Path, default=None, help="write PRT's bboxes here (JSON)")
+    ap.add_argument("--json", type=Path, default=None, help="also write the table as JSON")
+    args = ap.parse_args(argv)
+    try:
+        import pyprt  # noqa: F401 - optional reference (Esri's terms), never a dependency
+    except ImportError:
+        pyprt = None
+    rpks = sorted(PACKAGES.glob("*.rpk")) + list(args.extra)
+    rows, reference = [], {}
+    with tempfile.TemporaryDirectory() as tmp:
+        for rpk in rpks:
+            grammar, err = import_package(rpk, Path(tmp))
+            for lot_name, lot in _lots().items():
+                row = {"package": rpk.stem, "lot": lot_name, "derives": False, "error": err}
+                gk, prt, gk_t, prt_t = None, None, [], []
+                for _ in range(max(1, args.runs)):  # alternate: the same machine state for both
+                    if grammar is not None and row["error"] is None:
+                        try:
+                            gk = gk_run(grammar, lot)
+                            gk_t.append(gk["time"])
+                        except Exception as exc:  # noqa: BLE001 - a failing package is a row, not a crash
+                            row["error"] = f"derive: {str(exc).splitlines()[0][:120]}"
+                    if pyprt is not None:
+                        prt = prt_run(pyprt, rpk, lot)
+                        prt_t.append(prt["time"])
+                row["derives"] = gk is not None and row["error"] is None
+                row["gk"], row["prt"] = gk, prt
+                row["bbox_diff"] = bbox_diff(gk and gk["bbox"], prt and prt["bbox"])
+                row["gk_ms"] = statistics.median(gk_t) * 1e3 if gk_t else None
+                row["prt_ms"] = statistics.median(prt_t) * 1e3 if prt_t else None
+                row["ratio"] = row["gk_ms"] / row["prt_ms"] if gk_t and prt_t and row["prt_ms"] else None
+                rows.append(row)
+                if prt is not None:
+                    reference.setdefault(rpk.stem, {})[lot_name] = {
+                        "bbox": [[round(c, 4) for c in prt["bbox"][0]], [round(c, 4) for c in prt["bbox"][1]]]
+                        if prt["bbox"] else None, "triangles": prt["triangles"]}
+    _print(rows, pyprt is not None)
+    if args.record is not None and reference:
+        args.record.parent.mkdir(parents=True, exist_ok=True)
+        args.record.write_text(json.dumps({"source": "PyPRT generate_model, default attributes, lots of "
+                                           "benchmarks/bench_prt.py, z-up", "packages": reference},
+                                          indent=1, sort_keys=True) + "\n", encoding="utf-8")
+        print(f"recorded PRT reference bboxes in {args.record}")
+    if args.json is not None:
+        args.json.write_text(json.dumps(rows, indent=1, default=str) + "\n", encoding="utf-8")
+    return 0
+
+
+def _fmt(v, spec=".2f") -> str:
+    return "-" if v is None else format(v, spec)
+
+
+def _print(rows: list, have_prt: bool) -> None:
+    print(f"{'package':22} {'lot':7} {'derives':7} {'bbox d(m)':>9} {'terms':>6} {'prt faces':>9} "
+          f"{'tris gk':>8} {'tris prt':>8} {'tight gk/prt':>12} {'bodies gk/prt':>13} "
+          f"{'gk ms':>8} {'prt ms':>8} {'ratio':>6}")
+    for r in rows:
+        gk, prt = r["gk"] or {}, r["prt"] or {}
+        tight = f"{_yn(gk.get('watertight'))}/{_yn(prt.get('watertight'))}"
+        bodies = f"{gk.get('bodies', '-')}/{prt.get('bodies', '-')}"
+        print(f"{r['package'][:22]:22} {r['lot']:7} {'yes' if r['derives'] else 'no':7} "
+              f"{_fmt(r['bbox_diff'], '.3f'):>9} {gk.get('terminals', '-')!s:>6} {prt.get('faces', '-')!s:>9} "
+              f"{gk.get('triangles', '-')!s:>8} {prt.get('triangles', '-')!s:>8} {tight:>12} {bodies:>13} "
+              f"{_fmt(r['gk_ms'], '.1f'):>8} {_fmt(r['prt_ms'], '.1f'):>8} {_fmt(r['ratio']):>6}")
+        if r["error"]:
+            print(f"    {r['error']}")
+    if not have_prt:
+        print("(PyPRT is not installed: no reference columns; `pip install pyprt`, Esri's terms)")
+
+
+def _yn(v) -> str:
+    return "-" if v is None else ("y" if v else "n")
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,92 @@
+"""Asset inserts: i() and the primitive operations."""
+from __future__ import annotations
+
+from ....ir import (
+    Arg,
+    Call,
+    Case,
+    CaseArm,
+    OpCall,
+    Seq,
+    Str,
+)
+from ....ir.base import Span
+from ....printer import format_expr
+from ...expressions import Untranslatable, translate_expr
+from ..context import (
+    HandlerContext,
+    known_file_name,
+    register,
+)
+
+# CGA's built-in assets and primitive operations -> grammarkit's built-in primitives
+# (grammarkit/split/assets.py). CGA's primitives are y-up; in frame Y that is grammarkit's z.
+_BUILTIN_NAMES = {"cube": "cube", "cube:notex": "cube:notex", "cylinder": "cylinder",
+                  "sphere": "sphere", "cone": "cone", "quad": "quad", "disk": "disk"}
+_PRIMITIVE_OPS = {"primitiveCube": "cube", "primitiveCylinder": "cylinder", "primitiveSphere": "sphere",
+                  "primitiveCone": "cone", "primitiveQuad": "quad", "primitiveDisk": "disk"}
+
+
+def _builtin(name: str, frame: str, span: Span | None, options: bool) -> tuple:
+    gk = _BUILTIN_NAMES.get(name)
+    if gk is None:
+        raise Untranslatable("i:builtin", f"built-in asset 'builtin:{name}' has no grammarkit "
+                             "counterpart", span)
+    if gk == "cylinder" and frame == "Z":
+        gk = "cylinder:y"  # CGA's cylinder axis is its scope's y: grammarkit's y on a face
+    call = OpCall(name="i", args=(Arg(value=Str(value="builtin:" + gk)),), span=span)
+    if options:
+        return [call], ("i:options", "the up axis and insert mode arguments are ignored")
+    return [call], None
+
+
+def _h_primitive(cga: str):
+    def handler(h: HandlerContext):
+        items, approx = _builtin(_PRIMITIVE_OPS[cga], h.frame, h.span, False)
+        if h.args:
+            approx = (f"{cga}:options", "the number of segments (and other arguments) is "
+                      "grammarkit's fixed 16")
+        return items, approx
+    return handler
+
+
+for _cga in _PRIMITIVE_OPS:
+    register(_cga)(_h_primitive(_cga))
+
+
+
+@register("i")
+def _h_i(h: HandlerContext):
+    if not h.args:
+        raise Untranslatable("op:i", "i() without a file", h.span)
+    path = translate_expr(h.args[0], h.ctx)
+    if not isinstance(path, Str):
+        # a computed file name (an attr, a parameter, fileRandom(...), "dir/" + name): grammarkit
+        # evaluates it at derive time too; a value known from the attrs' defaults is looked up
+        # (and, with missing_assets="drop", left out when missing) like a literal
+        known = known_file_name(h.t, path)
+        if known is None:
+            h.t.computed_asset(format_expr(path), h.span)
+        if known is not None and not h.t.asset(known, h.span, computed=True) and h.t.missing_assets == "drop":
+            raise Untranslatable("asset:missing", f"asset {known!r} was not found (the i() is "
+                                 "left out; --missing-assets keep keeps it)", h.span)
+        call = OpCall(name="i", args=(Arg(value=path),), span=h.span)
+        approx = ("i:options", "the up axis and insert mode arguments are ignored") if len(h.args) > 1 else None
+        if known is None and h.t.missing_assets == "drop":
+            # which file is only known while deriving: `(case fileExists(p): i(p))` leaves the
+            # i() out there when the file is missing, as "drop" does here for a known one
+            guard = Case(arms=(CaseArm(cond=Call(func="fileExists", args=(path,), span=h.span),
+                                       body=Seq(items=(call,)), span=h.span),), span=h.span)
+            return [guard], approx
+        return [call], approx
+    if path.value.startswith("builtin:"):
+        return _builtin(path.value[len("builtin:"):], h.frame, h.span, len(h.args) > 1)
+    found = h.t.asset(path.value, h.span)
+    if not found and h.t.missing_assets == "drop":
+        raise Untranslatable("asset:missing", f"asset {path.value!r} was not found (the i() is "
+                             "left out; --missing-assets keep keeps it)", h.span)
+    call = OpCall(name="i", args=(Arg(value=path),), span=h.span)
+    if len(h.args) > 1:
+        return [call], ("i:options", "the up axis and insert mode arguments are ignored")
+    return [call], None
+
