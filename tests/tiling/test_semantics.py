@@ -143,8 +143,11 @@ def test_path_without_entry_fails_and_count_is_learned():
     learned = learn([EXAMPLES / "balltrack" / f for f in ("track_short.glb", "track_long.glb")], name="b",
                     notes=notes)
     counted = {c.args[0].value.name for c in learned.constraints if c.name == "count"}
-    assert counted == {"Entry", "Exit"}
-    assert "constraint count(Entry) == 1" in print_grammar(learned)
+    # every type gets the examples' range (issue 28): exact where all examples agree
+    assert counted == {"Entry", "Exit", "Pillar", "Ramp", "Turn"}
+    text = print_grammar(learned)
+    assert "constraint count(Entry) == 1" in text
+    assert "constraint count(Pillar, lo=6, hi=15)" in text
     assert any("Entry" in n and "count" in n for n in notes), notes
     assert validate(learned, no_entry, docks=False).violations
 
