@@ -15,6 +15,8 @@ naming the parts involved; an empty list means the constraint holds.
   every A part reaches some B part through contacts; with `downhill=true` every step must not
   climb (centroid height may not rise by more than the tolerance), as a ball track needs.
 - `count(T, lo, hi)`: the number of T parts is within lo..hi (hi may be omitted).
+- `filled(T, "site")`: every T part has a neighbour at that site wherever the site opens inside
+  the shape's outline (holes; `grammarkit.tiling.holes`).
 """
 from __future__ import annotations
 
@@ -190,6 +192,12 @@ def check_count(graph: nx.Graph, args: dict[str, Any], context: dict | None = No
     return [f"{n} {t} part(s), allowed {rng}"]
 
 
+def _check_filled(graph: nx.Graph, args: dict[str, Any], context: dict | None = None) -> list[str]:
+    from .holes import check_filled
+
+    return check_filled(graph, args, context)
+
+
 @hookimpl
 def grammarkit_constraints():  # noqa: ANN201
     return [
@@ -212,6 +220,11 @@ def grammarkit_constraints():  # noqa: ANN201
                    doc="every step must not climb (ball tracks)")),
             "there is an entry-type part and every one reaches an exit-type part through contacts",
             check_path),
+        ConstraintSpec(
+            "filled",
+            (Param("type", "string", doc="part type"), Param("site", "string", doc="one of its sites")),
+            "every part of the type has a neighbour at the site wherever the site opens inside the "
+            "shape's outline (no holes; see grammarkit.tiling.holes)", _check_filled),
         ConstraintSpec(
             "count",
             (Param("type", "string"), Param("lo", "number", required=False, default=0),

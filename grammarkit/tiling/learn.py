@@ -18,14 +18,18 @@ From the shape graphs of the examples (recomputed from geometry) `learn` writes:
   Mean Shift (features: translation plus the rotation matrix's entries scaled so that a
   rotation of `ANGLE_SCALE_DEG` weighs like one bandwidth; each sample first reduced modulo the
   parts' turn symmetries). With `sites=False`: one `dock A -- B { ... }` per type pair;
-- neighbourhood rules: `neighbors="multisets"` (Kalojanov's exact neighbour-type multisets,
-  the default), `"ranges"` (per neighbour type the observed count range) or `"none"` (sites and
-  docks only: the rules that generalise to new tilings);
+- neighbourhood rules: `neighbors="none"` (the default: sites, docks and `filled` only, the
+  rules that generalise to new tilings), `"multisets"` (Kalojanov's exact neighbour-type
+  multisets: they reject any neighbourhood no example shows, e.g. most larger or smaller valid
+  tilings) or `"ranges"` (per neighbour type the observed count range);
 - `count(T, lo, hi)`: the fewest and most T parts an example has (two or more examples;
-  `count_slack` widens the range), see learn_stats;
+  `count_slack` widens the range), for the types no example has more than 3 of unless
+  `counts="all"`, see learn_stats;
 - `connected`, and `grounded(ground=G)` (strict support) or `grounded(ground=G, sideways=true,
   max_span=K)` when every example satisfies it, G being the examples' lowest point along the
   up axis and K the examples' longest sideways run (learn_stats, support);
+- `filled(T, "s")` for every site the examples fill wherever it opens inside the shape's
+  outline (not `required`: a border tile leaves its outer side open; holes.py);
 - `example NAME = assembly("file")` for each input.
 
 Mean Shift (flat kernel, written here in numpy): every sample is a seed and moves to the mean
@@ -50,7 +54,7 @@ import numpy as np
 
 from ..errors import ShapeError
 from ..ir import Grammar
-from ..ir.expr import Call, Num, Str
+from ..ir.expr import Call, Num, Ref, Str
 from ..ir.split import Arg
 from ..ir.tiling import (
     ConstraintDef, CountRange, DockDef, ExampleDef, NeighborRule, PartDef, Placement, SiteDef, UpDef,
@@ -58,7 +62,7 @@ from ..ir.tiling import (
 from .assembly import Assembly
 from .frames import local_frame, local_frames
 from .graph import shape_graph
-from .learn_stats import SupportStats, count_statements, support_stats
+from .learn_stats import COUNT_MODES, SupportStats, count_statements, support_stats
 from .meanshift import mean_shift
 from .rules import DockPlacement, PartSpec, Rules, euler_degrees, rotation_matrix
 
@@ -402,7 +406,8 @@ def _learn_sites(examples: list["_Example"], info: dict[str, _TypeInfo], bandwid
 def learn(assemblies: Sequence[Assembly | str | os.PathLike], name: str = "learned", *,
           example_paths: Sequence[str] | None = None, tolerance: float | None = None,
           bandwidth: float = 0.05, docks: bool = True, constraints: bool = True,
-          neighbors: str = "multisets", sites: bool = True, counts: bool = True, count_slack: int = 0,
+          neighbors: str = "none", sites: bool = True, counts: bool | str = True, count_slack: int = 0,
+          holes: bool = True,
           up: str = "+z", notes: list[str] | None = None,
           progress: Callable[[str], Any] | None = None) -> Grammar:
     """The tiling grammar the examples exhibit (see the module docstring).
@@ -412,9 +417,10 @@ def learn(assemblies: Sequence[Assembly | str | os.PathLike], name: str = "learn
     statements (default: the given paths; omitted for in-memory assemblies without a source).
     `docks=False` writes `dock A -- B` without placements (type pairs only); `sites=False`
     learns no docking sites (one dock per type pair); `neighbors` is "multisets", "ranges" or
-    "none"; `counts=False` infers no `count` constraints, `count_slack` widens each learned
+    "none"; `counts` is True ("few": ranges for the types no example has more than
+    learn_stats.FEW of), "all" (every type) or False; `count_slack` widens each learned
     count range by that many parts on each side (default 0: the examples' min..max); `up` is
-    the examples' up axis.
+    the examples' up axis; `holes=False` writes no `filled` constraints (holes.py).
     `notes` (a list) receives one line per inference (counts, symmetries, support, ...);
     `progress(stage)` is called as each stage starts."""
     from .contacts import check_tolerance
@@ -427,6 +433,10 @@ def learn(assemblies: Sequence[Assembly | str | os.PathLike], name: str = "learn
     if isinstance(bandwidth, bool) or not isinstance(bandwidth, (int, float)) \
             or not (math.isfinite(bandwidth) and bandwidth > 0):
         raise ShapeError(f"learn: bandwidth must be a finite number > 0, got {bandwidth!r}")
+    if counts not in (True, False, *COUNT_MODES):
+        raise ShapeError(f"learn: counts must be True, False or one of {', '.join(COUNT_MODES)}, got {counts!r}")
+    if isinstance(count_slack, bool) or not isinstance(count_slack, int) or count_slack < 0:
+        raise ShapeError(f"learn: count_slack must be a whole number >= 0, got {count_slack!r}")
     if neighbors not in NEIGHBOR_MODES:
         raise ShapeError(f"learn: neighbors must be one of {', '.join(NEIGHBOR_MODES)}, got {neighbors!r}")
     upv = up_vector(up) if up != "none" else None
@@ -513,7 +523,9 @@ def learn(assemblies: Sequence[Assembly | str | os.PathLike], name: str = "learn
     placements_of: dict[tuple, list[tuple[np.ndarray, np.ndarray]]] = {}
     for key in dock_keys:
         placements_of[key] = _cluster_placements(samples[key], bandwidth) if docks else []
-    count_st = count_statements(list(info), type_counts, count_slack, notes) if counts else []
+    extra: list[ConstraintDef] = []  # `filled` constraints (found once the sites are known)
+    mode = "few" if counts is True else "none" if counts is False else counts
+    count_st = count_statements(list(info), type_counts, count_slack, notes, mode)
     ground = None
     support = SupportStats(False, False, None)
     connected = False
@@ -548,6 +560,7 @@ def learn(assemblies: Sequence[Assembly | str | os.PathLike], name: str = "learn
             for a, b in sorted({(k[0], k[1]) for k in dock_keys}):
                 out.append(DockDef(a=a, b=b))
         out.extend(count_st)
+        out.extend(extra)
         if connected:
             out.append(ConstraintDef(name="connected"))
         grounded = support.statement(_num(ground)) if ground is not None else None
@@ -563,7 +576,17 @@ def learn(assemblies: Sequence[Assembly | str | os.PathLike], name: str = "learn
         if required:
             statements[:] = [s.model_copy(update={"required": True})
                              if isinstance(s, SiteDef) and (s.part, s.name) in required else s for s in statements]
-            grammar = build()
+        if holes and upv is not None:
+            # and the sites every example fills wherever they open inside the shape (holes.py)
+            from .holes import filled_sites
+            from .validate import _Shape
+
+            for t, site in filled_sites(_rules_for(grammar, info, up), [_Shape(e.asm, e.graph) for e in examples],
+                                        required):
+                notes.append(f"filled({t}, \"{site}\"): every example has a neighbour at {t}.{site} wherever "
+                             "it opens inside the shape")
+                extra.append(ConstraintDef(name="filled", args=(Arg(value=Ref(name=t)), Arg(value=Str(value=site)))))
+        grammar = build()
     if docks:
         # the learned grammar must accept its own examples: add any contact no cluster covers
         say("checking the examples against the learned grammar")

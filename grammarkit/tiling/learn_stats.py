@@ -3,7 +3,11 @@
 
 - `count(T, lo, hi)`: lo and hi are the fewest and the most T parts one example has (two or
   more examples; one example gives no range), widened by `slack` parts on each side only when
-  asked: a castle learned from examples with 1 and 2 gates must have a gate;
+  asked: a castle learned from examples with 1 and 2 gates must have a gate. By default
+  (`counts="few"`) only for types no example has more than FEW of: the number of grass tiles
+  of a tiling or of walls of a castle follows the shape's size, and a range of it would reject
+  every valid tiling larger or smaller than the examples; `counts="all"` bounds every type
+  (the examples' sizes: what the shipped example grammars use);
 - `grounded(ground=G)` when every example part is carried from below, else
   `grounded(ground=G, sideways=true, max_span=K)`, K being the longest sideways run any
   example has (support.sideways_runs): a ball track whose examples hang at most 3 pieces in a
@@ -19,17 +23,28 @@ from ..ir.expr import Bool, Num, Ref
 from ..ir.split import Arg
 from ..ir.tiling import ConstraintDef
 
-__all__ = ["count_statements", "SupportStats", "support_stats"]
+__all__ = ["COUNT_MODES", "FEW", "count_statements", "SupportStats", "support_stats"]
+
+
+# a type no example has more than this many of is a *designed* count (gates, entries, exits);
+# more numerous types grow with the shape (tiles of a tiling, walls of a castle)
+FEW = 3
+COUNT_MODES = ("few", "all", "none")
 
 
 def count_statements(types: Sequence[str], type_counts: list[dict[str, int]], slack: int,
-                     notes: list[str]) -> list[ConstraintDef]:
-    """`constraint count(T, lo, hi)` per type from the per-example counts (two or more examples)."""
-    if len(type_counts) < 2:
+                     notes: list[str], mode: str = "few") -> list[ConstraintDef]:
+    """`constraint count(T, lo, hi)` from the per-example counts (two or more examples): for
+    every type with `mode="all"`, for the types no example has more than FEW of with "few"
+    (the default: a tiling's tile counts follow its size, and ranges of them would reject
+    every larger or smaller valid tiling)."""
+    if len(type_counts) < 2 or mode == "none":
         return []
     out = []
     for t in sorted(types):
         ns = [h.get(t, 0) for h in type_counts]
+        if mode == "few" and max(ns) > FEW:
+            continue
         lo, hi = max(0, min(ns) - slack), max(ns) + slack
         seen = f"{min(ns)}..{max(ns)}" if min(ns) != max(ns) else f"{min(ns)}"
         widened = f", widened by {slack}" if slack else ""
