@@ -23,7 +23,7 @@ From the shape graphs of the examples (recomputed from geometry) `learn` writes:
   multisets: they reject any neighbourhood no example shows, e.g. most larger or smaller valid
   tilings) or `"ranges"` (per neighbour type the observed count range);
 - `count(T, lo, hi)`: the fewest and most T parts an example has (two or more examples;
-  `count_slack` widens the range), for the types no example has more than 3 of unless
+  `count_slack` widens the range), for the types no example has more than 2 of unless
   `counts="all"`, see learn_stats;
 - `connected`, and `grounded(ground=G)` (strict support) or `grounded(ground=G, sideways=true,
   max_span=K)` when every example satisfies it, G being the examples' lowest point along the

@@ -26,9 +26,10 @@ from ..ir.tiling import ConstraintDef
 __all__ = ["COUNT_MODES", "FEW", "count_statements", "SupportStats", "support_stats"]
 
 
-# a type no example has more than this many of is a *designed* count (gates, entries, exits);
-# more numerous types grow with the shape (tiles of a tiling, walls of a castle)
-FEW = 3
+# a type no example has more than this many of is a *designed* count (gates, entries, exits, a
+# door); more numerous types grow with the shape (tiles of a tiling, walls of a castle, the ledges
+# of a facade: one per floor)
+FEW = 2
 COUNT_MODES = ("few", "all", "none")
 
 

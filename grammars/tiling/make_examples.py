@@ -8,8 +8,8 @@ extras and name, shared meshes for identical parts) plus `<name>/<name>.grammar`
 - balltrack/ a downhill ball track with Entry/Exit pieces and pillar columns (Liu 2015);
 - facade/   a facade-like grid of wall, window and door panels between ledges.
 The grammars are *learned* (`grammarkit.tiling.learn`) from the two examples with exact
-neighbourhoods and every type's count range (`neighbors="multisets", counts="all"`: these are
-designs whose variants should stay like them); the ball track's grammar additionally gets the
+neighbourhoods (`neighbors="multisets"`: these are designs whose variants should stay like
+them; no `filled` sites for the ball track); the ball track's grammar additionally gets the
 hand-added constraint `path(from=Entry, to=Exit, downhill=true)`, which learning cannot guess.
 
 Geometry is chosen so contacts are unambiguous: neighbours touch face to face (wall ends dip
@@ -184,10 +184,11 @@ def main(argv: list[str] | None = None) -> int:
         folder = args.out / gname
         for a in asms:
             write_assembly(a, folder / f"{a.name}.glb")
-        # Kalojanov's exact neighbourhoods and every type's count range: these examples are
-        # designs whose variants should stay like them (learn's defaults are for tilings)
+        # Kalojanov's exact neighbourhoods: these examples are designs whose variants should stay
+        # like them (learn's default, no neighbourhood rules, is for tilings)
+        # (holes: a ball track is no tiling, an open side of a piece inside its loop is no hole)
         grammar = learn(asms, name=gname, example_paths=[f"{a.name}.glb" for a in asms],
-                        neighbors="multisets", counts="all")
+                        neighbors="multisets", holes=gname != "balltrack")
         if gname == "balltrack":  # the one rule learning cannot guess (Liu 2015's path constraint)
             path = ConstraintDef(name="path", args=(Arg(name="from", value=Ref(name="Entry")),
                                                     Arg(name="to", value=Ref(name="Exit")),
