@@ -15,6 +15,8 @@ naming the parts involved; an empty list means the constraint holds.
   every A part reaches some B part through contacts; with `downhill=true` every step must not
   climb (centroid height may not rise by more than the tolerance), as a ball track needs.
 - `count(T, lo, hi)`: the number of T parts is within lo..hi (hi may be omitted).
+- `filled(T, "site")`: every T part has a neighbour at that site wherever the site opens inside
+  the shape's outline (holes; `grammarkit.tiling.holes`).
 """
 from __future__ import annotations
 
@@ -29,7 +31,7 @@ if TYPE_CHECKING:  # networkx is imported by the checks that need it: plugin loa
 from ..hookspecs import hookimpl
 from ..registry import ConstraintSpec, Param
 
-__all__ = ["check_connected", "check_count", "check_grounded", "check_path", "grammarkit_constraints"]
+__all__ = ["check_connected", "check_count", "check_grounded", "check_path", "grammarkit_constraints", "sideways_span"]
 
 _MAX_LISTED = 8
 
@@ -52,13 +54,13 @@ def check_connected(graph: nx.Graph, args: dict[str, Any], context: dict | None 
             f"piece: {_ids(set().union(*comps[1:]))}"]
 
 
-def check_grounded(graph: nx.Graph, args: dict[str, Any], context: dict | None = None) -> list[str]:
+def _support(graph: nx.Graph, args: dict[str, Any], context: dict | None):  # noqa: ANN202
+    """(sunk, floating, runs, nodes, ground, own, axis index, sign, max_span) of the shape: the
+    support test of `grounded` (support.py) on the graph's parts."""
     import numpy as np
 
     from .support import carry_directions, support_problems
 
-    if graph.number_of_nodes() == 0:
-        return []
     context = context or {}
     rules = context.get("rules")
     up = _up_of(rules)
@@ -66,12 +68,12 @@ def check_grounded(graph: nx.Graph, args: dict[str, Any], context: dict | None =
     data = dict(graph.nodes(data=True))  # one pass (NodeView lookups are slow on 100k parts)
     nodes = sorted(data, key=lambda n: data[n].get("index", 0))
     pos = {n: i for i, n in enumerate(nodes)}
-    lo = np.array([data[n]["lo"] for n in nodes], dtype=np.float64)
-    hi = np.array([data[n]["hi"] for n in nodes], dtype=np.float64)
+    lo = np.array([data[n]["lo"] for n in nodes], dtype=np.float64).reshape(-1, 3)
+    hi = np.array([data[n]["hi"] for n in nodes], dtype=np.float64).reshape(-1, 3)
     edges = np.array([(pos[u], pos[v]) for u, v in graph.edges()], dtype=np.int64).reshape(-1, 2)
     carry = context.get("carry")
     if carry is None or len(carry) != len(edges):
-        boxy = np.array([bool(data[n].get("box", False)) for n in nodes])
+        boxy = np.array([bool(data[n].get("box", False)) for n in nodes], dtype=bool)
         assembly = context.get("assembly")
         parts = None
         if assembly is not None:
@@ -88,23 +90,49 @@ def check_grounded(graph: nx.Graph, args: dict[str, Any], context: dict | None =
     k = int(np.argmax(np.abs(up)))
     sign = 1.0 if up[k] > 0 else -1.0
     own = False
-    if ground is None:  # neither the grammar nor its examples say: the shape's own lowest point
+    if ground is None and len(nodes):  # neither the grammar nor its examples say: the shape's own lowest point
         ground = float(lo[:, k].min()) if sign > 0 else float(hi[:, k].max())
         own = True
     sideways = bool(args.get("sideways") or False)
-    sunk, floating = support_problems(lo, hi, carry, edges, tol, up, float(ground), sideways=sideways)
-    axis = "xyz"[k]
-    where = f"{axis}={float(ground):.4g}" + (" (the shape's lowest point)" if own else "")
+    max_span = args.get("max_span")
+    max_span = None if max_span is None or not sideways else int(max_span)
+    sunk, floating, runs, long_run = support_problems(lo, hi, carry, edges, tol, up, float(ground or 0.0),
+                                                      sideways=sideways, max_span=max_span)
+    return sunk, floating, runs, long_run, nodes, lo, hi, ground, own, k, sign, max_span
+
+
+def check_grounded(graph: nx.Graph, args: dict[str, Any], context: dict | None = None) -> list[str]:
+    import numpy as np
+
+    if graph.number_of_nodes() == 0:
+        return []
+    sunk, floating, runs, long_run, nodes, lo, hi, ground, own, k, sign, max_span = _support(graph, args, context)
+    sideways = bool(args.get("sideways") or False)
+    where = f"{'xyz'[k]}={float(ground):.4g}" + (" (the shape's lowest point)" if own else "")
     out = []
     if len(sunk):
         depth = float(np.max(sign * ground - np.where(sign > 0, lo[sunk, k], -hi[sunk, k])))
         out.append(f"{len(sunk)} part(s) reach below the ground {where} (by up to {depth:.4g}): "
                    f"{_ids(nodes[i] for i in sunk)}")
+    floating = np.setdiff1d(floating, long_run)
+    if len(long_run):
+        out.append(f"{len(long_run)} part(s) are held only sideways in runs longer than max_span={max_span} "
+                   f"(no carried part below them): {_ids(nodes[i] for i in long_run)}")
     if len(floating):
         how = "contacts from below or from the side" if sideways else "contacts from below"
         out.append(f"{len(floating)} part(s) are not carried down to the ground {where} (no chain of "
                    f"{how}): {_ids(nodes[i] for i in floating)}")
     return out
+
+
+def sideways_span(graph: nx.Graph, args: dict[str, Any], context: dict | None = None) -> int | None:
+    """The longest sideways run of the shape (the most parts in one connected group held only
+    sideways, support.sideways_runs): what `learn` writes as `max_span`. None when some part
+    is not carried even with side contacts."""
+    if graph.number_of_nodes() == 0:
+        return 0
+    runs = _support(graph, {**args, "sideways": True, "max_span": None}, context)[2]  # unbounded
+    return None if (runs < 0).any() else int(runs.max(initial=0))
 
 
 def _up_of(rules: Any):  # noqa: ANN202
@@ -164,6 +192,12 @@ def check_count(graph: nx.Graph, args: dict[str, Any], context: dict | None = No
     return [f"{n} {t} part(s), allowed {rng}"]
 
 
+def _check_filled(graph: nx.Graph, args: dict[str, Any], context: dict | None = None) -> list[str]:
+    from .holes import check_filled
+
+    return check_filled(graph, args, context)
+
+
 @hookimpl
 def grammarkit_constraints():  # noqa: ANN201
     return [
@@ -173,7 +207,10 @@ def grammarkit_constraints():  # noqa: ANN201
                               doc="the ground plane's height along the up axis (default: the examples' "
                                   "lowest point)"),
                         Param("sideways", "any", required=False, default=False,
-                              doc="support may also pass through side contacts (never downwards)")),
+                              doc="support may also pass through side contacts (never downwards)"),
+                        Param("max_span", "number", required=False, default=None,
+                              doc="with sideways: at most this many parts in a row held only by side "
+                                  "contacts (learn writes the examples' longest run)")),
                        "every part is carried down to the ground plane through contacts from below, "
                        "and none reaches below it", check_grounded),
         ConstraintSpec(
@@ -183,6 +220,11 @@ def grammarkit_constraints():  # noqa: ANN201
                    doc="every step must not climb (ball tracks)")),
             "there is an entry-type part and every one reaches an exit-type part through contacts",
             check_path),
+        ConstraintSpec(
+            "filled",
+            (Param("type", "string", doc="part type"), Param("site", "string", doc="one of its sites")),
+            "every part of the type has a neighbour at the site wherever the site opens inside the "
+            "shape's outline (no holes; see grammarkit.tiling.holes)", _check_filled),
         ConstraintSpec(
             "count",
             (Param("type", "string"), Param("lo", "number", required=False, default=0),

@@ -240,9 +240,11 @@ def edit_violations(rule_set, types: Sequence[str], edges, meshes, centroids, to
             if cache is not None and keys is not None:
                 extra = {"support_cache": cache.support, "keys": list(keys)}
             # the global constraints through `validate` (which owns the registries' default),
-            # with every other rule switched off: they were checked above
+            # with every other rule switched off: they were checked above (the sites stay, not
+            # required: `filled` needs them)
+            sites = {t: tuple(replace(x, required=False) for x in sts) for t, sts in rule_set.sites.items()}
             only = replace(rule_set, types=frozenset(), neighbor_multisets={}, neighbor_counts={},
-                           pairs=None, sites={}, configs={}, docks={})
+                           pairs=None, sites=sites, configs={}, docks={})
             report = validate(only, assembly, graph=g, docks=False, orientation=False,
                               max_violations=max_violations, registries=registries,
                               constraint_context=extra)

@@ -172,6 +172,9 @@ def _read_gltf(path: Path) -> list[Part]:
 
     solids = read_gltf_solids(path)  # grammarkit's own layout (format 2), in the Z-up frame
     if solids is not None:
+        # a file edited elsewhere may hold parts outside the marked root (trimesh and Blender
+        # move a node to the scene root keeping its world placement): read those too
+        strays = _stray_parts(path, {s.name for s in solids})
         parts = []
         for s in solids:
             ptype = s.extras.get("type") if isinstance(s.extras, dict) else None
@@ -182,7 +185,7 @@ def _read_gltf(path: Path) -> list[Part]:
             mesh.apply_transform(s.matrix)
             meta = {"source": str(path)}
             parts.append(Part(s.name, ptype, mesh, s.matrix.copy(), meta))
-        return parts
+        return parts + strays
     try:
         scene = trimesh.load(str(path), force="scene")
     except Exception as exc:  # noqa: BLE001 - any parser failure means "not a mesh file"
@@ -213,6 +216,87 @@ def _read_gltf(path: Path) -> list[Part]:
 
 def _gltf_node_extras(path: Path) -> dict[str, dict]:
     """node name -> extras, read straight from the glTF JSON (trimesh does not expose them)."""
+    out: dict[str, dict] = {}
+    for node in _gltf_doc(path).get("nodes", []):
+        if isinstance(node, dict) and "name" in node:
+            out[node["name"]] = node.get("extras") or {}
+    return out
+
+
+def _node_matrix(node: dict) -> np.ndarray:
+    """A glTF node's local matrix (column-major `matrix`, or translation/rotation/scale)."""
+    if "matrix" in node:
+        return np.asarray(node["matrix"], dtype=np.float64).reshape(4, 4).T
+    T = np.eye(4)
+    x, y, z, w = node.get("rotation", (0.0, 0.0, 0.0, 1.0))
+    T[:3, :3] = trimesh.transformations.quaternion_matrix((w, x, y, z))[:3, :3]
+    T[:3, :3] = T[:3, :3] * np.asarray(node.get("scale", (1.0, 1.0, 1.0)), dtype=np.float64)
+    T[:3, 3] = node.get("translation", (0.0, 0.0, 0.0))
+    return T
+
+
+def _stray_parts(path: Path, read: set[str]) -> list[Part]:
+    """The mesh nodes of a grammarkit glTF that are not below its marked root (the layout
+    `read_gltf_solids` reads), placed in the model's Z-up frame (their world placement with the
+    root's own placement undone). A node that cannot be placed (no triangles, a name a part
+    already has, a node with several parents) is an error naming it: no part is dropped."""
+    try:
+        doc = _gltf_doc(path)
+        nodes = doc["nodes"]
+        tops = list(doc["scenes"][doc.get("scene", 0)]["nodes"])
+        root = tops[0]
+    except (KeyError, IndexError, TypeError):
+        return []
+    world: dict[int, np.ndarray] = {}
+    bad: list[str] = []
+    stack = [(k, np.eye(4)) for k in tops]
+    while stack:  # every node of the scene with its world matrix (glTF scenes are trees)
+        k, parent = stack.pop()
+        if not isinstance(k, int) or not 0 <= k < len(nodes) or k in world:
+            bad.append(f"node {k}")
+            continue
+        world[k] = parent @ _node_matrix(nodes[k])
+        stack.extend((c, world[k]) for c in nodes[k].get("children", []))
+    below = set(nodes[root].get("children", []))
+    below |= {c for k in below for c in nodes[k].get("children", [])}  # a part's label groups
+    stray = [k for k in sorted(world) if "mesh" in nodes[k] and k != root and k not in below]
+    if not stray and not bad:
+        return []
+    try:
+        scene = trimesh.load(str(path), force="scene")
+    except Exception:  # noqa: BLE001 - the stray nodes cannot be read: named below
+        scene = trimesh.Scene()
+    to_model = np.linalg.inv(world[root])
+    extras = _gltf_node_extras(path)
+    parts = []
+    for k in stray:
+        name = str(nodes[k].get("name", f"node{k}"))
+        try:
+            _, geom_name = scene.graph.get(name)
+            geometry = scene.geometry.get(geom_name)
+        except (KeyError, ValueError, TypeError):
+            geometry = None
+        if name in read or not isinstance(geometry, trimesh.Trimesh):
+            bad.append(repr(name))
+            continue
+        matrix = to_model @ world[k]
+        mesh = trimesh.Trimesh(np.asarray(geometry.vertices, dtype=np.float64).copy(),
+                               np.asarray(geometry.faces).copy(), process=False)
+        check_part_mesh(mesh, f"{path}: part {name!r}")
+        mesh.apply_transform(matrix)
+        ptype = (extras.get(name) or {}).get("type")
+        parts.append(Part(name, str(ptype) if ptype else type_from_name(name), mesh, matrix,
+                          {"source": str(path), "placed": "outside the grammarkit root node"}))
+        read.add(name)
+    if bad:
+        raise ShapeError(f"{path}: cannot place the mesh node(s) {', '.join(bad)} outside the grammarkit "
+                         "root node (no triangle geometry, a repeated part name, or a broken node tree); "
+                         "move them back under the root node or remove them")
+    return parts
+
+
+def _gltf_doc(path: Path) -> dict:
+    """The glTF JSON document of a .glb/.gltf file ({} when it cannot be read)."""
     try:
         raw = path.read_bytes()
         if raw[:4] == b"glTF":
@@ -224,11 +308,7 @@ def _gltf_node_extras(path: Path) -> dict[str, dict]:
             doc = json.loads(raw.decode("utf-8"))
     except (OSError, ValueError, struct.error, UnicodeDecodeError):
         return {}
-    out: dict[str, dict] = {}
-    for node in doc.get("nodes", []):
-        if "name" in node:
-            out[node["name"]] = node.get("extras") or {}
-    return out
+    return doc if isinstance(doc, dict) else {}
 
 
 def _read_obj(path: Path) -> list[Part]:

@@ -18,12 +18,18 @@ From the shape graphs of the examples (recomputed from geometry) `learn` writes:
   Mean Shift (features: translation plus the rotation matrix's entries scaled so that a
   rotation of `ANGLE_SCALE_DEG` weighs like one bandwidth; each sample first reduced modulo the
   parts' turn symmetries). With `sites=False`: one `dock A -- B { ... }` per type pair;
-- neighbourhood rules: `neighbors="multisets"` (Kalojanov's exact neighbour-type multisets,
-  the default), `"ranges"` (per neighbour type the observed count range) or `"none"` (sites and
-  docks only: the rules that generalise to new tilings);
-- `count(T) == n` for types that occur equally often in every example (two or more examples);
-- `connected`, and `grounded(ground=G)` (strict support) or `grounded(ground=G, sideways=true)`
-  when every example satisfies it, G being the examples' lowest point along the up axis;
+- neighbourhood rules: `neighbors="none"` (the default: sites, docks and `filled` only, the
+  rules that generalise to new tilings), `"multisets"` (Kalojanov's exact neighbour-type
+  multisets: they reject any neighbourhood no example shows, e.g. most larger or smaller valid
+  tilings) or `"ranges"` (per neighbour type the observed count range);
+- `count(T, lo, hi)`: the fewest and most T parts an example has (two or more examples;
+  `count_slack` widens the range), for the types no example has more than 2 of unless
+  `counts="all"`, see learn_stats;
+- `connected`, and `grounded(ground=G)` (strict support) or `grounded(ground=G, sideways=true,
+  max_span=K)` when every example satisfies it, G being the examples' lowest point along the
+  up axis and K the examples' longest sideways run (learn_stats, support);
+- `filled(T, "s")` for every site the examples fill wherever it opens inside the shape's
+  outline (not `required`: a border tile leaves its outer side open; holes.py);
 - `example NAME = assembly("file")` for each input.
 
 Mean Shift (flat kernel, written here in numpy): every sample is a seed and moves to the mean
@@ -48,7 +54,7 @@ import numpy as np
 
 from ..errors import ShapeError
 from ..ir import Grammar
-from ..ir.expr import Bool, Call, Num, Ref, Str
+from ..ir.expr import Call, Num, Ref, Str
 from ..ir.split import Arg
 from ..ir.tiling import (
     ConstraintDef, CountRange, DockDef, ExampleDef, NeighborRule, PartDef, Placement, SiteDef, UpDef,
@@ -56,6 +62,8 @@ from ..ir.tiling import (
 from .assembly import Assembly
 from .frames import local_frame, local_frames
 from .graph import shape_graph
+from .learn_stats import COUNT_MODES, SupportStats, count_statements, support_stats
+from .meanshift import mean_shift
 from .rules import DockPlacement, PartSpec, Rules, euler_degrees, rotation_matrix
 
 __all__ = ["ANGLE_SCALE_DEG", "DockSample", "NEIGHBOR_MODES", "docking_samples", "learn", "mean_shift"]
@@ -67,54 +75,6 @@ ANGLE_SCALE_DEG = 20.0
 SITE_BANDWIDTH = 4.0
 NEIGHBOR_MODES = ("multisets", "ranges", "none")
 _DIGITS = 4
-
-
-def mean_shift(points: np.ndarray, bandwidth: float, *, max_iter: int = 100,
-               max_seeds: int = 2000) -> tuple[np.ndarray, np.ndarray]:
-    """(modes (m, d), label per point (n,)) of flat-kernel Mean Shift. Deterministic."""
-    X = np.asarray(points, dtype=np.float64)
-    n = len(X)
-    if n == 0:
-        return np.zeros((0, X.shape[1] if X.ndim == 2 else 0)), np.zeros(0, dtype=int)
-    if bandwidth <= 0:
-        raise ValueError("mean_shift: bandwidth must be positive")
-    # seeds: one per occupied bin of size bandwidth/2 (like sklearn's bin seeding) for big inputs
-    if n > max_seeds:
-        keys = np.floor(X / (bandwidth / 2)).astype(np.int64)
-        _, first = np.unique(keys, axis=0, return_index=True)
-        seeds = X[np.sort(first)]
-    else:
-        seeds = X.copy()
-    from scipy.spatial import cKDTree
-
-    tree = cKDTree(X)
-    modes = []
-    for s in seeds:
-        m = s
-        for _ in range(max_iter):
-            idx = tree.query_ball_point(m, bandwidth)
-            new = X[idx].mean(axis=0) if idx else m
-            if np.linalg.norm(new - m) <= 1e-6 * bandwidth:
-                m = new
-                break
-            m = new
-        modes.append((len(tree.query_ball_point(m, bandwidth)), tuple(m)))
-    # strongest modes first; drop modes within half a bandwidth of a kept one
-    modes.sort(key=lambda c: (-c[0], c[1]))
-    kept: list[np.ndarray] = []
-    for _, m in modes:
-        m = np.array(m)
-        if all(np.linalg.norm(m - k) > bandwidth / 2 for k in kept):
-            kept.append(m)
-    centres = np.array(kept)
-    labels = np.argmin(np.linalg.norm(X[:, None, :] - centres[None, :, :], axis=2), axis=1)
-    # drop modes that own no point, keep the order of first appearance (deterministic output)
-    used = []
-    for lab in labels:
-        if lab not in used:
-            used.append(int(lab))
-    remap = {old: new for new, old in enumerate(used)}
-    return centres[used], np.array([remap[int(lab)] for lab in labels])
 
 
 class DockSample:
@@ -446,7 +406,8 @@ def _learn_sites(examples: list["_Example"], info: dict[str, _TypeInfo], bandwid
 def learn(assemblies: Sequence[Assembly | str | os.PathLike], name: str = "learned", *,
           example_paths: Sequence[str] | None = None, tolerance: float | None = None,
           bandwidth: float = 0.05, docks: bool = True, constraints: bool = True,
-          neighbors: str = "multisets", sites: bool = True, counts: bool = True,
+          neighbors: str = "none", sites: bool = True, counts: bool | str = True, count_slack: int = 0,
+          holes: bool = True,
           up: str = "+z", notes: list[str] | None = None,
           progress: Callable[[str], Any] | None = None) -> Grammar:
     """The tiling grammar the examples exhibit (see the module docstring).
@@ -456,7 +417,10 @@ def learn(assemblies: Sequence[Assembly | str | os.PathLike], name: str = "learn
     statements (default: the given paths; omitted for in-memory assemblies without a source).
     `docks=False` writes `dock A -- B` without placements (type pairs only); `sites=False`
     learns no docking sites (one dock per type pair); `neighbors` is "multisets", "ranges" or
-    "none"; `counts=False` infers no `count` constraints; `up` is the examples' up axis.
+    "none"; `counts` is True ("few": ranges for the types no example has more than
+    learn_stats.FEW of), "all" (every type) or False; `count_slack` widens each learned
+    count range by that many parts on each side (default 0: the examples' min..max); `up` is
+    the examples' up axis; `holes=False` writes no `filled` constraints (holes.py).
     `notes` (a list) receives one line per inference (counts, symmetries, support, ...);
     `progress(stage)` is called as each stage starts."""
     from .contacts import check_tolerance
@@ -469,6 +433,10 @@ def learn(assemblies: Sequence[Assembly | str | os.PathLike], name: str = "learn
     if isinstance(bandwidth, bool) or not isinstance(bandwidth, (int, float)) \
             or not (math.isfinite(bandwidth) and bandwidth > 0):
         raise ShapeError(f"learn: bandwidth must be a finite number > 0, got {bandwidth!r}")
+    if counts not in (True, False, *COUNT_MODES):
+        raise ShapeError(f"learn: counts must be True, False or one of {', '.join(COUNT_MODES)}, got {counts!r}")
+    if isinstance(count_slack, bool) or not isinstance(count_slack, int) or count_slack < 0:
+        raise ShapeError(f"learn: count_slack must be a whole number >= 0, got {count_slack!r}")
     if neighbors not in NEIGHBOR_MODES:
         raise ShapeError(f"learn: neighbors must be one of {', '.join(NEIGHBOR_MODES)}, got {neighbors!r}")
     upv = up_vector(up) if up != "none" else None
@@ -555,16 +523,14 @@ def learn(assemblies: Sequence[Assembly | str | os.PathLike], name: str = "learn
     placements_of: dict[tuple, list[tuple[np.ndarray, np.ndarray]]] = {}
     for key in dock_keys:
         placements_of[key] = _cluster_placements(samples[key], bandwidth) if docks else []
-    if counts and len(asms) >= 2:
-        for t in sorted(info):
-            ns = {h.get(t, 0) for h in type_counts}
-            if len(ns) == 1:
-                n = ns.pop()
-                notes.append(f"count({t}) == {n}: each of the {len(asms)} examples has {n} {t} part(s)")
+    extra: list[ConstraintDef] = []  # `filled` constraints (found once the sites are known)
+    mode = "few" if counts is True else "none" if counts is False else counts
+    count_st = count_statements(list(info), type_counts, count_slack, notes, mode)
     ground = None
-    strict = sideways = connected = False
+    support = SupportStats(False, False, None)
+    connected = False
     if constraints:
-        from .constraints import check_connected, check_grounded
+        from .constraints import check_connected
 
         connected = all(not check_connected(g, {}) for g in graphs)
         if upv is not None:
@@ -572,16 +538,7 @@ def learn(assemblies: Sequence[Assembly | str | os.PathLike], name: str = "learn
             lows = [float(a.bounds[0][k]) if upv[k] > 0 else float(a.bounds[1][k]) for a in asms]
             ground = min(lows) if upv[k] > 0 else max(lows)
             proto_rules = Rules(name=name, up=up)
-            strict = all(not check_grounded(g, {"ground": ground}, {"assembly": a, "rules": proto_rules})
-                         for g, a in zip(graphs, asms))
-            sideways = strict or all(not check_grounded(g, {"ground": ground, "sideways": True},
-                                                        {"assembly": a, "rules": proto_rules})
-                                     for g, a in zip(graphs, asms))
-            if sideways and not strict:
-                notes.append("grounded(sideways=true): not every part of the examples rests on parts below it; "
-                             "some are held by side contacts only")
-            elif not sideways:
-                notes.append("no grounded constraint: some example part is not carried down to the ground")
+            support = support_stats(graphs, [{"assembly": a, "rules": proto_rules} for a in asms], ground, notes)
     used_names: set[str] = set()
     examples_st = []
     for asm, path in zip(asms, paths):
@@ -602,20 +559,13 @@ def learn(assemblies: Sequence[Assembly | str | os.PathLike], name: str = "learn
         if not docks:
             for a, b in sorted({(k[0], k[1]) for k in dock_keys}):
                 out.append(DockDef(a=a, b=b))
-        if counts and len(asms) >= 2:
-            for t in sorted(info):
-                ns = {h.get(t, 0) for h in type_counts}
-                if len(ns) == 1:
-                    n = Num(value=float(ns.pop()))
-                    out.append(ConstraintDef(name="count", args=(Arg(value=Ref(name=t)), Arg(name="lo", value=n),
-                                                                Arg(name="hi", value=n))))
+        out.extend(count_st)
+        out.extend(extra)
         if connected:
             out.append(ConstraintDef(name="connected"))
-        if sideways:
-            args = [Arg(name="ground", value=_num(ground))]
-            if not strict:
-                args.append(Arg(name="sideways", value=Bool(value=True)))
-            out.append(ConstraintDef(name="grounded", args=tuple(args)))
+        grounded = support.statement(_num(ground)) if ground is not None else None
+        if grounded is not None:
+            out.append(grounded)
         return Grammar(name=_identifier(name, set()), statements=tuple(out + examples_st))
 
     grammar = build()
@@ -626,7 +576,17 @@ def learn(assemblies: Sequence[Assembly | str | os.PathLike], name: str = "learn
         if required:
             statements[:] = [s.model_copy(update={"required": True})
                              if isinstance(s, SiteDef) and (s.part, s.name) in required else s for s in statements]
-            grammar = build()
+        if holes and upv is not None:
+            # and the sites every example fills wherever they open inside the shape (holes.py)
+            from .holes import filled_sites
+            from .validate import _Shape
+
+            for t, site in filled_sites(_rules_for(grammar, info, up), [_Shape(e.asm, e.graph) for e in examples],
+                                        required):
+                notes.append(f"filled({t}, \"{site}\"): every example has a neighbour at {t}.{site} wherever "
+                             "it opens inside the shape")
+                extra.append(ConstraintDef(name="filled", args=(Arg(value=Ref(name=t)), Arg(value=Str(value=site)))))
+        grammar = build()
     if docks:
         # the learned grammar must accept its own examples: add any contact no cluster covers
         say("checking the examples against the learned grammar")

@@ -538,13 +538,29 @@ def _dock_violations(rules: Rules, shape: _Shape, edge_idx: np.ndarray, poses: _
 def required_site_violations(rules: Rules, shape: _Shape, poses: _Poses | None = None) -> list[Violation]:
     """Parts with a `required` site (any of its turned and mirrored images) that nothing touches
     (no contact point within the position tolerance x the smaller part's diagonal)."""
-    req = {t: [s for s in sts if s.required] for t, sts in rules.sites.items()}
-    req = {t: v for t, v in req.items() if v and t in rules.parts}
-    if not req:
-        return []
-    members = np.array([i for i, t in enumerate(shape.types) if t in req], dtype=np.int64)
+    req = {t: [s.name for s in sts if s.required] for t, sts in rules.sites.items()}
+    out: list[Violation] = []
+    for i, t, name, _, _, filled in site_occupancy(rules, shape, req, poses):
+        if not filled.all():
+            empty = int((~filled).sum())
+            out.append(Violation("site", f"required site {t}.{name} has nothing docked "
+                                 f"({empty} of its {len(filled)} position(s) empty)",
+                                 shape.nodes[i], t, f"{len(filled) - empty}/{len(filled)} filled",
+                                 f"{t}.{name}"))
+    return out
+
+
+def site_occupancy(rules: Rules, shape: _Shape, wanted: dict[str, list[str]], poses: _Poses | None = None):  # noqa: ANN201
+    """For every part of a type in `wanted` (type -> site names) and each of those sites:
+    (part index, type, site, image positions (k, 3) and facing directions (k, 3) in world
+    coordinates, filled mask (k,)): the site's turned and mirrored images, and whether a
+    contact point lies within the position tolerance x the smaller part's diagonal of each."""
+    wanted = {t: v for t, v in wanted.items() if v and t in rules.parts}
+    if not wanted:
+        return
+    members = np.array([i for i, t in enumerate(shape.types) if t in wanted], dtype=np.int64)
     if len(members) == 0:
-        return []
+        return
     if poses is None:
         poses = _poses(rules, shape, members)
     F = shape.frames(members)
@@ -557,7 +573,7 @@ def required_site_violations(rules: Rules, shape: _Shape, poses: _Poses | None =
     order = np.argsort(ends, kind="stable")
     ends, others, points, tol = ends[order], others[order], points[order], tol[order]
     starts = np.searchsorted(ends, np.arange(len(shape.nodes) + 1))
-    out: list[Violation] = []
+    local_sites = {(t, name): _site_points_and_dirs(rules, t, name) for t, names in wanted.items() for name in names}
     for i in members.tolist():
         if poses.skip[i]:
             continue
@@ -565,22 +581,28 @@ def required_site_violations(rules: Rules, shape: _Shape, poses: _Poses | None =
         grp = poses.groups[poses.group[i]] if poses.group[i] >= 0 else np.eye(3)[None]
         lo, hi = starts[i], starts[i + 1]
         loc = _local(np.repeat(F[i][None], hi - lo, axis=0), points[lo:hi]) if hi > lo else np.zeros((0, 3))
-        for site in req[t]:
-            pts = _site_points(rules, t, site.name)
+        for name in wanted[t]:
+            pts, dirs = local_sites[(t, name)]
             images = np.einsum("kij,pj->kpi", grp, pts).reshape(-1, 3)
-            images = images[np.unique(np.round(images, 6), axis=0, return_index=True)[1]]
+            facing = np.einsum("kij,pj->kpi", grp, dirs).reshape(-1, 3)
+            keep = np.unique(np.round(images, 6), axis=0, return_index=True)[1]
+            images, facing = images[keep], facing[keep]
             if hi > lo:
                 dist = np.linalg.norm(loc[:, None, :] - images[None, :, :], axis=2)  # (contacts, images)
                 filled = (dist <= tol[lo:hi, None]).any(axis=0)
             else:
                 filled = np.zeros(len(images), dtype=bool)
-            if not filled.all():
-                empty = int((~filled).sum())
-                out.append(Violation("site", f"required site {t}.{site.name} has nothing docked "
-                                     f"({empty} of its {len(images)} position(s) empty)",
-                                     shape.nodes[i], t, f"{len(images) - empty}/{len(images)} filled",
-                                     f"{t}.{site.name}"))
-    return out
+            R, o = F[i][:3, :3], F[i][:3, 3]
+            yield i, t, name, images @ R.T + o, facing @ R.T, filled
+
+
+def _site_points_and_dirs(rules: Rules, t: str, name: str) -> tuple[np.ndarray, np.ndarray]:
+    """The site's positions and facing directions (mirror images too), in the type
+    prototype's Kalojanov frame."""
+    spec = rules.parts[t]
+    site = next(s for s in rules.sites.get(t, ()) if s.name == name)
+    inv = np.linalg.inv(spec.frame)
+    return _site_points(rules, t, name), site.frames[:, :3, 0] @ inv[:3, :3].T
 
 
 # --------------------------------------------------------------------------------------------

@@ -7,10 +7,10 @@ extras and name, shared meshes for identical parts) plus `<name>/<name>.grammar`
 - castle/   towers, wall segments and gates forming cycles (Kalojanov 2019's castle spirit);
 - balltrack/ a downhill ball track with Entry/Exit pieces and pillar columns (Liu 2015);
 - facade/   a facade-like grid of wall, window and door panels between ledges.
-
-The grammars are *learned* (`grammarkit.tiling.learn`, the same as `grammarkit learn`) from the
-two examples; the ball track's grammar additionally gets the hand-added constraint
-`path(from=Entry, to=Exit, downhill=true)`, which learning cannot guess.
+The grammars are *learned* (`grammarkit.tiling.learn`) from the two examples with exact
+neighbourhoods (`neighbors="multisets"`: these are designs whose variants should stay like
+them; no `filled` sites for the ball track); the ball track's grammar additionally gets the
+hand-added constraint `path(from=Entry, to=Exit, downhill=true)`, which learning cannot guess.
 
 Geometry is chosen so contacts are unambiguous: neighbours touch face to face (wall ends dip
 0.08 into the towers' flat faces), and every non-neighbour pair is at least 0.1 apart (the
@@ -184,7 +184,11 @@ def main(argv: list[str] | None = None) -> int:
         folder = args.out / gname
         for a in asms:
             write_assembly(a, folder / f"{a.name}.glb")
-        grammar = learn(asms, name=gname, example_paths=[f"{a.name}.glb" for a in asms])
+        # Kalojanov's exact neighbourhoods: these examples are designs whose variants should stay
+        # like them (learn's default, no neighbourhood rules, is for tilings)
+        # (holes: a ball track is no tiling, an open side of a piece inside its loop is no hole)
+        grammar = learn(asms, name=gname, example_paths=[f"{a.name}.glb" for a in asms],
+                        neighbors="multisets", holes=gname != "balltrack")
         if gname == "balltrack":  # the one rule learning cannot guess (Liu 2015's path constraint)
             path = ConstraintDef(name="path", args=(Arg(name="from", value=Ref(name="Entry")),
                                                     Arg(name="to", value=Ref(name="Exit")),

@@ -59,7 +59,8 @@ def test_generator_is_deterministic_and_matches_committed_files():
 
 def test_learn_print_parse_round_trip(tmp_path):
     asms = [read_assembly(EXAMPLES / "facade" / f) for f in ("facade_small.glb", "facade_large.glb")]
-    g = learn(asms, name="facade", example_paths=["facade_small.glb", "facade_large.glb"])
+    g = learn(asms, name="facade", example_paths=["facade_small.glb", "facade_large.glb"],
+              neighbors="multisets")
     text = print_grammar(g)
     again = parse(text)
     assert again == g
@@ -74,7 +75,7 @@ def test_learn_print_parse_round_trip(tmp_path):
 
 def test_learned_multisets_and_pairs_are_what_the_examples_show():
     a = MK.castle("c", 3, 2, {(0, 0, 1)})
-    g = learn([a], name="c")
+    g = learn([a], name="c", neighbors="multisets")
     rules = rules_from_grammar(g)
     assert rules.neighbor_multisets["Gate"] == {("Tower", "Wall")}
     graph = shape_graph(a)
@@ -111,12 +112,14 @@ def test_interpenetrating_extra_part_is_reported(castle_grammar):
 
 def test_misaligned_part_with_unchanged_graph_fails_the_dock_check():
     lat = lattice(3, 3, 1)
-    g = learn([lat], name="lat")
+    g = learn([lat], name="lat", neighbors="multisets", holes=False)
     beam = next(p for p in lat.parts if p.type == "Beam")
     shifted = moved(lat, beam.id, translation(0, 0, 0.25))  # still touching both cubes
     assert {tuple(sorted(e)) for e in shape_graph(shifted).edges()} == {tuple(sorted(e)) for e in shape_graph(lat).edges()}
     r = validate(g, shifted)
-    assert [v.rule for v in r.violations] and all(v.rule == "dock" for v in r.violations)
+    # the beam is off its docking placement; the cubes' sites it left read as open ("filled")
+    rules = {v.rule for v in r.violations}
+    assert "dock" in rules and rules <= {"dock", "constraint filled"}, r.format()
     assert any(beam.id in (v.part_id, v.other_id) for v in r.violations)
     assert validate(g, shifted, docks=False).ok
 

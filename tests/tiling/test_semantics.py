@@ -143,8 +143,14 @@ def test_path_without_entry_fails_and_count_is_learned():
     learned = learn([EXAMPLES / "balltrack" / f for f in ("track_short.glb", "track_long.glb")], name="b",
                     notes=notes)
     counted = {c.args[0].value.name for c in learned.constraints if c.name == "count"}
+    # by default the types no example has more than 2 of (issue 28); counts="all": every type
     assert counted == {"Entry", "Exit"}
     assert "constraint count(Entry) == 1" in print_grammar(learned)
+    every = learn([EXAMPLES / "balltrack" / f for f in ("track_short.glb", "track_long.glb")], name="b",
+                  counts="all", count_slack=1)
+    text = print_grammar(every)
+    assert "constraint count(Pillar, lo=5, hi=16)" in text  # the examples' 6..15, widened by 1
+    assert "constraint count(Entry, lo=0, hi=2)" in text
     assert any("Entry" in n and "count" in n for n in notes), notes
     assert validate(learned, no_entry, docks=False).violations
 

@@ -38,5 +38,11 @@ class SamplerOptions(BaseModel):
     max_match_steps: int = Field(2000, ge=1, description="assignments tried per boundary search")
     contact_tolerance: Optional[float] = Field(None, gt=0, description="absolute contact distance "
                                                "(default: from the examples' scale)")
+    max_iterations: int = Field(64, ge=1, description="iteration cap: a run goes on until -n new "
+                                "variants, this many iterations (or --iterations, if larger), an "
+                                "iteration that finds nothing new, or --time-limit")
+    final_check: bool = Field(True, description="validate every variant with `grammarkit validate`'s "
+                              "rules and defaults before it is written (a variant it rejects is dropped "
+                              "and counted)")
     incremental: bool = Field(True, description="recompute only contacts involving inserted parts "
                               "(False: the whole graph; a benchmark baseline)")

@@ -1,7 +1,10 @@
 """The `graph-sampler` back end, registered through the `grammarkit` entry-point group.
 
-`grammarkit derive castle.grammar [--backend graph-sampler] -n 200 --iterations 4 --seed 7 -o out/`
-runs `run(request)`: it yields up to `n` new valid variants sampled from the grammar's examples
+`grammarkit derive castle.grammar [--backend graph-sampler] -n 200 --seed 7 -o out/`
+runs `run(request)`: it yields up to `n` new valid variants sampled from the grammar's examples,
+iterating until `n` are made, the iteration cap (`--option max-iterations=64`, or `--iterations`
+if larger), an iteration that finds nothing new, or the graceful `--time-limit` (the summary's
+`stopped` says which; every variant passes `validate` before it is written)
 as `grammarkit.run.Result`s (the assembly, its parents, and the operation that made it); the
 run layer writes them (`out/variant_NNNNN.glb`, `manifest.jsonl`). Options (`--option key=value`)
 are the fields of `SamplerOptions` (tolerance, dock-tolerance, dedupe=histogram|isomorphism, ...).
@@ -24,12 +27,18 @@ def run(request: Request) -> Iterator[Result]:
     t0 = time.perf_counter()
     sampler = GraphSampler(request.grammar, seed=request.seed, executor=request.executor,
                            options=request.options)
-    for index, shape in enumerate(sampler.run(request.n, request.iterations,
-                                              progress=request.progress)):
+    cap = max(request.iterations, sampler.options.max_iterations)
+    sampler.dropped = 0
+    index = -1
+    for shape in sampler.run(request.n, cap, progress=request.progress, time_is_up=request.time_is_up):
         request.check_deadline()
+        assembly = sampler.to_assembly(shape)
+        if sampler.options.final_check and not final_check(request.grammar, assembly):
+            sampler.dropped += 1  # never written: `grammarkit validate` would reject the file
+            continue
+        index += 1
         if index < request.start:
             continue  # already written by an interrupted run; the sampler must still make it
-        assembly = sampler.to_assembly(shape)
         yield Result(id=shape.key, index=index, seed=request.seed, model=assembly,
                      parents=tuple(shape.parents),
                      metrics={"parts": len(shape), "iteration": shape.iteration,
@@ -39,13 +48,20 @@ def run(request: Request) -> Iterator[Result]:
                                       "edges": [[shape.ids[a], shape.ids[b]] for a, b in shape.edges]},
                             "operation": assembly.meta["graph_sampler"]["operation"],
                             "dedupe": sampler.options.dedupe})
-    return summary(sampler, time.perf_counter() - t0, request)
+    return summary(sampler, time.perf_counter() - t0, request, cap)
 
 
-def summary(sampler, elapsed: float, request: Request) -> dict:
+def final_check(grammar, assembly) -> bool:  # noqa: ANN001
+    """Does `grammarkit validate` (same grammar, default tolerance) accept the variant?"""
+    from grammarkit.tiling import validate
+
+    return validate(grammar, assembly, max_violations=1).ok
+
+
+def summary(sampler, elapsed: float, request: Request, cap: int | None = None) -> dict:
     attempts = sum(s.attempts for s in sampler.stats)
     valid = sum(s.outcomes["valid"] for s in sampler.stats)
-    made = sampler.counter
+    made = sampler.counter - getattr(sampler, "dropped", 0)
     out = {
         "examples": len(sampler.examples),
         "workers": sampler.workers,
@@ -59,14 +75,23 @@ def summary(sampler, elapsed: float, request: Request) -> dict:
         "growth": sampler.growth_table(),
         "iterations": [s.row() for s in sampler.stats],
     }
+    stopped = sampler.stopped if made < request.n else "n"
+    out["stopped"] = {"n": f"made the {request.n} asked for", "time": "the time limit was reached",
+                      "iterations": f"the iteration cap ({cap or request.iterations}) was reached",
+                      "exhausted": "an iteration found no new variant"}.get(stopped, stopped)
+    out["dropped_by_final_check"] = getattr(sampler, "dropped", 0)
     if made < request.n:
         last = sampler.stats[-1] if sampler.stats else None
-        if last is not None and last.new == 0:
-            why = (f"iteration {last.iteration} found no new variant in {last.attempts} attempts "
-                   f"({', '.join(f'{k} {v}' for k, v in last.outcomes.items() if v)})")
+        if stopped == "time":
+            why = f"made {made} of {request.n}: the time limit was reached"
+        elif stopped == "exhausted" and last is not None:
+            why = (f"made {made} of {request.n}: iteration {last.iteration} found no new variant in "
+                   f"{last.attempts} attempts ({', '.join(f'{k} {v}' for k, v in last.outcomes.items() if v)}); "
+                   "other options (--option max-subgraph-fraction=..., tolerance=...) may find more")
         else:
-            why = f"{request.iterations} iteration(s) made {made} new variants"
-        out["shortfall"] = why + "; more --iterations or other options may find more"
+            why = (f"made {made} of {request.n}: the iteration cap ({cap or request.iterations}) was reached; "
+                   "a larger --iterations or --option max-iterations=... may find more")
+        out["shortfall"] = why
     return out
 
 

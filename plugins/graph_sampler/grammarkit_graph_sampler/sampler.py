@@ -366,12 +366,19 @@ class GraphSampler:
         self.max_parts = self.options.max_parts or 4 * largest
         self.stats: list[IterationStats] = []
         self.counter = 0
+        self.stopped = ""  # what ended the last run (see `run`)
         self.by_key: dict[str, Shape] = {s.key: s for s in self.examples}
 
     # The pool grows as variants are kept; examples are never emitted.
-    def run(self, n: int, iterations: int, *, progress: Callable | None = None) -> Iterator[Shape]:
+    def run(self, n: int, iterations: int, *, progress: Callable | None = None,
+            time_is_up: Callable[[], bool] | None = None) -> Iterator[Shape]:
+        """Yield up to `n` new variants over at most `iterations` iterations; `time_is_up()`
+        (polled between batches of attempts) ends the run gracefully. Afterwards `stopped`
+        says what ended it: "n" (asked for reached), "iterations" (the cap), "exhausted" (an
+        iteration found nothing new: later ones would repeat it) or "time"."""
         if n < 0 or iterations < 0:
             raise ValueError("n and iterations must be >= 0")
+        self.stopped = "n"
         opt = self.options
         dedupe = Deduper(opt.dedupe)
         for s in self.examples:
@@ -390,7 +397,13 @@ class GraphSampler:
         known_sent: set = set()
         try:
             for it in range(1, iterations + 1):
-                if emitted >= n or not fresh:
+                if emitted >= n:
+                    break
+                if not fresh:
+                    self.stopped = "exhausted"
+                    break
+                if time_is_up is not None and time_is_up():
+                    self.stopped = "time"
                     break
                 t0 = time.perf_counter()
                 st = IterationStats(it, len(pool), len(fresh))
@@ -430,10 +443,24 @@ class GraphSampler:
                                 new=st.new, total_new=emitted)
                     if emitted >= n:
                         break
+                    if time_is_up is not None and time_is_up():
+                        self.stopped = "time"
+                        break
                 st.shapes_after = len(pool)
                 st.seconds = time.perf_counter() - t0
                 self.stats.append(st)
+                if not new_this and len(fresh) < len(pool):
+                    # nothing new from the last iteration's shapes: one more round with every
+                    # shape of the pool as a partner before the run counts as exhausted
+                    new_this = list(range(len(pool)))
                 fresh = new_this
+                if self.stopped == "time":
+                    break
+            else:
+                if emitted < n:
+                    self.stopped = "iterations"
+            if emitted < n and not fresh and self.stopped == "n":
+                self.stopped = "exhausted"
         finally:
             session.close()
 

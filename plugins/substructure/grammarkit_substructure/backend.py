@@ -224,9 +224,13 @@ def run(request) -> Iterator:  # noqa: ANN001
     try:
         next_index = 0
         last_new = 0  # candidate count when the last new variant came
+        stopped = "n"
         while made < request.n and next_index < opt.max_candidates \
                 and stats["candidates"] - last_new < opt.patience:
             request.check_deadline()
+            if request.time_is_up():
+                stopped = "time"
+                break
             items = list(range(next_index, min(opt.max_candidates, next_index + BATCH)))
             next_index = items[-1] + 1
             outs = session.map(candidate, items) if session is not None else (candidate(state, i) for i in items)
@@ -239,6 +243,12 @@ def run(request) -> Iterator:  # noqa: ANN001
                     stats["valid"] += 1
                     if not dedupe.add(shape):
                         continue
+                    key = f"variant_{made + 1:05d}"
+                    assembly = shape.to_assembly(key, {"substructure": {"start": out["start"],
+                                                                        "operations": history}})
+                    if opt.final_check and not validate(request.grammar, assembly, max_violations=1).ok:
+                        stats["dropped_by_final_check"] = stats.get("dropped_by_final_check", 0) + 1
+                        continue  # never written: `grammarkit validate` would reject the file
                     index = made
                     made += 1
                     last_new = stats["candidates"]
@@ -248,9 +258,6 @@ def run(request) -> Iterator:  # noqa: ANN001
                     advance(1, candidates=stats["candidates"], new=made)
                     if index < request.start:
                         continue
-                    key = f"variant_{index + 1:05d}"
-                    assembly = shape.to_assembly(key, {"substructure": {"start": out["start"],
-                                                                        "operations": history}})
                     yield Result(id=key, index=index, seed=request.seed, model=assembly,
                                  parents=(f"example:{out['start']}",) + tuple(
                                      f"example:{h['donor']}" for h in history),
@@ -265,7 +272,14 @@ def run(request) -> Iterator:  # noqa: ANN001
     summary = {"examples": len(examples), "operations_in_examples": n_ops, **stats,
                "seconds": round(elapsed, 3),
                "variants_per_minute": round(60.0 * made / elapsed, 1) if elapsed > 0 else None}
-    if made < request.n:
+    if made < request.n and stopped != "time":
+        stopped = "patience" if stats["candidates"] - last_new >= opt.patience else "candidates"
+    summary["stopped"] = {"n": f"made the {request.n} asked for", "time": "the time limit was reached",
+                          "patience": f"{opt.patience} candidates in a row gave nothing new",
+                          "candidates": f"the candidate cap ({opt.max_candidates}) was reached"}[stopped]
+    if made < request.n and stopped == "time":
+        summary["shortfall"] = f"made {made} of {request.n}: the time limit was reached"
+    elif made < request.n:
         why = (f"the last {opt.patience} candidates gave nothing new" if stats["candidates"] - last_new >= opt.patience
                else f"max_candidates ({opt.max_candidates}) reached" if stats["candidates"] >= opt.max_candidates
                else "stopped")

@@ -19,8 +19,10 @@ class SubstructureOptions(BaseModel):
     embedding: Literal["rigid", "non-rigid"] = Field("rigid", description="interpolate the "
                                                      "boundary transforms per part (rigid) or per "
                                                      "vertex (non-rigid, blend skinning)")
-    repair: bool = Field(True, description="greedy part rescaling (along z) when the embedded "
-                         "shape breaks a constraint, as the paper suggests")
+    repair: bool = Field(False, description="greedy part rescaling (along z) when the embedded "
+                         "shape breaks a constraint, as the paper suggests: it deforms parts (no "
+                         "longer rigid copies of their prototypes), so it is off by default and every "
+                         "result it touched says `repaired` (rescaled parts) in its manifest record")
     orientation_degrees: float = Field(20.0, gt=0, lt=45, description="orientation check: "
                                        "consecutive cut edges within this angle of parallel "
                                        "may not become perpendicular, and vice versa")
@@ -37,5 +39,8 @@ class SubstructureOptions(BaseModel):
     dedupe: Literal["isomorphism", "none"] = Field("isomorphism", description="skip variants "
                                                    "whose typed graph equals an earlier one's "
                                                    "or an example's")
+    final_check: bool = Field(True, description="validate every variant with `grammarkit validate`'s "
+                              "rules and defaults before it is written (one it rejects is dropped and "
+                              "counted)")
     contact_tolerance: Optional[float] = Field(None, gt=0, description="absolute contact "
                                                "distance (default: from the examples' scale)")
