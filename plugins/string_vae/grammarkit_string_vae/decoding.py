@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Sequence
+from typing import Any, Sequence
 
 import numpy as np
 import torch
@@ -43,6 +43,8 @@ class Decoded:
     error: str | None = None
     backtracks: int = 0  # token expansions spent repairing a dead end (masked)
     repaired: str | None = None  # masked dead ends: None, "backtrack", "resample", "rules" or "failed"
+    placement: Any = None  # placed decoding: frames, variants and categories (placed.Placement)
+    stage: str | None = None  # invalid: where it failed ("decoding", "3D placement")
 
 
 def check_text(text: str, alphabet: Alphabet, rules: TopologyRules) -> Decoded:

@@ -34,6 +34,11 @@ def generate(request: Request) -> Iterator[Result]:
                                 magnitude=opts.magnitude, steps=opts.steps,
                                 local_magnitude=opts.local_magnitude, points=opts.points,
                                 path_length=opts.path_length, batch=opts.batch)
+    if opts.decoding == "placed" and not opts.categories:
+        raise GrammarkitError("--option decoding=placed needs edge categories: --option categories=FILE.edges "
+                              "(or builtin:castle)")
+    if opts.decoding == "placed":  # seconds per point: small batches, so the time budget is polled often
+        settings = SamplingSettings(**{**settings.__dict__, "batch": min(opts.batch, 4)})
     sampler = Sampler(vae, settings, seed=request.seed)
     train = GraphSet()
     for g in sampler.train_graphs:
@@ -50,15 +55,25 @@ def generate(request: Request) -> Iterator[Result]:
         em = load_edge_model(opts.categories, request.grammar)
         inst = Instantiator(request.grammar, em.categories, budget=opts.budget)
         decoder = ConsistentDecoder(inst, beam=opts.beam)
+        if opts.decoding == "placed":
+            from .placed import PlacedDecoder
+
+            sampler.placed = PlacedDecoder(vae, inst, expansions=opts.placed_steps, width=opts.width,
+                                           slack=opts.slack, temperature=opts.temperature)
     failures: dict[str, int] = {}
     inst_stats = {"instantiated": 0, "failed": 0, "tries": 0, "monte_carlo": 0, "seconds": 0.0}
     advance = request.progress("string-vae", request.n)
     index = 0
     skipped = {"invalid": 0, "training": 0, "duplicate": 0, "too large": 0}
-    while index < request.n and sampler.decoded_points < limit:
+    stages = {"decoding": 0, "categories": 0, "3D placement": 0}  # where the graphs that were not built failed
+    stopped = None
+    while index < request.n and sampler.decoded_points < limit and stopped is None:
         request.check_deadline()
         for s in sampler.run(opts.mode, 1):
             if index >= request.n:
+                break
+            if request.time_is_up():
+                stopped = "time limit"
                 break
             if not s.valid:
                 skipped["invalid"] += 1
@@ -75,9 +90,12 @@ def generate(request: Request) -> Iterator[Result]:
                 continue
             model = None
             extra_inst: dict = {}
-            if inst is not None:
+            if s.decoded.placement is not None:  # placed decoding: the shape is already laid out
+                res, predicted = build_placed(inst, g, s.decoded.placement), {}
+            elif inst is not None:
                 gseed = int(request.seed) * 1_000_003 + sampler.decoded_points
                 res, predicted = instantiate_graph(em, inst, decoder, g, opts, gseed, request.deadline)
+            if inst is not None:
                 inst_stats["tries"] += res.tries
                 inst_stats["seconds"] += res.seconds
                 if not res.ok:
@@ -86,6 +104,9 @@ def generate(request: Request) -> Iterator[Result]:
                     why = (res.reason or "?").split("most often: ")[-1]
                     key = re.sub(r"\d+(\.\d+)?", "N", why.split(": placing")[0].split(" puts ")[0])[:90]
                     failures[key] = failures.get(key, 0) + 1
+                    # the consistent search found no labelling: the categories; else the shape
+                    stages["3D placement" if s.decoded.placement is not None or "finished shape" in why
+                           else "categories"] += 1
                     continue
                 inst_stats["instantiated"] += 1
                 inst_stats["monte_carlo"] += res.monte_carlo
@@ -108,18 +129,40 @@ def generate(request: Request) -> Iterator[Result]:
                        "histogram": g.histogram(), "mode": opts.mode, "decoding": opts.decoding,
                        "novel": g not in train, **extra_inst})
             index += 1
-            advance(1, decoded=sampler.decoded_points)
+            elapsed = time.perf_counter() - t0
+            advance(1, decoded=sampler.decoded_points,
+                    eta=f"{elapsed / index * (request.n - index):.0f}s")
     stats = {"decoded": sampler.decoded_points, "valid": sampler.valid_points,
              "validity": round(sampler.valid_points / max(1, sampler.decoded_points), 4),
              "yielded": index, "skipped": skipped, "mode": opts.mode, "decoding": opts.decoding,
              "seconds": round(time.perf_counter() - t0, 2)}
     if inst is not None:
         stats["instantiation"] = {**inst_stats, "seconds": round(inst_stats["seconds"], 2), "failures": failures}
+    for key, c in sampler.lost.items():  # latent points that decoded to nothing usable
+        stages[key] = stages.get(key, 0) + c
+    stats["lost"] = stages
     if index < request.n:
-        stats["shortfall"] = (f"{index} new graphs after decoding {sampler.decoded_points} latent points "
-                              f"(limit {limit}: --option max-decodes=N); skipped {skipped}"
+        why = (f"the time limit was reached" if stopped else
+               f"the decoding limit was reached ({limit} latent points: --option max-decodes=N)")
+        worst = max(stages, key=stages.get)
+        neck = (f"; the bottleneck is {worst} ({stages[worst]} of {sum(stages.values())} graphs lost there: "
+                f"{', '.join(f'{k} {v}' for k, v in stages.items())})" if any(stages.values()) else "")
+        stats["shortfall"] = (f"made {index} of {request.n}: {why} after decoding {sampler.decoded_points} latent "
+                              f"points{neck}; skipped {skipped}"
                               + (f"; {inst_stats['failed']} could not be instantiated ({failures})" if inst else ""))
     return stats
+
+
+def build_placed(inst, g, placement):  # noqa: ANN001, ANN201
+    """The shape of a placed decoding, checked like any instantiation (`Instantiator.build`:
+    the requested graph and `validate` at both tolerances) before it may be yielded."""
+    from .instantiate import Instantiation
+
+    t = time.perf_counter()
+    asm, problem = inst.build(g, placement.frames, placement.variants)
+    out = Instantiation(asm, tries=1, insertions=placement.expansions, categories=dict(placement.categories),
+                        reason=problem, seconds=time.perf_counter() - t)
+    return out
 
 
 def instantiate_graph(em, inst, decoder, g, opts, seed: int, deadline: float | None):  # noqa: ANN001, ANN201

@@ -19,9 +19,14 @@ class StringVAEOptions(BaseModel):
     mode: Literal["perturb", "interpolate", "path", "prior"] = Field(
         "perturb", description="latent sampling: around training points, between two, along a latent "
         "path, or from the prior N(0, I)")
-    decoding: Literal["masked", "free"] = Field(
+    decoding: Literal["masked", "free", "placed"] = Field(
         "masked", description="masked: grammar-constrained, valid by construction; free: the paper's "
-        "decoding, invalid strings dropped")
+        "decoding, invalid strings dropped; placed: string and edge categories decoded together, every "
+        "step masked by what can still be placed in 3D (needs categories; see docs/string-vae.md)")
+    width: int = Field(8, ge=1, description="placed decoding: placements kept per written prefix")
+    placed_steps: int = Field(150, ge=1, description="placed decoding: search steps per latent point")
+    slack: float = Field(0.15, ge=0, description="placed decoding: the length prior's slack (budget = the "
+                         "start string's length x (1 + slack))")
     temperature: float = Field(0.0, ge=0, description="0: most likely token; > 0: sample tokens")
     magnitude: float = Field(0.25, gt=0, description="perturb: largest latent offset per dimension "
                              "(paper: 0.25)")

@@ -72,11 +72,13 @@ class Sampler:
     seed: int = 0
     decoded_points: int = 0  # every latent point decoded (the yield's denominator)
     valid_points: int = 0
+    placed: object = None  # decoding "placed": the placed.PlacedDecoder that decodes each point
 
     def __post_init__(self) -> None:
         self.rng = np.random.default_rng(self.seed)
         self._train_graphs: list[TypedGraph] | None = None
         self._calls = 0
+        self.lost: dict[str, int] = {}  # invalid decodes by where they failed ("decoding", "3D placement")
 
     # ---- helpers ---------------------------------------------------------------------------
     @property
@@ -85,14 +87,34 @@ class Sampler:
             self._train_graphs = [decode(s, self.vae.alphabet).graph for s in self.vae.train_strings]
         return self._train_graphs
 
-    def _decode(self, z: np.ndarray) -> list[Decoded]:
+    def _targets(self, parents: list[tuple[int, ...]]) -> list[int]:
+        """The length prior: per latent point, the length of the training strings it starts
+        from (their mean), or a random training string's."""
+        S = self.vae.train_strings
+        return [int(round(np.mean([len(S[a]) for a in ps]))) if ps else len(S[int(self.rng.integers(len(S)))])
+                for ps in parents]
+
+    def _decode(self, z: np.ndarray, parents: list[tuple[int, ...]] | None = None) -> list[Decoded]:
         self._calls += 1
+        if self.settings.decoding == "placed":
+            targets = self._targets(parents or [()] * len(z))
+            out = [self.placed.decode(z[i], targets[i], seed=self.seed * 7919 + self._calls * 1009 + i)
+                   for i in range(len(z))]
+            self._count(out)
+            return out
         out = decode_latents(self.vae.model, torch.from_numpy(np.ascontiguousarray(z, dtype=np.float32)),
                              vocab=self.vae.vocab, rules=self.vae.rules, mode=self.settings.decoding,
                              temperature=self.settings.temperature, seed=self.seed * 7919 + self._calls)
+        self._count(out)
+        return out
+
+    def _count(self, out: list[Decoded]) -> None:
         self.decoded_points += len(out)
         self.valid_points += sum(d.valid for d in out)
-        return out
+        for d in out:
+            if not d.valid:
+                key = d.stage or "decoding"
+                self.lost[key] = self.lost.get(key, 0) + 1
 
     def _search(self, centres: np.ndarray, avoid: list[list[int]], magnitude: float, steps: int,
                 mode: str, parents: list[tuple[int, ...]]) -> list[Sample | None]:
@@ -106,7 +128,7 @@ class Sampler:
                 break
             m = magnitude * k / steps
             z = centres[todo] + self.rng.uniform(-m, m, size=(len(todo), D))
-            outs = self._decode(z)
+            outs = self._decode(z, [parents[i] for i in todo])
             left = []
             for j, i, d in zip(range(len(todo)), todo, outs):
                 if d.valid and not any(_same(d.graph, self.train_graphs[a]) for a in avoid[i]):

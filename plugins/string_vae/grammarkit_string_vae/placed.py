@@ -1,0 +1,349 @@
+"""Placed decoding (beyond the paper): the string and its edge categories decoded together, each
+step masked by what can still be placed in 3D.
+
+The paper decodes a string freely, keeps it if the grammar accepts it, and only then asks an
+edge-category network how to build it (section 6); the masked decoder (decoding.py) makes every
+string grammatical but most sampled castles still cannot be built: a ring of towers and walls
+closes only when its turns add up. Here every letter the decoder writes is *placed* at once:
+
+- the new part docks to the part it hangs from (its parent in the string) with one of the
+  pair's edge categories (categories.py: a rigid placement seen in the training shapes);
+  the categories are tried in an order that steers towards the parts whose ring labels are
+  still open (the nearest first), else by how often the category occurs;
+- a placement is *masked out* when the part would touch a placed part that it may not join:
+  any part that is not its parent and does not own an open ring label (no collision), or a
+  ring owner in a placement that is no docking category of the pair (no free docking site);
+  when it goes below the ground (support); or when an open ring's owner is farther away than
+  the parts the length budget still allows can reach;
+- the parts it touches besides its parent *must* be joined right away: after the letter only
+  the ring labels those parts opened may follow until all of them are closed, and no other
+  ring label may close on it (its owner does not touch it);
+- the topology masks (masked.py: neighbour types and counts, syntax, the length budget) apply
+  as before, with a budget per sample: the *length prior* (the length of the training string
+  the sample starts from, times 1 + `slack`; a random training string's for the prior), so
+  samples have the training sizes.
+
+The search is depth-first in the network's order (most likely allowed token first), at most
+`branching` tokens per step and `expansions` steps in all; a latent point whose search runs out
+is retried with sampled tokens (`retries` times). What comes out is a string, its graph, and a
+frame and category per part and edge: `Instantiator.build` makes the shape and validates it
+(the part of the grammar that only the finished shape can show: `grounded`, sites, the
+recomputed contact graph); nothing is yielded that fails.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import torch
+
+from .consistent import ConsistentDecoder, _relative
+from .decoding import Decoded, check_text
+from .masked import Automaton, DecodeState
+from .vocab import EOS
+
+__all__ = ["PlacedDecoder", "Placement"]
+
+
+@dataclass
+class Placement:
+    frames: list  # per part (string order), 4x4 canonical frames
+    variants: list  # per part, geometry variant keys
+    categories: dict = field(default_factory=dict)  # (u, v), u < v: category u -> v
+    expansions: int = 0  # decoding steps spent
+    retries: int = 0
+
+
+@dataclass
+class _Hyp:
+    """One way to place the string written so far."""
+    frames: list
+    variants: list
+    cats: dict
+    touched: dict  # parts the current part touches besides its parent, not yet joined: category
+    score: float = 0.0
+    rank: float | None = None  # score minus the homing penalty, when ranked by it
+
+
+class _OutOfSteps(Exception):
+    pass
+
+
+class PlacedDecoder:
+    """Decode latent points into placed shape strings (see the module docstring)."""
+
+    def __init__(self, vae: Any, instantiator: Any, *, expansions: int = 150, branching: int = 2,
+                 retries: int = 2, slack: float = 0.15, pressure: int = 40, temperature: float = 0.0,
+                 width: int = 8, homing: float = 1.0):
+        self.vae = vae
+        self.model = vae.model
+        self.vocab = vae.vocab
+        self.rules = vae.rules
+        self.inst = instantiator
+        self.cats = instantiator.cats
+        self.lib = instantiator.library
+        self.geom = ConsistentDecoder(instantiator)  # cached exact contact tests
+        self.expansions = int(expansions)
+        self.branching = max(1, int(branching))
+        self.retries = max(0, int(retries))
+        self.slack = float(slack)
+        self.pressure = int(pressure)
+        self.temperature = float(temperature)
+        self.width = max(1, int(width))
+        self.homing = float(homing)
+        self._autos: dict[int, Automaton] = {}
+        self.types = list(vae.alphabet.types)
+        steps = [float(np.linalg.norm(c.matrix[:3, 3])) for c in self.cats.categories]
+        self.step_max = (max(steps) if steps else 1.0) * 1.05 + 2 * instantiator.tolerance
+        self._low: dict[tuple[str, str], np.ndarray] = {}
+        total: dict[tuple[str, str], int] = {}
+        for c in self.cats.categories:
+            total[(c.a, c.b)] = total.get((c.a, c.b), 0) + c.count
+        self.logfreq = [math.log(max(1, c.count) / max(1, total[(c.a, c.b)])) for c in self.cats.categories]
+        self.stats = {"letters": 0, "collision": 0, "no dock": 0, "ground": 0, "reach": 0, "out of steps": 0}
+
+    # ---- budgets ---------------------------------------------------------------------------
+    def budget_for(self, target_len: int | None) -> int:
+        """Tokens a sample may write: the length prior (`target_len` * (1 + slack)), never more
+        than the masked decoder's budget (1.2 times the longest training string)."""
+        cap = int(math.ceil(1.2 * self.model.config.max_len))
+        if target_len is None:
+            return cap
+        return max(4, min(cap, int(math.ceil(target_len * (1.0 + self.slack)))))
+
+    def _automaton(self, max_len: int) -> Automaton:
+        a = self._autos.get(max_len)
+        if a is None:
+            a = self._autos[max_len] = Automaton(self.rules, self.vocab, max_len)
+        return a
+
+    # ---- geometry --------------------------------------------------------------------------
+    def _lowest(self, t: str, v: str, F: np.ndarray) -> float:
+        """The part's lowest point along the grammar's up axis."""
+        up = self.lib.up
+        key = (t, v)
+        if key not in self._low:
+            self._low[key] = self.lib.variants[key][0]
+        local = self._low[key]
+        return float(((local @ F[:3, :3].T + F[:3, 3]) @ up).min())
+
+    def _spots(self, types: list, frames: list, o: int) -> list:
+        """Where a part joined to part `o` can sit (frame origins), by every category of o's type."""
+        to, Fo = types[o], frames[o]
+        out = [(Fo @ self.cats.placement(k, to, ty))[:3, 3]
+               for ty in set(self.types) for k in self.cats.pair_categories(to, ty)]
+        return out or [Fo[:3, 3]]
+
+    def _place(self, ctx: "_Ctx", hyp: _Hyp, parent: int, ty: str, Fy: np.ndarray, vy: str):
+        """The placed parts (besides the parent) that a part of type `ty` at `Fy` touches, with
+        their cycle edges' categories, or None with the reason the placement is masked out."""
+        T, F, V = ctx.types, hyp.frames, hyp.variants
+        if self.lib.up is not None and self.lib.ground is not None:
+            if self._lowest(ty, vy, Fy) < self.lib.ground - self.inst.tolerance:
+                return None, "ground"
+        n = len(F)
+        if n == 0:
+            return {}, None
+        P = np.array([f[:3, 3] for f in F])
+        owners = set(ctx.state.rings.values())
+        d = np.linalg.norm(P - Fy[:3, 3], axis=1)
+        # an open ring's owner must stay reachable with the tokens left (each part one step)
+        left = ctx.state.a.max_len - ctx.state.length
+        for o in owners:
+            if o != parent and d[o] > (left + 1) * self.step_max:
+                return None, "reach"
+        radius = np.array([self.geom._r(T[p], V[p]) for p in range(n)]) + self.geom._r(ty, vy)
+        touched: dict[int, int] = {}
+        for j in np.flatnonzero(d <= radius + 2 * self.inst.tolerance):
+            p = int(j)
+            if p == parent or not self.geom._touch(T[p], V[p], F[p], ty, vy, Fy):
+                continue
+            if p not in owners:
+                return None, "collision"
+            kw, _dist = self.cats.classify(T[p], ty, _relative(F[p], Fy), V[p] or None, vy or None)
+            if kw is None:
+                return None, "no dock"
+            touched[p] = kw
+        return touched, None
+
+    def _extend(self, ctx: "_Ctx", beam: list, ty: str) -> list:
+        """Every placement of a new type-`ty` part under the current part in every hypothesis
+        that the masks let through, the `width` most likely kept (categories scored by how
+        often they occur in the training shapes)."""
+        parent = ctx.state.current
+        out = []
+        for hyp in beam:
+            if parent < 0:
+                cands = [(None, self.lib.start_frame.get(ty, np.eye(4)), self.lib.default[ty])]
+            else:
+                tx = ctx.types[parent]
+                cands = [(k, hyp.frames[parent] @ A, vy)
+                         for k, A, vy in self.inst._candidates(tx, ty, None, True, ctx.rng, hyp.variants[parent])]
+            for k, Fy, vy in cands:
+                self.stats["letters"] += 1
+                touched, why = self._place(ctx, hyp, parent, ty, Fy, vy)
+                if touched is None:
+                    self.stats[why] += 1
+                    ctx.fails[why] = ctx.fails.get(why, 0) + 1
+                    continue
+                cats = dict(hyp.cats)
+                score = hyp.score
+                if k is not None:
+                    cats[(parent, len(hyp.frames))] = k
+                    score += self.logfreq[k]
+                out.append(_Hyp(hyp.frames + [Fy], hyp.variants + [vy], cats, touched, score))
+        if len(out) > self.width and self.homing:
+            # keep the hypotheses whose open rings can close soonest: the new part's distance
+            # to the nearest docking spot of each open ring's owner, in docking steps
+            owners = [o for o in set(ctx.state.rings.values())]
+            if owners:
+                for hyp in out:
+                    y = hyp.frames[-1][:3, 3]
+                    hyp.rank = hyp.score - self.homing * sum(
+                        min(float(np.linalg.norm(p - y)) for p in self._spots(ctx.types, hyp.frames, o))
+                        for o in owners) / self.step_max
+        out.sort(key=lambda h: -(h.rank if h.rank is not None else h.score))
+        return out[:self.width]
+
+    # ---- the search ------------------------------------------------------------------------
+    @torch.no_grad()
+    def decode(self, z: np.ndarray, target_len: int | None = None, seed: int = 0) -> Decoded:
+        """One latent point -> a checked string with its placement (`Decoded.placement`), or an
+        invalid Decoded whose error says why (`stage`: "decoding" or "3D placement")."""
+        zt = torch.from_numpy(np.ascontiguousarray(z, dtype=np.float32).reshape(1, -1))
+        auto = self._automaton(self.budget_for(target_len))
+        soft_end = target_len if target_len is not None else getattr(self.model, "soft_end", None)
+        spent = 0
+        reasons: dict[str, int] = {}
+        ctx = None
+        for attempt in range(self.retries + 1):
+            temp = self.temperature if attempt == 0 else max(self.temperature, 0.8)
+            ctx = _Ctx(auto.start(), np.random.default_rng([seed, attempt]), temp, soft_end, self.expansions)
+            ok = self._run(ctx, zt)
+            spent += ctx.steps
+            for key, c in ctx.fails.items():
+                reasons[key] = reasons.get(key, 0) + c
+            if ok:
+                d = self._result(ctx, spent, attempt)
+                if d.valid:
+                    return d
+        common = max(reasons, key=reasons.get) if reasons else "no allowed token"
+        out = Decoded(ctx.state.graph_text(), False, None,
+                      f"placed decoding found no buildable string in {spent} steps (most often masked: {common})",
+                      spent, "failed")
+        out.stage = "3D placement" if reasons else "decoding"
+        return out
+
+    @torch.no_grad()
+    def place_text(self, text: str, *, steps: int = 20000, seed: int = 0) -> Decoded:
+        """Place a given string (the same masks, the categories searched by the beam): whether
+        the masks let a known buildable string through (tests) and how it sits in 3D."""
+        tokens = self.vocab.encode(text) + [EOS]
+        ctx = _Ctx(self._automaton(max(len(tokens), 4)).start(), np.random.default_rng(seed), 0.0, None, steps,
+                   forced=tokens)
+        if not self._run(ctx, torch.zeros((1, self.model.config.latent))):
+            return Decoded(text, False, None, f"masked out after {ctx.deepest} tokens: {ctx.fails}",
+                           ctx.steps, "failed")
+        return self._result(ctx, ctx.steps, 0)
+
+    def _run(self, ctx: "_Ctx", z: torch.Tensor) -> bool:
+        logits, h = self.model.start(z)
+        try:
+            return self._dfs(ctx, z, logits, h, [_Hyp([], [], {}, {})])
+        except _OutOfSteps:
+            self.stats["out of steps"] += 1
+            return False
+
+    def _result(self, ctx: "_Ctx", spent: int, attempt: int) -> Decoded:
+        d = check_text(ctx.state.graph_text(), self.vae.alphabet, self.rules)
+        best = ctx.result
+        d.placement = Placement(list(best.frames), list(best.variants), dict(best.cats), spent, attempt)
+        d.repaired = "placed" if attempt == 0 else "placed-resample"
+        d.backtracks = spent
+        return d
+
+    def _ordered(self, ctx: "_Ctx", logits: torch.Tensor, allowed: list[int]) -> list[int]:
+        row = logits[0].double()
+        if ctx.temperature > 0:
+            g = torch.from_numpy(ctx.rng.gumbel(size=row.shape[0]))
+            row = row / ctx.temperature + g
+        return sorted(allowed, key=lambda t: -float(row[t]))
+
+    def _next_beam(self, ctx: "_Ctx", beam: list, t: int) -> list:
+        """The hypotheses that survive token `t` (see the module docstring)."""
+        st = ctx.state
+        kind, value = self.vocab.kind(t)
+        if kind == "ring" and value in st.rings:  # closes: only where its owner touches this part
+            owner = st.rings[value]
+            out = []
+            for h in beam:
+                if owner in h.touched:
+                    cats = dict(h.cats)
+                    cats[(owner, st.current)] = h.touched[owner]
+                    rest = {p: k for p, k in h.touched.items() if p != owner}
+                    out.append(_Hyp(h.frames, h.variants, cats, rest, h.score))
+            return out
+        if kind == "ring":  # opens
+            return beam
+        # anything else leaves the part: every part it touches must have been joined
+        beam = [h for h in beam if not h.touched]
+        if kind == "node" and beam:
+            return self._extend(ctx, beam, self.types[value])
+        return beam
+
+    def _dfs(self, ctx: "_Ctx", z: torch.Tensor, logits: torch.Tensor, h: torch.Tensor, beam: list) -> bool:
+        """Depth-first over tokens in the network's order (at most `branching` per step whose
+        beam of placements survives); True when the string ended (ctx.result holds the best
+        placement)."""
+        st = ctx.state
+        if st.done:
+            ctx.result = beam[0]
+            return True
+        ctx.steps += 1
+        ctx.deepest = max(ctx.deepest, st.length)
+        if ctx.steps > ctx.limit:
+            raise _OutOfSteps
+        allowed = st.allowed()
+        if ctx.forced is not None:  # place a given string: its next token or nothing
+            nxt = ctx.forced[st.length] if st.length < len(ctx.forced) else None
+            order = [nxt] if nxt in allowed else []
+        else:
+            if allowed and self.pressure:
+                allowed = st.closing(allowed, self.pressure, ctx.soft_end)
+            order = self._ordered(ctx, logits, allowed)
+        tried = 0
+        for t in order:
+            if tried >= self.branching:
+                break
+            nb = self._next_beam(ctx, beam, t)
+            if not nb:
+                continue
+            tried += 1
+            kind, value = self.vocab.kind(t)
+            st.apply(t)
+            if kind == "node":
+                ctx.types.append(self.types[value])
+            nl, nh = self.model.step(torch.tensor([t]), h, z)
+            if self._dfs(ctx, z, nl, nh, nb):
+                return True
+            if kind == "node":
+                ctx.types.pop()
+            st.undo()
+        return False
+
+
+@dataclass
+class _Ctx:
+    state: DecodeState
+    rng: np.random.Generator
+    temperature: float
+    soft_end: int | None
+    limit: int
+    forced: list | None = None  # place_text: the tokens to write
+    steps: int = 0
+    deepest: int = 0  # the longest prefix reached (diagnostics)
+    types: list = field(default_factory=list)  # per part written
+    fails: dict = field(default_factory=dict)
+    result: Any = None
