@@ -144,3 +144,35 @@ def test_the_cli_says_not_sure_below_the_threshold(rec, library, tmp_path, monke
         tm.metrics.update(saved)
     assert r.exit_code == 0, r.output
     assert "not sure (probability" in r.output and "redraw the sketch" in r.output
+
+
+def test_fine_tune_starts_from_the_trained_weights_and_keeps_the_regressors(rec):
+    from grammarkit_sketch.training import TrainConfig, fine_tune_classifier
+
+    tm = rec.models.types["Ledge"]
+    cfg = TrainConfig(samples=4, classifier_epochs=1, lr=5e-4, style="augmented", seed=7, cache=None)
+    tuned = fine_tune_classifier(rec.library, tm, cfg)
+    ft = tuned.metrics["fine_tune"]
+    assert ft["style"] == "augmented" and ft["val_accuracy_after"] >= ft["val_accuracy_before"]
+    assert tuned.regressors is tm.regressors and tuned.classes == tm.classes
+    assert set(tuned.classifier) == set(tm.classifier)
+    assert "fine_tune" not in tm.metrics  # the original is not modified
+    again = fine_tune_classifier(rec.library, tm, cfg)  # same settings and seed, same weights
+    assert all((again.classifier[k].float() == tuned.classifier[k].float()).all() for k in tuned.classifier)
+
+
+def test_calibration_script_reads_held_out_logits_with_their_classes(rec):
+    import importlib.util
+
+    from .conftest import ROOT
+
+    path = ROOT / "plugins" / "sketch" / "scripts" / "calibrate_shipped.py"
+    spec = importlib.util.spec_from_file_location("calibrate_shipped", path)
+    script = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(script)
+    logits, labels = script.held_out_logits(rec, "Ledge", 1, sets=(("augmented", 5001),))
+    tm = rec.models.types["Ledge"]
+    assert logits.shape == (len(labels), len(tm.classes)) and len(labels) >= 2
+    assert set(labels) <= set(range(len(tm.classes)))
+    with pytest.raises(SystemExit):
+        script.main(["-o", str(script.SHIPPED)])  # never the shipped file without the flag
