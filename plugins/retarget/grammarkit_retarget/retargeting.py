@@ -14,9 +14,14 @@ that axis. A mesh without principal offsets is an error unless `allow_scale=True
 scaling). Every error is a `grammarkit.errors.ShapeError` whose message starts with `name`
 (the file name, when the mesh came from a file).
 
+Parts: a mesh is read per part (its components connected by vertex index, as a GLB node or
+an OBJ object gives them). A mesh is closed when every part is; parts may touch or share
+edges (they are united before stitching, never welded to each other).
+
 Open meshes: the booleans that stitch closed meshes need an inside, so an open mesh is
 refused unless `open_surface=True`, which stitches its triangles as a surface (the output is
-then open where the input was).
+then open where the input was). A mesh with edges shared by more than two faces (parts
+welded together where they touch) is refused with that remedy, not `open_surface`.
 """
 from __future__ import annotations
 
