@@ -90,7 +90,16 @@ def structure(model, axis, mesh) -> tuple[float, int]:
 def paper_params():
     from grammarkit_retarget.offsets import OffsetParams
 
-    return OffsetParams(tie_ratio=1.0, min_share=0.0, min_count=1, min_overlap=0.0)
+    return OffsetParams(tie_ratio=1.0, min_share=0.0, min_count=1, min_overlap=0.0,
+                        min_facing_overlap=0.0, fundamental=False)
+
+
+def tie_params():
+    """The project's earlier default: the tie rule (nearest of the matches within 1.5x of the
+    best descriptor distance), no facing-overlap check, no fundamental-offset search."""
+    from grammarkit_retarget.offsets import OffsetParams
+
+    return OffsetParams(tie_ratio=1.5, min_facing_overlap=0.0, fundamental=False)
 
 
 def found_generators(model, offsets) -> bool:
@@ -105,21 +114,23 @@ def table_sparsity(models, runs):
     from grammarkit_retarget.offsets import principal_offsets
 
     print("\n## 1. Offset statistics on the test models\n")
-    print("| model | triangles | features | ours: top 7% | ours: top 20% | strict Eq. (1): top 7% "
-          "| strict: top 20% | principal offsets = generating? ours / strict | offsets time (s) |")
+    print("| model | triangles | features | default (strict Eq. 1): top 7% | top 20% | tie rule "
+          "1.5: top 7% | top 20% | principal offsets = generating? default / tie rule / paper "
+          "| offsets time (s) |")
     print("|---|---|---|---|---|---|---|---|---|")
     rows, found = [], {}
     for name, model in models.items():
         ours = principal_offsets(model.mesh)
-        strict = principal_offsets(model.mesh, params=paper_params())
+        tie = principal_offsets(model.mesh, params=tie_params())
+        paper = principal_offsets(model.mesh, params=paper_params())
         t = median_time(lambda: principal_offsets(model.mesh), runs)
-        rows.append((ours.sparsity, strict.sparsity))
+        rows.append((ours.sparsity, tie.sparsity))
         found[name] = ours
+        yes = lambda o: "yes" if found_generators(model, o) else "NO"  # noqa: E731
         print(f"| {name} | {len(model.mesh.faces)} | {ours.stats['features']} | "
               f"{100 * ours.sparsity['top7']:.1f}% | {100 * ours.sparsity['top20']:.1f}% | "
-              f"{100 * strict.sparsity['top7']:.1f}% | {100 * strict.sparsity['top20']:.1f}% | "
-              f"{'yes' if found_generators(model, ours) else 'NO'} / "
-              f"{'yes' if found_generators(model, strict) else 'no'} | {t:.3f} |")
+              f"{100 * tie.sparsity['top7']:.1f}% | {100 * tie.sparsity['top20']:.1f}% | "
+              f"{yes(ours)} / {yes(tie)} / {yes(paper)} | {t:.3f} |")
     mean = lambda k, i: 100 * statistics.mean(r[i][k] for r in rows)  # noqa: E731
     print(f"| **mean** | | | **{mean('top7', 0):.1f}%** | **{mean('top20', 0):.1f}%** | "
           f"**{mean('top7', 1):.1f}%** | **{mean('top20', 1):.1f}%** | | |")
@@ -183,7 +194,9 @@ def table_paper_variant(models, factors):
     print("\n## 3. The paper's variant against the default\n")
     print("| variant | cases | defects (> 5%) | wrong principal offsets | median total (s) |")
     print("|---|---|---|---|---|")
-    for label, params, seam in (("default: tie rule, overlap check, surface-distance seams", None, "geometry"),
+    for label, params, seam in (("default: strict Eq. (1), overlap checks, fundamental offsets, "
+                                 "surface-distance seams", None, "geometry"),
+                                ("earlier default: tie rule 1.5, surface-distance seams", tie_params(), "geometry"),
                                 ("paper: strict Eq. (1), every peak, descriptor-set seams", paper_params(), "descriptor"),
                                 ("default offsets, descriptor-set seams", None, "descriptor")):
         cases = defects = wrong = 0
@@ -309,10 +322,129 @@ def table_command(runs):
           f"time ({t_fresh:.2f} s), {'met' if c_fresh <= 5 else 'not met'} in CPU time ({c_fresh:.2f} s).")
 
 
+def _per_part(model):
+    """The model as the command reads it: its scene written as GLB and loaded per part."""
+    from grammarkit.geometry.meshio import load_mesh
+    from grammarkit_retarget.retargeting import prepare_mesh
+
+    with tempfile.TemporaryDirectory() as tmp:
+        path = Path(tmp) / f"{model.name}.glb"
+        model.scene.export(str(path))
+        return prepare_mesh(load_mesh(path), str(path))
+
+
+def table_part_models(factors):
+    """Issue 30's acceptance on per-part models the method was not tuned on: element sizes
+    and pitch after retargeting, the strict rule (default) against the tie rule."""
+    from grammarkit_retarget import partmodels, retarget_report, testmodels
+    from grammarkit_retarget.offsets import principal_offsets
+
+    print("\n## 6. Per-part models (parts share edges), read per part\n")
+    print("| case | variant | steps | elements in -> out | worst element size dev | pitch dev "
+          "| volume dev vs ideal |")
+    print("|---|---|---|---|---|---|---|")
+    sparsity = []
+    worst = {"default": 0.0, "tie rule": 0.0}
+    for name in partmodels.PART_MODELS:
+        model = partmodels.build_parts(name)
+        mesh = _per_part(model)
+        variants = {"default": principal_offsets(mesh),
+                    "tie rule": principal_offsets(mesh, params=tie_params())}
+        sparsity.append(variants["default"].sparsity)
+        base_volume = _slab_volume(mesh, 0, float("inf"))  # the parts' union (they may overlap)
+        for axis in sorted(model.probes):
+            probe = model.probes[axis]
+            ref = testmodels.measure(model.mesh, probe)
+            size0 = float(np.median(ref["sizes"]))
+            for f in factors:
+                size = np.asarray(mesh.extents, dtype=np.float64).copy()
+                size[axis] *= f
+                for label, off in variants.items():
+                    try:
+                        rep = retarget_report(mesh, size, offsets=off, allow_scale=True)
+                        got = testmodels.measure(rep.mesh, probe)
+                        dev = max([abs(x / size0 - 1) for x in got["sizes"]] or [1.0])
+                        pitch = abs(got["pitch"] / ref["pitch"] - 1) if got["count"] > 1 else float("nan")
+                        k = int(rep.steps[np.argmax(np.abs(rep.steps))]) if rep.steps.any() else 0
+                        ideal = base_volume + k * _element_volume(model, axis, mesh)
+                        vol = abs(rep.mesh.volume / ideal - 1) if rep.method == "retarget" else float("nan")
+                        cell = (f"{rep.steps.astype(int).tolist()} | {ref['count']} -> {got['count']} | "
+                                f"{100 * dev:.2f}% | {100 * pitch:.3f}% | {100 * vol:.2f}%")
+                    except Exception as exc:  # noqa: BLE001 - a refusal is a result too
+                        dev, cell = 1.0, f"refused: {str(exc)[:70]} | | | |"
+                    worst[label] = max(worst[label], dev)
+                    print(f"| {name} {'xyz'[axis]} x{f} | {label} | {cell} |")
+    print(f"\nWorst element size deviation: default {100 * worst['default']:.2f}%, tie rule "
+          f"{100 * worst['tie rule']:.2f}%. Sparsity of the default on these models: top 7% "
+          f"{100 * statistics.mean(s['top7'] for s in sparsity):.1f}%, top 20% "
+          f"{100 * statistics.mean(s['top20'] for s in sparsity):.1f}% (paper 79.9% / 97.1%).")
+    _plus_one()
+
+
+def _element_volume(model, axis, mesh) -> float:
+    """Volume one repeat adds along `axis` in the ideal model: one period (the generating
+    offset) of the model's periodic middle."""
+    g = next(g for g in model.generators if abs(g[axis]) > 0)
+    return _slab_volume(mesh, axis, float(np.linalg.norm(g)))
+
+
+def _slab_volume(mesh, axis, pitch) -> float:
+    """Volume of the union of the model's parts between two planes `pitch` apart across its
+    middle (one period of a row whose middle is periodic; all of it for an infinite pitch)."""
+    import manifold3d as m3
+
+    from grammarkit_retarget.stitch import part_face_sets
+
+    lo, hi = mesh.bounds
+    mid = (lo[axis] + hi[axis]) / 2
+    box_lo, box_hi = lo - 1, hi + 1
+    if np.isfinite(pitch):
+        box_lo[axis], box_hi[axis] = mid - pitch / 2, mid + pitch / 2
+    parts = []
+    for faces in part_face_sets(mesh.faces, len(mesh.vertices)):
+        sub = mesh.submesh([faces], append=True)
+        m = m3.Mesh(vert_properties=np.ascontiguousarray(sub.vertices, dtype=np.float32),
+                    tri_verts=np.ascontiguousarray(sub.faces, dtype=np.uint32))
+        m.merge()
+        parts.append(m3.Manifold(m))
+    solid = m3.Manifold.batch_boolean(parts, m3.OpType.Add)
+    box = m3.Manifold.cube(tuple(box_hi - box_lo)).translate(tuple(box_lo))
+    return float((solid ^ box).volume())
+
+
+def _plus_one():
+    """A 30-element row and the 12-picket fence retargeted to one element more."""
+    from grammarkit_retarget import partmodels, retarget_report, testmodels
+
+    print("\n| +1 element | elements before | after (default) | after (tie rule) |")
+    print("|---|---|---|---|")
+    from grammarkit_retarget.offsets import principal_offsets
+
+    for name in ("long_row", "slat_fence"):
+        model = partmodels.build_parts(name)
+        mesh = _per_part(model)
+        probe = model.probes[0]
+        size = np.asarray(mesh.extents, dtype=np.float64).copy()
+        size[0] += float(np.linalg.norm(model.generators[0]))
+        before = testmodels.measure(model.mesh, probe)["count"]
+        cells = []
+        for params in (None, tie_params()):
+            off = principal_offsets(mesh, params=params) if params else principal_offsets(mesh)
+            try:
+                rep = retarget_report(mesh, size, offsets=off, allow_scale=True)
+                cells.append(f"{testmodels.measure(rep.mesh, probe)['count']} "
+                             f"(size {rep.size[0]:.4g} for {size[0]:.4g})")
+            except Exception as exc:  # noqa: BLE001
+                cells.append(f"refused: {str(exc)[:50]}")
+        print(f"| {name} to {size[0]:.4g} | {before} | {cells[0]} | {cells[1]} |")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--runs", type=int, default=3)
     ap.add_argument("--quick", action="store_true", help="one run, 1.5x only, skip table 3")
+    ap.add_argument("--only-parts", action="store_true",
+                    help="tables 1 and 6 only (the offset statistics and the per-part models)")
     args = ap.parse_args()
     from grammarkit_retarget import testmodels
 
@@ -321,9 +453,13 @@ def main() -> None:
     print(f"# bench_retarget ({load()}; median of {runs} run(s))")
     models = {name: testmodels.build(name) for name in testmodels.MODELS}
     found = table_sparsity(models, runs)
+    if args.only_parts:
+        table_part_models((0.6, 1.5, 2.5))
+        return
     table_graphs(models, found, runs, factors)
     if not args.quick:
         table_paper_variant(models, (0.5, 1.5, 3.0))
+    table_part_models((0.6, 1.5, 2.5))
     table_solver(runs)
     table_command(runs)
     print(f"\n({load()} at the end)")

@@ -68,7 +68,8 @@ def test_sparsity_of_the_test_models_is_reported(offsets):
         assert 0 < sp["top7"] <= sp["top20"] <= 1, name
         assert sp["offsets"] == found.stats["matched"]
         # the offsets are sparse: far more than 7% / 20% of them in 7% / 20% of the bins
-        assert sp["top7"] > 0.4 and sp["top20"] > 0.6, (name, sp)
+        # (the paper's strict Eq. (1), the default: 32-56% / 56-81% on these models)
+        assert sp["top7"] > 0.3 and sp["top20"] > 0.5, (name, sp)
 
 
 def test_histogram_bins_and_non_maximum_suppression():

@@ -65,7 +65,8 @@ def retarget_command(model: Path, output: Path, size, scale, allow_scale: bool, 
     check_outputs({"--output": output, "--preview": preview, "--explain": explain},
                   inputs=[model])
     spec = exporter_for(output)
-    mesh = prepare_mesh(load_mesh(model, single=True), str(model))
+    # per part: a scene's parts are welded one by one, never to each other
+    mesh = prepare_mesh(load_mesh(model), str(model))
     target = size if size is not None else target_from_scale(mesh, scale, str(model))
     report = retarget_report(mesh, target, allow_scale=allow_scale, exact=exact,
                              open_surface=open_surface, name=str(model), seed=seed, seam=seam)

@@ -14,9 +14,14 @@ that axis. A mesh without principal offsets is an error unless `allow_scale=True
 scaling). Every error is a `grammarkit.errors.ShapeError` whose message starts with `name`
 (the file name, when the mesh came from a file).
 
+Parts: a mesh is read per part (its components connected by vertex index, as a GLB node or
+an OBJ object gives them). A mesh is closed when every part is; parts may touch or share
+edges (they are united before stitching, never welded to each other).
+
 Open meshes: the booleans that stitch closed meshes need an inside, so an open mesh is
 refused unless `open_surface=True`, which stitches its triangles as a surface (the output is
-then open where the input was).
+then open where the input was). A mesh with edges shared by more than two faces (parts
+welded together where they touch) is refused with that remedy, not `open_surface`.
 """
 from __future__ import annotations
 
@@ -159,6 +164,35 @@ def _closed(mesh: trimesh.Trimesh) -> bool:
     return bool(mesh.is_watertight)
 
 
+def _not_closed_message(mesh: trimesh.Trimesh, name: str) -> str:
+    """Why the mesh is not closed, and the remedy that fits: boundary edges (an open surface)
+    or edges shared by more than two faces (parts welded together where they touch)."""
+    _, counts = np.unique(mesh.edges_sorted, axis=0, return_counts=True)
+    boundary, shared = int((counts == 1).sum()), int((counts > 2).sum())
+    head = (f"{name}: the mesh is not closed ({boundary} boundary edges, {shared} edges shared "
+            "by more than two faces)")
+    if shared:
+        return (head + ": where parts touch along an edge they must stay separate meshes; give "
+                "each part its own mesh (a node of a GLB/glTF file, an object of an OBJ file) or "
+                "weld the parts into one closed solid first")
+    return (head + ": the retargeter unites solid copies, which needs an inside; pass "
+            "--open-surface (open_surface=True) to stitch its triangles as a surface instead "
+            "(the output is then open as well)")
+
+
+def _check_parts(mesh: trimesh.Trimesh, name: str) -> None:
+    """Each part (connected by vertex index) must be a closed manifold solid; the ShapeError
+    names the file and the part."""
+    from grammarkit.geometry.convert import to_manifold
+
+    from .stitch import part_face_sets
+
+    sets = part_face_sets(mesh.faces, len(mesh.vertices))
+    for i, faces in enumerate(sets):
+        part = mesh.submesh([faces], append=True) if len(sets) > 1 else mesh
+        to_manifold(part, what=name if len(sets) == 1 else f"{name}: part {i + 1} of {len(sets)}")
+
+
 def scale_to(mesh: trimesh.Trimesh, size: Sequence[float]) -> trimesh.Trimesh:
     """Plain scaling to the bounding box `size`, about the bounding box's minimum corner."""
     lo = np.asarray(mesh.bounds[0], dtype=np.float64)
@@ -198,18 +232,9 @@ def retarget_report(mesh: Any, size: Sequence[float], *, allow_scale: bool = Fal
     target = _check_size(size, name)
     closed = _closed(mesh)
     if not closed and not open_surface:
-        edges = mesh.edges_sorted
-        _, counts = np.unique(edges, axis=0, return_counts=True)
-        boundary = int((counts == 1).sum())
-        raise ShapeError(
-            f"{name}: the mesh is not closed ({boundary} boundary edges, "
-            f"{int((counts > 2).sum())} edges shared by more than two faces): the retargeter "
-            "unites solid copies, which needs an inside; pass --open-surface (open_surface=True) "
-            "to stitch its triangles as a surface instead (the output is then open as well)")
+        raise ShapeError(_not_closed_message(mesh, name))
     if closed:
-        from grammarkit.geometry.convert import to_manifold
-
-        to_manifold(mesh, what=name)  # ShapeError naming the file if manifold3d refuses it
+        _check_parts(mesh, name)
     input_size = np.asarray(mesh.extents, dtype=np.float64)
     colors = (np.asarray(mesh.visual.face_colors, dtype=np.uint8)
               if mesh.visual.kind in ("face", "vertex") else None)

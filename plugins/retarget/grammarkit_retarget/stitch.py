@@ -24,7 +24,7 @@ import trimesh
 
 from .labelling import Lattice
 
-__all__ = ["StitchResult", "merge_boxes", "snap_periodic", "stitch_solid", "stitch_surface"]
+__all__ = ["StitchResult", "merge_boxes", "part_face_sets", "snap_periodic", "stitch_solid", "stitch_surface"]
 
 
 def merge_boxes(mask: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
@@ -75,6 +75,25 @@ def snap_periodic(c: np.ndarray, tol: float = 1e-6) -> np.ndarray:
     return c
 
 
+def part_face_sets(faces: np.ndarray, n_vertices: int) -> list[np.ndarray]:
+    """The faces of each part: the connected components of the faces by shared vertex index
+    (not position), in order of their first face."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    faces = np.asarray(faces, dtype=np.int64)
+    if len(faces) == 0:
+        return []
+    rows = np.repeat(faces[:, 0], 2)
+    cols = faces[:, 1:].ravel()
+    graph = coo_matrix((np.ones(len(rows), np.int8), (rows, cols)), shape=(n_vertices, n_vertices))
+    _, label = connected_components(graph, directed=False)
+    face_label = label[faces[:, 0]]
+    _, first, inverse = np.unique(face_label, return_index=True, return_inverse=True)
+    order = np.argsort(first)
+    return [np.flatnonzero(inverse == k) for k in order]
+
+
 def _box(lo: np.ndarray, hi: np.ndarray) -> m3.Manifold:
     return m3.Manifold.cube(tuple(float(x) for x in hi - lo)).translate(tuple(float(x) for x in lo))
 
@@ -97,15 +116,21 @@ def stitch_solid(mesh_n: trimesh.Trimesh, lattice: Lattice, label_grid: np.ndarr
     start = np.round(lattice.start * 2 ** 20) / 2 ** 20  # a dyadic corner: exact in float64
     tris = np.ascontiguousarray(mesh_n.faces, dtype=np.uint64)
     face_groups = _face_groups(mesh_n, colors)
-    src = m3.Mesh64(vert_properties=np.ascontiguousarray(c), tri_verts=tris,
-                    face_id=face_groups.astype(np.uint64))
-    src.merge()
-    solid = m3.Manifold(src)  # not as_original(): that would renumber the face ids
-    if solid.status() != m3.Error.NoError:
-        raise ValueError(f"the mesh is not a closed manifold solid ({solid.status().name})")
-    # overlapping parts of the input (e.g. a file with touching or overlapping nodes) would
-    # make the copies self-intersect: unite them first
-    parts = solid.decompose()
+    # one solid per part (connected by vertex index, as the file gave them): welding by
+    # position across parts would join parts that share an edge into a non-manifold mesh
+    parts = []
+    for part_faces in part_face_sets(mesh_n.faces, len(c)):
+        used, local = np.unique(tris[part_faces], return_inverse=True)
+        src = m3.Mesh64(vert_properties=np.ascontiguousarray(c[used.astype(np.int64)]),
+                        tri_verts=np.ascontiguousarray(local.reshape(-1, 3), dtype=np.uint64),
+                        face_id=face_groups[part_faces].astype(np.uint64))
+        src.merge()  # welds a part's own triangle soup (STL-style duplicated vertices)
+        part = m3.Manifold(src)  # not as_original(): that would renumber the face ids
+        if part.status() != m3.Error.NoError:
+            raise ValueError(f"the mesh is not a closed manifold solid ({part.status().name})")
+        parts.extend(part.decompose())
+    # touching or overlapping parts would make the copies self-intersect: unite them first
+    solid = parts[0]
     if len(parts) > 1:
         solid = m3.Manifold.batch_boolean(parts, m3.OpType.Add)
     source_ids = set(int(i) for i in np.asarray(solid.to_mesh64().run_original_id))

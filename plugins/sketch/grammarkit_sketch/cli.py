@@ -42,6 +42,9 @@ def print_recognition(r: Any, library: Any, source: str) -> None:
         click.echo(f"  {c.snippet:<18} {c.probability:6.3f}{same}{mark}")
     if r.snippet not in [c.snippet for c in r.top]:
         click.echo(f"  {r.snippet:<18} {r.probability:6.3f}  <- chosen with --snippet")
+    if r.redraw:
+        click.echo(f"not sure (probability {r.probability:.2f}, below {r.redraw_below:.2f}): redraw "
+                   "the sketch, or choose the snippet with --snippet NAME")
     if info.params:
         click.echo(f"parameters of {r.snippet}:")
         width = max(len(p.name) for p in info.params)
@@ -189,8 +192,11 @@ def sketch_session_command(session: Path, output: Path, library: Path | None, mo
               help="Training renders per snippet (10% held out for validation).")
 @click.option("--classifier-epochs", type=click.IntRange(1, 1000), default=14, show_default=True)
 @click.option("--regressor-epochs", type=click.IntRange(1, 1000), default=30, show_default=True)
-@click.option("--style", type=click.Choice(("sketchy", "plain")), default="sketchy", show_default=True,
-              help="Training drawings: hand-drawn-looking (the paper's) or exact lines (Table 3).")
+@click.option("--style", type=click.Choice(("sketchy", "plain", "augmented")), default="sketchy",
+              show_default=True,
+              help="Training drawings: hand-drawn-looking (the paper's), exact lines (Table 3), or "
+                   "hand-drawn with the page turned and the view off by up to 5 degrees and some "
+                   "strokes broken off (augmented).")
 @click.option("--types", default=None, help="Comma-separated object types to train (default: all).")
 @click.option("--classifiers-only", is_flag=True,
               help="Train the snippet classifiers only (e.g. to compare training styles).")

@@ -21,7 +21,9 @@ import numpy as np
 #: drawing styles: "sketchy" is the paper's training style (hand-drawn polylines), "plain"
 #: the exact line drawing (the paper's Table 3 baseline); the others are robustness tests
 #: never trained on.
-STYLES = ("sketchy", "plain", "jitter", "missing", "overdrawn", "thick", "perspective")
+STYLES = ("sketchy", "plain", "jitter", "missing", "overdrawn", "thick", "perspective",
+          "rotated", "partial")
+PERTURBATIONS = ("rotated", "perspective", "partial")
 
 
 @dataclass(frozen=True)
@@ -38,6 +40,8 @@ class DrawStyle:
     seed: int = 0
     pitch_offset: float = 0.0  # a slightly wrong perspective (degrees)
     yaw_offset: float = 0.0
+    rotation: float = 0.0  # the drawing turned on the page (degrees; augment.rotate_ink)
+    partial: float = 0.0  # share of the ink cut out in gaps (augment.break_strokes)
 
     def line_style(self, scale: float = 1.0):  # noqa: ANN201
         from grammarkit.geometry.render import LineStyle
@@ -50,19 +54,42 @@ class DrawStyle:
 def training_style(rng: np.random.Generator, kind: str = "sketchy") -> DrawStyle:
     """A random pen for a training image: sketchy lines of varied width, wobble, overshoot and
     passes (from nearly clean to shaky), or the plain line drawing; the view may be off by up
-    to 2 degrees (people do not draw exact perspective)."""
+    to 2 degrees (people do not draw exact perspective). "augmented": the sketchy pen with the
+    view off by up to 5 degrees, the page turned by up to 5 degrees, and in 40% of the
+    drawings 5-25% of the ink cut out (partial strokes)."""
     seed = int(rng.integers(0, 2**31 - 1))
     width = float(rng.uniform(1.0, 3.5))
     pitch, yaw = (float(v) for v in rng.uniform(-2.0, 2.0, 2))
     if kind == "plain":
         return DrawStyle(sketchy=False, width=width, seed=seed, pitch_offset=pitch, yaw_offset=yaw)
-    return DrawStyle(sketchy=True, width=width, jitter=float(rng.uniform(0.3, 2.0)),
-                     overshoot=float(rng.uniform(1.0, 7.0)), strokes=int(rng.integers(1, 4)),
-                     seed=seed, pitch_offset=pitch, yaw_offset=yaw)
+    pen = DrawStyle(sketchy=True, width=width, jitter=float(rng.uniform(0.3, 2.0)),
+                    overshoot=float(rng.uniform(1.0, 7.0)), strokes=int(rng.integers(1, 4)),
+                    seed=seed, pitch_offset=pitch, yaw_offset=yaw)
+    if kind == "augmented":  # issue 30: page turned, perspective off, strokes broken off
+        from .augment import MAX_PERSPECTIVE, MAX_ROTATION
+
+        p2, y2, rot = (float(v) for v in rng.uniform(-1.0, 1.0, 3))
+        partial = float(rng.uniform(0.05, 0.25)) if rng.random() < 0.4 else 0.0
+        return replace(pen, pitch_offset=p2 * MAX_PERSPECTIVE, yaw_offset=y2 * MAX_PERSPECTIVE,
+                       rotation=rot * MAX_ROTATION, partial=partial)
+    return pen
 
 
 def test_style(kind: str, rng: np.random.Generator) -> DrawStyle:
-    """Held-out drawing styles: the trained one with new seeds, or one never trained on."""
+    """Held-out drawing styles: the trained one with new seeds, or one never trained on.
+
+    "PEN+PERTURBATION" (e.g. "thick+rotated") draws with the pen of style PEN and the page
+    turn, perspective error or broken strokes of style PERTURBATION ("rotated",
+    "perspective", "partial"): the robustness tests on pens no training augmentation used."""
+    if "+" in kind:
+        pen, _, perturbation = kind.partition("+")
+        if perturbation not in PERTURBATIONS or pen not in STYLES:
+            raise ValueError(f"unknown drawing style {kind!r}; expected PEN+PERTURBATION with PEN one "
+                             f"of {', '.join(STYLES)} and PERTURBATION one of {', '.join(PERTURBATIONS)}")
+        drawn = test_style(pen, rng)
+        moved = test_style(perturbation, rng)
+        return replace(drawn, rotation=moved.rotation, partial=moved.partial,
+                       pitch_offset=moved.pitch_offset, yaw_offset=moved.yaw_offset)
     base = training_style(rng, "sketchy")
     if kind == "sketchy":
         return base
@@ -76,6 +103,10 @@ def test_style(kind: str, rng: np.random.Generator) -> DrawStyle:
         return replace(base, strokes=5, jitter=2.0)
     if kind == "thick":  # a felt pen: twice the widest trained line
         return replace(base, width=7.0)
+    if kind == "rotated":  # the page turned by 3-5 degrees
+        return replace(base, rotation=float(rng.choice([-1.0, 1.0]) * rng.uniform(3, 5)))
+    if kind == "partial":  # strokes that stop short: 15-30% of the ink cut out in gaps
+        return replace(base, partial=float(rng.uniform(0.15, 0.3)))
     if kind == "perspective":  # the view off by 3-6 degrees (trained: up to 2)
         sign = rng.choice([-1.0, 1.0], size=2)
         return replace(base, pitch_offset=float(sign[0] * rng.uniform(3, 6)),
@@ -125,7 +156,14 @@ def draw(model: Any, view: Any, style: DrawStyle, host_box: Any = None, *,
     scale = min(view.size) / 256.0
     img = render(geom, view, style="lines", size=view.size, line_style=style.line_style(scale),
                  supersample=supersample)
-    return 1.0 - np.asarray(img.convert("L"), dtype=np.float32) / 255.0
+    ink = 1.0 - np.asarray(img.convert("L"), dtype=np.float32) / 255.0
+    if style.rotation or style.partial:
+        from .augment import break_strokes, rotate_ink
+
+        ink = rotate_ink(ink, style.rotation)
+        if style.partial:
+            ink = break_strokes(ink, np.random.default_rng([style.seed, 0x9A27]), style.partial)
+    return ink
 
 
 def strokes_to_ink(strokes: Any, size: tuple[int, int], width: float = 2.0) -> np.ndarray:

@@ -8,7 +8,10 @@ checked again after loading.
 """
 from __future__ import annotations
 
+import hashlib
 from pathlib import Path
+
+from grammarkit.errors import GrammarkitError
 
 from .dataset import DEFAULT_CACHE
 from .library import SnippetLibrary, _asset_paths, load_library
@@ -50,7 +53,9 @@ def embedded_library(models: SketchModels, cache: Path | None = None) -> Snippet
         raise ModelFileError(f"{models.path or 'the models'}: the models file does not carry its "
                              "library; pass the library it was trained on (--library / library=)",
                              None, code="sketch-need-library")
-    root = Path(cache or DEFAULT_CACHE) / "libraries" / models.library_hash[:20]
+    # the folder is named after the files' real content, not the hash the models file claims:
+    # a tampered file then gets a folder of its own and cannot overwrite the shared copy
+    root = Path(cache or DEFAULT_CACHE) / "libraries" / content_hash(files)[:20]
     for rel, data in files.items():
         target = (root / rel).resolve()
         if root.resolve() not in target.parents:
@@ -62,7 +67,27 @@ def embedded_library(models: SketchModels, cache: Path | None = None) -> Snippet
         with atomic_output(target) as tmp:
             with open(tmp, "wb") as fh:
                 fh.write(data)
-    library = load_library(root / main)
-    models.check_library(library)
+    try:
+        library = load_library(root / main)
+    except GrammarkitError as exc:
+        raise ModelFileError(f"{models.path or 'the models'}: the library carried in the models "
+                             f"file is damaged and cannot be read ({str(exc).splitlines()[0]}); "
+                             "retrain, or pass the library it was trained on (--library / "
+                             "library=)", None, code="sketch-bad-models") from None
+    if library.hash != models.library_hash:
+        raise ModelFileError(f"{models.path or 'the models'}: the library carried in the models "
+                             "file does not match the hash the file records (the file was edited "
+                             "or damaged); retrain, or pass the library it was trained on "
+                             "(--library / library=)", None, code="sketch-bad-models")
     return library
+
+
+def content_hash(files: dict[str, bytes]) -> str:
+    """SHA-256 of the carried files (names and bytes, in name order)."""
+    h = hashlib.sha256()
+    for rel in sorted(files):
+        data = files[rel]
+        h.update(rel.encode("utf-8") + b"\0" + str(len(data)).encode() + b"\0")
+        h.update(data)
+    return h.hexdigest()
 

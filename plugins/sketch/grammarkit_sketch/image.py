@@ -21,6 +21,7 @@ FIT_MARGIN = 0.06  # free border around a fit-framed drawing, fraction of RES
 INK_THRESHOLD = 0.08  # ink level below which a pixel counts as paper
 MIN_SIDE = 32  # smallest sketch image side accepted, pixels
 ASPECT_TOLERANCE = 0.04
+MAX_PIXELS = 40_000_000  # largest sketch image read, pixels (a 6,000 x 6,000 scan fits)
 
 
 class SketchError(ShapeError):
@@ -31,29 +32,62 @@ def _name(source: Any) -> str:
     return str(source) if isinstance(source, (str, Path)) else "<sketch>"
 
 
+def _check_pixels(name: str, w: int, h: int) -> None:
+    if w * h > MAX_PIXELS:
+        raise SketchError(f"{name}: image is {w}x{h} pixels ({w * h / 1e6:.0f} megapixels); a "
+                          f"sketch may have at most {MAX_PIXELS / 1e6:.0f} megapixels (scale it "
+                          f"down: the recognizer reads it at {RES}x{RES})")
+
+
+def _read_image(p: Path) -> Any:
+    """The decoded image of file `p`, or a SketchError naming it: unreadable, damaged, or
+    larger than MAX_PIXELS (checked from the header, before anything is decoded: PIL's own
+    guard, DecompressionBombError, fires only at twice its warning size and as an exception
+    of its own)."""
+    from PIL import Image, UnidentifiedImageError
+
+    try:
+        with Image.open(p) as im:
+            _check_pixels(str(p), *im.size)
+            im.load()
+            return im.copy()
+    except SketchError:
+        raise
+    except Image.DecompressionBombError as exc:  # raised by open() from the header's size
+        import re
+
+        found = re.search(r"\((\d+) pixels\)", str(exc))
+        size = f"{int(found.group(1)) / 1e6:.0f} megapixels" if found else "too many pixels"
+        raise SketchError(f"{p}: image is {size}; a sketch may have at most "
+                          f"{MAX_PIXELS / 1e6:.0f} megapixels (scale it down: the recognizer "
+                          f"reads it at {RES}x{RES})") from None
+    except UnidentifiedImageError as exc:
+        raise SketchError(f"{p}: not a readable image ({exc.__class__.__name__}: "
+                          f"{str(exc).splitlines()[0] if str(exc) else ''}); expected a PNG, "
+                          "JPEG or other raster image") from None
+    except (OSError, ValueError, SyntaxError, EOFError, MemoryError, IndexError,
+            TypeError) as exc:  # what PIL's decoders raise for damaged files
+        raise SketchError(f"{p}: damaged or unreadable image ({exc.__class__.__name__}: "
+                          f"{str(exc).splitlines()[0] if str(exc) else ''})") from None
+
+
 def load_ink(source: Any) -> np.ndarray:
     """Ink map (float32 H x W in [0, 1], 1 = black) from a path, a PIL image or an array.
 
     Arrays: 2-D greyscale (0-255 or 0-1, white paper) or H x W x 3/4. Raises SketchError for a
     missing or unreadable file, an image that is too small, or one with nothing drawn on it.
     """
-    from PIL import Image, UnidentifiedImageError
+    from PIL import Image
 
     name = _name(source)
     if isinstance(source, (str, Path)):
         p = Path(source)
         if not p.is_file():
             raise SketchError(f"{p}: sketch image not found")
-        try:
-            with Image.open(p) as im:
-                im.load()
-                img = im.copy()
-        except (UnidentifiedImageError, OSError, ValueError) as exc:
-            raise SketchError(f"{p}: not a readable image ({exc.__class__.__name__}); "
-                              "expected a PNG, JPEG or other raster image") from None
-        source = img
+        source = _read_image(p)
     if isinstance(source, Image.Image):
         img = source
+        _check_pixels(name, *img.size)
         if img.mode in ("RGBA", "LA", "PA") or (img.mode == "P" and "transparency" in img.info):
             rgba = img.convert("RGBA")
             white = Image.new("RGBA", rgba.size, (255, 255, 255, 255))
@@ -65,6 +99,7 @@ def load_ink(source: Any) -> np.ndarray:
         if arr.dtype == object or arr.ndim not in (2, 3) or (arr.ndim == 3 and arr.shape[2] not in (3, 4)):
             raise SketchError(f"{name}: expected an image or an H x W (x 3/4) array, got shape "
                               f"{getattr(arr, 'shape', None)}")
+        _check_pixels(name, arr.shape[1], arr.shape[0])
         a = arr.astype(np.float32)
         if a.size and a.max() > 1.0:
             a = a / 255.0

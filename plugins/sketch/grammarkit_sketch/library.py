@@ -76,6 +76,9 @@ class SnippetLibrary:
         self.defaults = {d.object_type: d.snippet for d in grammar.defaults}
         self.anchor_kinds = _anchor_kinds(grammar, self.types)
         self.hash = library_hash(grammar)
+        # part meshes the snippets insert that are not there (the hash then differs from a
+        # models file's, and the message must say which file is missing, not "changed")
+        self.missing_assets = [p for p in _asset_paths(grammar) if not p.is_file()]
 
     @property
     def name(self) -> str:

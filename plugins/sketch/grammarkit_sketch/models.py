@@ -79,6 +79,12 @@ class SketchModels:
                              code="sketch-no-model")
 
     def check_library(self, library: SnippetLibrary) -> None:
+        if library.hash != self.library_hash and library.missing_assets:
+            files = ", ".join(str(m) for m in library.missing_assets)
+            raise ModelFileError(
+                f"{library.path or library.name}: part mesh file(s) missing: {files} (inserted by "
+                f"the library's snippets); restore them next to the library (the models file "
+                f"{self.path or ''} was trained with them)", None, code="sketch-missing-part")
         if library.hash != self.library_hash:
             raise ModelFileError(
                 f"{self.path or 'the models'}: trained on a different version of library "
@@ -142,6 +148,21 @@ def save_models(models: SketchModels, path: str | Path) -> Path:
     return path
 
 
+def _unreadable(p: Path, exc: BaseException) -> str:
+    """Why torch could not read `p`, in grammarkit's words: torch's own message for a file
+    with pickled objects advises loading with weights_only=False, which would run the file's
+    code, so it is never repeated."""
+    import pickle
+
+    text = str(exc)
+    if isinstance(exc, pickle.UnpicklingError) or "weights_only" in text or "Weights only" in text:
+        return (f"{p}: refused: the file holds pickled Python objects (code that would run when "
+                "it is loaded), and a sketch models file holds only tensors and plain values; "
+                "use a file written by `grammarkit train sketch`")
+    first = text.splitlines()[0] if text else ""
+    return f"{p}: not a sketch models file ({exc.__class__.__name__}: {first[:200]})"
+
+
 def load_models(path: str | Path | None = None, library: SnippetLibrary | None = None) -> SketchModels:
     """Load a models file (default: the weights shipped for grammars/library.grammar), check its
     format version and, given a library, that it was trained on exactly that library."""
@@ -156,9 +177,7 @@ def load_models(path: str | Path | None = None, library: SnippetLibrary | None =
     try:
         data = torch.load(p, map_location="cpu", weights_only=True)
     except Exception as exc:  # noqa: BLE001 - any unpickling failure means "not our file"
-        raise ModelFileError(f"{p}: not a sketch models file ({exc.__class__.__name__}: "
-                             f"{str(exc).splitlines()[0] if str(exc) else ''})", None,
-                             code="sketch-bad-models") from None
+        raise ModelFileError(_unreadable(p, exc), None, code="sketch-bad-models") from None
     if not isinstance(data, dict) or data.get("format") != FORMAT:
         raise ModelFileError(f"{p}: not a sketch models file (no {FORMAT!r} header)", None,
                              code="sketch-bad-models")

@@ -27,6 +27,7 @@ from .drawing import draw
 from .image import check_aspect, fit_transform, level, load_ink, resize, to_input
 from .library import SnippetLibrary, load_library
 from .models import ModelFileError, SketchModels, TypeModel, load_models
+from .calibration import softmax
 from .nets import require_torch
 from .refine import EXACT_STYLE, METHODS, SCORE_SHORT, SCORES, VIEW_RANGE, Scorer, centre_on_plateaus, refine
 from .stages import StageDeriver, StageSpec
@@ -65,6 +66,8 @@ class Recognition:
     timings: dict[str, float] = field(default_factory=dict)  # milliseconds
     stage: StageSpec | None = None
     score_kind: str = "chamfer"  # which score `score` is: "chamfer" or "paper" (refine.SCORES)
+    redraw: bool = False  # the classifier is not sure (probability below the type's threshold)
+    redraw_below: float = 0.0  # that threshold (0: the models file has none)
 
     def use_line(self, anchor: str | None = None) -> str:
         return f"use {self.snippet} as {anchor or self.object_type}"
@@ -82,11 +85,24 @@ class Recognition:
             "normalized": {k: round(v, 4) for k, v in self.normalized.items()},
             "estimated": list(self.estimated), "hidden": list(self.hidden),
             "score": round(self.score, 4), "network_score": round(self.network_score, 4),
-            "score_kind": self.score_kind,
+            "score_kind": self.score_kind, "redraw": self.redraw,
+            "redraw_below": round(self.redraw_below, 4),
             "refine_steps": self.refine_steps, "method": self.method, "evaluations": self.evaluations,
             "use": self.use_line(), "set": self.set_options(),
             "timings_ms": {k: round(v, 2) for k, v in self.timings.items()},
         }
+
+
+def temperature_of(tm: TypeModel) -> float:
+    """The type's calibration temperature (metrics "temperature"), 1.0 when uncalibrated."""
+    t = tm.metrics.get("temperature", 1.0)
+    return float(t) if isinstance(t, (int, float)) and 0 < float(t) < 1e3 else 1.0
+
+
+def redraw_threshold_of(tm: TypeModel) -> float:
+    """The type's redraw threshold (metrics "redraw_below"), 0.0 (never) when uncalibrated."""
+    t = tm.metrics.get("redraw_below", 0.0)
+    return float(t) if isinstance(t, (int, float)) and 0 <= float(t) < 1 else 0.0
 
 
 def _fmt(v: float) -> str:
@@ -125,14 +141,20 @@ class Recognizer:
         return got
 
     # -- the cascade -----------------------------------------------------------------------
-    def classify(self, tm: TypeModel, x: np.ndarray) -> list[Candidate]:
+    def logits(self, tm: TypeModel, x: np.ndarray) -> np.ndarray:
+        """The classifier's raw scores (C,) for one network input."""
         torch = require_torch()
         if len(tm.classes) == 1:
-            probs = np.ones(1)
-        else:
-            with torch.no_grad():
-                logits = tm.network()(torch.from_numpy(x[None, None].astype(np.float32)))
-                probs = torch.softmax(logits, dim=1)[0].numpy().astype(float)
+            return np.zeros(1)
+        with torch.no_grad():
+            out = tm.network()(torch.from_numpy(x[None, None].astype(np.float32)))
+        return out[0].numpy().astype(np.float64)
+
+    def classify(self, tm: TypeModel, x: np.ndarray) -> list[Candidate]:
+        """Candidates, most probable first, with calibrated probabilities: softmax of the
+        logits divided by the type's temperature (calibration.py; 1 when the models file has
+        none)."""
+        probs = softmax(self.logits(tm, x), temperature_of(tm))
         order = np.argsort(-probs, kind="stable")
         return [Candidate(tm.classes[i][0], float(probs[i]), tuple(tm.classes[i][1:])) for i in order]
 
@@ -213,9 +235,11 @@ class Recognizer:
         timings = {"load": t_load * 1e3, "classify": (t1 - t0) * 1e3, "regress": (t2 - t1) * 1e3,
                    "score": (t3 - t2) * 1e3, "refine": (t4 - t3) * 1e3,
                    "total": t_load * 1e3 + (t4 - t0) * 1e3}
+        threshold = redraw_threshold_of(tm)
         return Recognition(t, chosen, prob, top[:TOP], values, normalized, names, hidden, match,
                            net_score, refine_steps if len(u) else 0, method, scorer.evaluations,
-                           timings, stage, score)
+                           timings, stage, score, redraw=snippet is None and prob < threshold,
+                           redraw_below=threshold)
 
     def recognize(self, image: Any, object_type: str, *, stage: StageSpec | None = None, **kw: Any) -> Recognition:
         """Recognise a sketch image (path, PIL image or array) of one object type."""
