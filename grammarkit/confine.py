@@ -13,7 +13,7 @@ link that points outside all fail the same way.
 
     with confine.confined("grammars/", who="the studio"):
         ...                                  # any derive, check or import in here
-        confine.check("grammars/parts/a.glb", what="i()")   # passes
+        confine.check("grammars/parts/a.glb", what="mesh file")   # passes
         confine.check("/etc/passwd", what="import")         # ConfinementError
 
 Without a policy (the default: the command line, the Python API) `check` does nothing, so
@@ -127,8 +127,7 @@ def _message(policy: Policy, path: Any, what: str) -> str:
     shown = os.fsdecode(os.fspath(path)) if isinstance(path, (str, bytes, os.PathLike)) else str(path)
     if len(shown) > _SHOWN:
         shown = shown[:_SHOWN] + "..."
-    return (f"{what}: {shown!r} is outside {policy.root}, the only folder {policy.who} reads "
-            "files from")
+    return f"{what} {shown!r} is outside {policy.root}, the only folder {policy.who} reads files from"
 
 
 _HINT = ("keep the files a grammar uses (imports, meshes, textures, lots) inside its folder; a "
@@ -147,7 +146,8 @@ def refusal(path: str | os.PathLike, *, base: str | os.PathLike | None = None, w
 
 def check(path: str | os.PathLike, *, base: str | os.PathLike | None = None, what: str = "file",
           span: Span | None = None) -> None:
-    """Raise ConfinementError (naming `what`, the path and the folder; located at `span`)
+    """Raise ConfinementError (naming `what`, a noun such as "import" or "mesh file", the path
+    and the folder; located at `span`)
     unless the policy in force allows opening `path`. Call it with the path about to be
     opened, before anything looks at the file (so existence is never told)."""
     diagnostic = refusal(path, base=base, what=what, span=span)
