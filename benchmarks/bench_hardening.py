@@ -31,6 +31,8 @@ sys.path.insert(0, str(ROOT / "tests" / "qa"))
 import attack  # noqa: E402
 
 COLUMNS = ["clear", "traceback", "hang", "memory", "lost", "bypass", "wrong"]
+HEADINGS = {"clear": "clear errors", "traceback": "tracebacks", "hang": "hangs", "memory": "memory > 1 GB",
+            "lost": "data lost", "bypass": "confinement bypasses", "wrong": "other"}
 
 
 @dataclass
@@ -40,10 +42,15 @@ class Row:
     verdict: str
     seconds: float
     detail: str = ""
+    usage: str = ""  # CPU and memory of a subprocess case
+    output: str = ""
 
 
-def _rows_of(outcomes: list) -> list[Row]:
-    return [Row(o.case.group, o.case.name, o.verdict, o.seconds, o.detail) for o in outcomes]
+def _show(r: Row, verbose: bool) -> None:
+    print(f"{r.verdict:9s} {r.seconds:6.1f} s {r.usage}  {r.name}" + (f"  -- {r.detail[:300]}" if r.detail else ""),
+          flush=True)
+    if verbose and r.verdict != "clear" and r.output:
+        print("    " + r.output.strip()[-1500:].replace("\n", "\n    "))
 
 
 def confinement_rows(fuzz: int, words: str) -> list[Row]:
@@ -126,15 +133,17 @@ def server_rows(words: str) -> list[Row]:
 
 
 def table(rows: list[Row]) -> str:
-    groups: dict[str, list[Row]] = {}
+    """attack.table's table with a confinement-bypasses column (one Counter per group)."""
+    from collections import Counter
+
+    counts: dict[str, Counter] = {}
     for r in rows:
-        groups.setdefault(r.group, []).append(r)
-    lines = ["| group | cases | clear errors | tracebacks | hangs | memory > 1 GB | data lost "
-             "| confinement bypasses | other |", "|---|---|---|---|---|---|---|---|---|"]
-    for g, rs in list(groups.items()) + [("total", rows)]:
-        counts = [sum(1 for r in rs if r.verdict == c) for c in COLUMNS]
-        lines.append(f"| {g} | {len(rs)} | " + " | ".join(str(c) for c in counts) + " |")
-    return "\n".join(lines)
+        counts.setdefault(r.group, Counter())[r.verdict] += 1
+    counts["total"] = sum(counts.values(), Counter())
+    out = ["| group | cases | " + " | ".join(HEADINGS[c] for c in COLUMNS) + " |",
+           "|" + "---|" * (len(COLUMNS) + 2)]
+    out += [f"| {g} | {c.total()} | " + " | ".join(str(c[k]) for k in COLUMNS) + " |" for g, c in counts.items()]
+    return "\n".join(out)
 
 
 def main(argv: list[str]) -> int:
@@ -151,21 +160,19 @@ def main(argv: list[str]) -> int:
         cases = [c for c in (attack.fast_cases() if args.fast else attack.CASES) if words in c.name.lower()]
         for c in cases:
             o = attack.run_case(c)
-            rows += _rows_of([o])
-            print(f"{o.verdict:9s} {o.seconds:6.1f} s {o.cpu:6.1f} s CPU {o.peak_mb:7.0f} MB  {c.name}"
-                  + (f"  -- {o.detail[:300]}" if o.detail else ""), flush=True)
-            if args.v and o.verdict != "clear":
-                print("    " + o.output.strip()[-1500:].replace("\n", "\n    "))
+            rows.append(Row(c.group, c.name, o.verdict, o.seconds, o.detail,
+                            f"{o.cpu:6.1f} s CPU {o.peak_mb:7.0f} MB", o.output))
+            _show(rows[-1], args.v)
     baseline = _baseline(args.fuzz, words)
     for r in confinement_rows(args.fuzz, words) + server_rows(words):
         rows.append(r)
         if args.v or r.verdict != "clear" or r.group != "studio confinement fuzz":
-            print(f"{r.verdict:9s} {r.seconds:6.2f} s  {r.group}: {r.name}"
-                  + (f"  -- {r.detail[:300]}" if r.detail else ""), flush=True)
+            _show(r, args.v)
     print()
     print(table(rows))
-    print(f"\nbaseline in the same run, grammarkit.confine switched off: {baseline[0]} of {baseline[1]} "
-          "confinement cases read or list a file outside the folder (the rest name no file there)")
+    if baseline[1]:
+        print(f"\nbaseline in the same run, grammarkit.confine switched off: {baseline[0]} of {baseline[1]} "
+              "confinement cases read or list a file outside the folder (the rest name no file there)")
     return 0 if all(r.verdict == "clear" for r in rows) else 1
 
 

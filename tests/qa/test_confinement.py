@@ -14,6 +14,7 @@ from __future__ import annotations
 import json
 import os
 import struct
+import sys
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -22,6 +23,9 @@ import pytest
 
 from grammarkit import confine
 from grammarkit.errors import GrammarkitError
+
+sys.path.insert(0, str(Path(__file__).parent))
+from attack import _glb_with_buffer  # noqa: E402 - the glTF of issue 19's external-buffer attacks
 
 SECRET_ATTR = "leaked_secret"
 LOT = "Lot --> footprint(rect(4, 4)) extrude(2) "
@@ -47,17 +51,6 @@ def _box_obj() -> str:
         f"f {a} {b} {c}\nf {a} {c} {d}\n" for a, b, c, d in faces)
 
 
-def _gltf(uri: str) -> str:
-    """A glTF (JSON) triangle whose buffer is the external file `uri`."""
-    doc = {"asset": {"version": "2.0"}, "buffers": [{"uri": uri, "byteLength": 36}],
-           "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 36}],
-           "accessors": [{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
-                          "min": [0, 0, 0], "max": [1, 1, 0]}],
-           "meshes": [{"name": "A", "primitives": [{"attributes": {"POSITION": 0}}]}],
-           "nodes": [{"name": "A.0", "mesh": 0}], "scenes": [{"nodes": [0]}], "scene": 0}
-    return json.dumps(doc)
-
-
 PNG_1x1 = bytes.fromhex("89504e470d0a1a0a0000000d4948445200000001000000010802000000907753de0000000c49444154"
                         "08d763f8cfc0000003010100c9fe92ef0000000049454e44ae426082")
 
@@ -76,7 +69,7 @@ def make_tree(base: Path) -> Tree:
     (root / "g.grammar").write_text(f"grammar g\n{LOT}A.\n")
     (root / "parts" / "in.obj").write_text(_box_obj())
     (root / "tex.png").write_bytes(PNG_1x1)
-    (root / "evil.gltf").write_text(_gltf("../secret/tri.bin"))
+    _glb_with_buffer(root, "../secret/tri.bin").rename(root / "evil.gltf")
     (secret / "secret.grammar").write_text(f"grammar secret\nattr {SECRET_ATTR} = 1\n")
     (secret / "secret.obj").write_text(_box_obj())
     (secret / "tex.png").write_bytes(PNG_1x1)
