@@ -59,6 +59,7 @@ def make_tree(base: Path) -> Tree:
     """root/ (the studio's folder) and secret/ beside it:
 
     root/g.grammar, parts/in.obj, tex.png, evil.gltf (buffer ../secret/tri.bin),
+    parts/quoted.gltf (buffer %2e%2e/%2e%2e/secret/tri.bin), asm/a.obj -> ../../secret/secret.obj,
     link_out -> ../secret, link_file.obj -> ../secret/secret.obj, link_in -> parts,
     sub/up -> .. (root itself: inside), sub/up2 -> ../.. (base: outside);
     secret/secret.grammar (defines attr leaked_secret), secret.obj, tex.png, tri.bin."""
@@ -70,6 +71,9 @@ def make_tree(base: Path) -> Tree:
     (root / "parts" / "in.obj").write_text(_box_obj())
     (root / "tex.png").write_bytes(PNG_1x1)
     _glb_with_buffer(root, "../secret/tri.bin").rename(root / "evil.gltf")
+    _glb_with_buffer(root, "%2e%2e/%2e%2e/secret/tri.bin").rename(root / "parts" / "quoted.gltf")
+    (root / "asm").mkdir()
+    os.symlink("../../secret/secret.obj", root / "asm" / "a.obj")
     (secret / "secret.grammar").write_text(f"grammar secret\nattr {SECRET_ATTR} = 1\n")
     (secret / "secret.obj").write_text(_box_obj())
     (secret / "tex.png").write_bytes(PNG_1x1)
@@ -126,6 +130,7 @@ ATTACKS: list[Attack] = [
     Attack("i() through a folder link", _ins('"link_out/secret.obj"')),
     Attack("i() through a link to the parent", _ins('"sub/up2/secret/secret.obj"')),
     Attack("i() of a glTF whose buffer is outside", _ins('"evil.gltf"')),
+    Attack("i() of a glTF whose buffer URI is percent-encoded", _ins('"parts/quoted.gltf"')),
     Attack("i() of a rule argument", "grammar g\n"
            + 'Lot --> footprint(rect(4, 4)) extrude(2) B("../secret/" + "secret.obj")\n'
            + "B(p) --> i(p) A.\n"),
@@ -140,6 +145,8 @@ ATTACKS: list[Attack] = [
     # tiling grammars
     Attack("tiling mesh() through a link", 'grammar t\npart A = mesh("link_out/secret.obj")\n'
            "example e { A at (0, 0, 0) rot (0, 0, 0) }\n"),
+    Attack("tiling example: a folder holding a link outside", 'grammar t\npart A = box(1, 1, 1)\n'
+           'example e = assembly("asm")\n'),
     Attack("tiling example assembly outside", 'grammar t\npart A = box(1, 1, 1)\n'
            'example e = assembly("../secret/secret.obj")\n'),
 ]
