@@ -345,3 +345,22 @@ def test_confine_is_a_bottom_floor_module():
     mods |= {a.name for n in ast.walk(tree) if isinstance(n, ast.Import) for a in n.names
              if a.name.startswith("grammarkit")}
     assert mods <= {"errors", "ir.base"}, mods
+
+
+def test_every_worker_operation_runs_confined(work, tree):
+    """Each operation the page can ask for (worker.Worker.OPS) is a confined Work method, and
+    the policy is left when it returns (a gallery between its steps too)."""
+    from grammarkit_studio.work import Work
+    from grammarkit_studio.worker import Worker
+
+    for op in Worker.OPS:
+        method = getattr(Work, "format_text" if op == "format" else op)
+        assert getattr(method, "__wrapped__", None) is not None, f"{op} is not confined"
+    work.check(_imp("../secret/secret.grammar"))
+    assert confine.current() is None
+    steps = work.gallery(_ins('"../secret/" + "secret.obj"'), n=2, seed=0)
+    with pytest.raises(confine.ConfinementError):
+        next(steps)
+    assert confine.current() is None
+    items = list(work.gallery(_ins('"parts/" + "in.obj"'), n=2, seed=0))
+    assert items[-1]["done"] and items[-1]["count"] >= 1 and confine.current() is None
