@@ -132,9 +132,46 @@ def test_without_the_recognizer_the_page_is_told(monkeypatch):
     # as if grammarkit_sketch were not installed: `import grammarkit_sketch` raises ImportError
     monkeypatch.setitem(sys.modules, "grammarkit_sketch", None)
     merged = load(PARIS)
-    with pytest.raises(SketchError, match="sketch recognizer is not installed"):
+    with pytest.raises(SketchError, match="no sketch recognizer is installed"):
         recognize_sketch([[[1, 1], [50, 50]]], 100, 100, "Roof", PARIS.read_text(), PARIS, merged)
-    with pytest.raises(SketchError, match="sketch recognizer is not installed"):
+    with pytest.raises(SketchError, match="no sketch recognizer is installed"):
         sketch_canvas("Roof", merged)
-    with pytest.raises(SketchError, match="sketch recognizer is not installed"):
+    with pytest.raises(SketchError, match="no sketch recognizer is installed"):
         Work(str(PARIS), str(PARIS.parent)).sketch_canvas("Roof", PARIS.read_text())
+
+
+def test_the_studio_never_imports_another_plugin():
+    """Plugins never import each other (issue 25): the recognizer is found through the plugin
+    registry, so no module of the studio names the sketch plugin's package in an import."""
+    import ast
+
+    studio = ROOT / "plugins" / "studio" / "grammarkit_studio"
+    others = {p.name for p in (ROOT / "plugins").glob("*/grammarkit_*") if p.name != "grammarkit_studio"}
+    bad = []
+    for f in studio.rglob("*.py"):
+        for node in ast.walk(ast.parse(f.read_text())):
+            names = [a.name for a in node.names] if isinstance(node, ast.Import) else (
+                [node.module] if isinstance(node, ast.ImportFrom) and node.module and not node.level else [])
+            bad += [f"{f.name}:{node.lineno}: {n}" for n in names if n.split(".")[0] in others]
+    assert others and not bad, bad
+
+
+def test_the_studio_works_without_the_sketch_plugin(tmp_path, monkeypatch):
+    """With the sketch plugin disabled (as if it were not installed), the worker process derives,
+    checks and exports as before, and the sketch canvas says what is missing."""
+    from grammarkit.plugins import DISABLE_ENV
+    from grammarkit_studio.worker import CallFailed, Worker
+
+    monkeypatch.setenv(DISABLE_ENV, "sketch")  # the worker process inherits it
+    worker = Worker(str(PARIS), str(PARIS.parent), "nosketch")
+    try:
+        text = PARIS.read_text()
+        out = worker.call("derive", 120, text=text, attrs={}, seed=0)
+        assert out["ok"] and out["glb"][:4] == b"glTF"
+        assert worker.call("export", 60, fmt="stl")["data"]
+        with pytest.raises(CallFailed, match="no sketch recognizer is installed"):
+            worker.call("sketch_canvas", 60, object_type="Roof", text=text)
+        # the process is still usable after the refusal
+        assert worker.call("check", 60, text=text)["ok"]
+    finally:
+        worker.close()

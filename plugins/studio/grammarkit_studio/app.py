@@ -14,6 +14,7 @@ import contextlib
 import hashlib
 import json
 import logging
+import math
 import struct
 import threading
 import time
@@ -37,6 +38,7 @@ STATIC = Path(__file__).with_name("static")
 MAX_TEXT = 1024 * 1024  # characters of grammar text the page may send
 MAX_MESSAGE = 4 * 1024 * 1024  # bytes of one websocket message (sketch images included)
 MAX_GALLERY = 64
+MAX_DEPTH = 32  # nesting of a websocket message's JSON (the page sends at most 4 levels)
 log = logging.getLogger("grammarkit.studio")
 
 
@@ -206,13 +208,14 @@ class Studio:
             return PlainTextResponse(f"unknown format {fmt!r} (the studio exports "
                                      f"{', '.join(EXPORT_FORMATS)})", status_code=404)
         gallery = request.query_params.get("gallery")
-        if gallery is not None and not (gallery.isdigit() and int(gallery) < MAX_GALLERY):
-            return PlainTextResponse("gallery= must be a variant's index", status_code=400)
+        index = None if gallery is None else _gallery_index(gallery)
+        if gallery is not None and index is None:
+            return PlainTextResponse(f"gallery= must be a variant's index, 0..{MAX_GALLERY - 1}",
+                                     status_code=400)
         # a tiling gallery's variant lives in the gallery worker; everything else in the view's
         worker = self.derive_worker if gallery is None else self.gallery_worker
         try:
-            out = await asyncio.to_thread(worker.call, "export", self.budget, fmt=fmt,
-                                          gallery=None if gallery is None else int(gallery))
+            out = await asyncio.to_thread(worker.call, "export", self.budget, fmt=fmt, gallery=index)
         except CallFailed as exc:
             return PlainTextResponse(exc.info.get("message", "export failed"), status_code=409)
         except (BudgetExceeded, WorkerFailed) as exc:
@@ -243,14 +246,18 @@ class Studio:
                 if len(raw) > MAX_MESSAGE:
                     await conn.send_json({"type": "error", "message": "message too large"})
                     continue
-                try:
-                    msg = json.loads(raw)
-                    if not isinstance(msg, dict):
-                        raise ValueError("not an object")
-                except ValueError:
-                    await conn.send_json({"type": "error", "message": "malformed message"})
+                msg, problem = _parse_message(raw)
+                if problem is not None:
+                    await conn.send_json({"type": "error", "message": problem})
                     continue
-                await self._dispatch(conn, msg)
+                try:
+                    await self._dispatch(conn, msg)
+                except (WebSocketDisconnect, asyncio.CancelledError):
+                    raise
+                except Exception as exc:  # noqa: BLE001 - a bug must not drop the connection
+                    log.exception("studio: message %r failed", msg.get("op"))
+                    await conn.send_json({"type": "error", "op": _echo(msg.get("op")),
+                                          "message": f"internal error: {type(exc).__name__}: {exc}"})
         except WebSocketDisconnect:
             pass
         finally:
@@ -268,7 +275,7 @@ class Studio:
                 conn.wake.set()
             elif op == "tree":
                 out = await self._call("tree")
-                await conn.send_json({"type": "tree", "rev": msg.get("rev"), **out})
+                await conn.send_json({"type": "tree", "rev": _echo(msg.get("rev")), **out})
             elif op == "pick":
                 point = msg.get("point")
                 if not (isinstance(point, list) and len(point) == 3 and all(isinstance(v, (int, float)) for v in point)):
@@ -276,7 +283,7 @@ class Studio:
                 terminal = msg.get("terminal")
                 out = await self._call("pick", point=[float(v) for v in point],
                                        terminal=terminal if isinstance(terminal, str) else None)
-                await conn.send_json({"type": "pick", "rev": msg.get("rev"), **out})
+                await conn.send_json({"type": "pick", "rev": _echo(msg.get("rev")), **out})
             elif op == "node":  # a tree row, or the shapes of a source line: their parts
                 ids = msg.get("ids")
                 if not (isinstance(ids, list) and 0 < len(ids) <= 10_000):
@@ -315,11 +322,11 @@ class Studio:
                                        text=_text(msg.get("text")))
                 await conn.send_json({"type": "sketch-canvas", **out})
             else:
-                await conn.send_json({"type": "error", "message": f"unknown op {op!r}"})
+                await conn.send_json({"type": "error", "message": f"unknown op {repr(op)[:100]}"})
         except CallFailed as exc:
-            await conn.send_json({"type": "error", "op": op, **exc.info})
+            await conn.send_json({"type": "error", "op": _echo(op), **exc.info})
         except (BudgetExceeded, WorkerFailed, ValueError, GrammarkitError) as exc:
-            await conn.send_json({"type": "error", "op": op, "message": str(exc)})
+            await conn.send_json({"type": "error", "op": _echo(op), "message": str(exc)})
 
     async def _call(self, op: str, **kwargs: Any) -> Any:
         return await asyncio.to_thread(self.derive_worker.call, op, self.budget, **kwargs)
@@ -377,7 +384,7 @@ class Studio:
                   "backend": msg.get("backend") if isinstance(msg.get("backend"), str) and msg.get("backend") else None,
                   "iterations": _int(msg.get("iterations", 2), "iterations"),
                   "attrs": _attrs(msg.get("attrs")), "timeout": self.gallery_budget}
-        conn.gallery = asyncio.create_task(self._gallery(conn, msg.get("id"), kwargs))
+        conn.gallery = asyncio.create_task(self._gallery(conn, _echo(msg.get("id")), kwargs))
 
     async def _gallery(self, conn: Connection, gid: Any, kwargs: dict) -> None:
         loop = asyncio.get_running_loop()
@@ -439,6 +446,50 @@ class _Headers:
             await send(message)
 
         await self.app(scope, receive, send_with_headers)
+
+
+def _gallery_index(value: str) -> int | None:
+    """A gallery variant's index from a query string (ASCII digits, below MAX_GALLERY), else
+    None: `int()` of 5,000 digits raises, and str.isdigit() accepts digits int() refuses."""
+    if not (0 < len(value) <= len(str(MAX_GALLERY)) and value.isascii() and value.isdigit()):
+        return None
+    index = int(value)
+    return index if index < MAX_GALLERY else None
+
+
+def _depth_exceeds(value: Any, limit: int) -> bool:
+    """Whether a parsed JSON value nests deeper than `limit` (iterative: no recursion)."""
+    stack = [(value, 1)]
+    while stack:
+        item, depth = stack.pop()
+        if isinstance(item, (dict, list)):
+            if depth > limit:
+                return True
+            stack.extend((v, depth + 1) for v in (item.values() if isinstance(item, dict) else item))
+    return False
+
+
+def _parse_message(raw: str) -> tuple[dict, str | None]:
+    """A websocket message as a dict, or the reason it is refused (the connection stays)."""
+    try:
+        msg = json.loads(raw)
+    except RecursionError:
+        return {}, f"malformed message: nested deeper than {MAX_DEPTH} levels"
+    except ValueError:  # bad JSON, or a number of more digits than int() converts
+        return {}, "malformed message"
+    if not isinstance(msg, dict):
+        return {}, "malformed message"
+    if _depth_exceeds(msg, MAX_DEPTH):
+        return {}, f"malformed message: nested deeper than {MAX_DEPTH} levels"
+    return msg, None
+
+
+def _echo(value: Any) -> Any:
+    """A value of the page's message sent back in a reply (rev, id, op): scalars only."""
+    if isinstance(value, float):
+        return value if math.isfinite(value) else None
+    return value if value is None or isinstance(value, (str, bool)) or (
+        isinstance(value, int) and abs(value) <= 2**63) else None
 
 
 def _int(value: Any, what: str) -> int:

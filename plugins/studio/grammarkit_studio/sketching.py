@@ -2,8 +2,10 @@
 sketch recognizer's answer (snippet and parameters, top 3), and the grammar text updated through
 grammarkit's printer.
 
-The recognizer is the `grammarkit_sketch` plugin (Nishida et al. 2016), imported only when the
-sketch canvas is used, through its public API only. As in Nishida et al.'s interface, a sketch is
+The recognizer is a plugin (grammarkit's own is the `sketch` entry point, Nishida et al. 2016),
+never imported by name: plugins do not import each other. It is found through the plugin
+registry when the sketch canvas is first used (`recognizer_api`), so the studio works, less its
+sketch canvas, when no recognizer is installed or it is disabled (GRAMMARKIT_DISABLE_PLUGINS). As in Nishida et al.'s interface, a sketch is
 drawn on the canvas of its object type: the type's fixed camera framed on the anchor (the part
 already built), whose outline the canvas shows in light grey
 (`get_recognizer().canvas(object_type, size=...)`). An anchor-framed type has its own aspect
@@ -20,6 +22,7 @@ from __future__ import annotations
 import base64
 import io
 import math
+import sys
 from pathlib import Path
 from typing import Any
 
@@ -117,13 +120,31 @@ def apply_snippet(text: str, path: Path, merged: Any, object_type: str, snippet:
     return format_grammar(raw.model_copy(update={"statements": tuple(statements)}))
 
 
-def _recognizer_module() -> Any:
-    try:
-        import grammarkit_sketch
-    except ImportError:
-        raise SketchError("the sketch recognizer is not installed: the sketch canvas needs the "
-                          "grammarkit_sketch plugin (and the `learning` extra it uses)") from None
-    return grammarkit_sketch
+# The recognizer's API, as a plugin package exposes it: `recognize(image, object_type,
+# snippet=None)` and `get_recognizer()` (whose `.canvas(type, size=)` and `.models`).
+RECOGNIZER_API = ("recognize", "get_recognizer")
+
+
+def recognizer_api() -> Any:
+    """The sketch recognizer, found through the plugin registry: among the plugins the plugin
+    manager loaded (entry points of group `grammarkit`, minus disabled or broken ones), the
+    first whose package offers RECOGNIZER_API. Nothing is imported by name: the package is
+    the one its entry point already loaded."""
+    from grammarkit.plugins import get_plugin_manager
+
+    for info in get_plugin_manager().plugins():
+        if info.disabled or not info.ok or not info.module:
+            continue
+        module = info.module.partition(":")[0]
+        package = sys.modules.get(module.rpartition(".")[0] or module)
+        try:
+            if package is not None and all(callable(getattr(package, n, None)) for n in RECOGNIZER_API):
+                return package
+        except ImportError:  # the package is there, but its learning extra (torch) is not
+            raise SketchError(f"the sketch recognizer of plugin {info.name!r} cannot load: install "
+                              "the `learning` extra it uses") from None
+    raise SketchError("no sketch recognizer is installed: the sketch canvas needs a plugin that "
+                      "provides one (grammarkit's `sketch` plugin, with the `learning` extra)")
 
 
 def _check_type(object_type: Any, merged: Any) -> str:
@@ -137,7 +158,7 @@ def _check_type(object_type: Any, merged: Any) -> str:
 def sketch_canvas(object_type: str, merged: Any) -> dict:
     """The canvas a type is drawn on: its size in pixels (the type's aspect ratio, longest side
     CANVAS_LONGEST) and the blank canvas with the anchor's outline, as a PNG data URL."""
-    sketch = _recognizer_module()
+    sketch = recognizer_api()
     _check_type(object_type, merged)
     recognizer = sketch.get_recognizer()
     stage = recognizer.models.type_model(object_type).stage  # ModelFileError names the types it has
@@ -155,7 +176,7 @@ def recognize_sketch(strokes: Any, width: int, height: int, object_type: str, te
     """The recognizer's top candidates for the drawing (strokes in pixels of a `width` x
     `height` canvas of the type's shape, see `sketch_canvas`), each with its parameters and the
     grammar text that uses it."""
-    sketch = _recognizer_module()
+    sketch = recognizer_api()
     _check_type(object_type, merged)
     image = strokes_to_image(strokes, width, height)
     best = sketch.recognize(image, object_type)

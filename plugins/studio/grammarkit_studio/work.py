@@ -5,23 +5,29 @@ and its sliders) and the last model derived from it. It runs inside a `worker.Wo
 process, so that a runaway grammar can be stopped by ending the process (Python threads cannot
 be stopped) and so that the server's event loop never waits on the engine.
 
+Every operation runs confined to the grammar's folder (`grammarkit.confine`): each file the
+engine, the DSL or an exporter opens for it (imports, meshes, textures, file searches) is
+checked there by its resolved path, after escapes, evaluation and symbolic links.
+
 Everything here uses grammarkit's public API only.
 """
 from __future__ import annotations
 
+import contextlib
+import functools
 import math
-import re
 import time
 from pathlib import Path
-from typing import Any, Iterator
+from typing import Any, Callable, Iterator
 
+from grammarkit import confine
 from grammarkit.errors import GrammarkitError
 
 # How many text analyses to keep (the undo/redo of a few edits hits the cache).
 _CACHE = 8
 # The formats the Export buttons offer (grammarkit's exporter registry encodes them).
 EXPORT_FORMATS = ("glb", "obj", "stl")
-_IMPORT = re.compile(r'^[ \t]*import[ \t]+"((?:[^"\\\n]|\\.)*)"', re.M)
+WHO = "the studio"  # named in every refusal of a file outside the folder
 
 
 class StudioError(GrammarkitError):
@@ -85,52 +91,31 @@ def _step(lo: float, hi: float) -> float:
     return 10.0 ** math.floor(math.log10(span / 200.0))
 
 
-def confined_imports(text: str, path: Path, root: Path, depth: int = 0) -> list[dict]:
-    """Diagnostics for `import "..."` lines (of the text and, recursively, of the files it
-    imports) that reach outside the grammar's folder: the studio reads nothing else."""
-    problems = []
-    for m in _IMPORT.finditer(text):
-        target = (path.parent / m.group(1)).resolve()
-        line = text.count("\n", 0, m.start()) + 1
-        if not target.is_relative_to(root):
-            problems.append({"severity": "error", "code": "studio-outside-folder", "hint": None,
-                             "message": f"import {m.group(1)!r}: the studio only reads files in "
-                                        f"{root} (run `grammarkit studio` on a grammar in a "
-                                        "folder that holds its imports)",
-                             "file": str(path), "line": line, "column": m.start(1),
-                             "end_line": line, "end_column": m.end(1) + 1})
-        elif depth < 16 and target.is_file() and target.suffix == ".grammar":
-            try:
-                sub = target.read_text(encoding="utf-8")
-            except (OSError, UnicodeDecodeError):
-                continue  # the checker reports it with its own message
-            problems += confined_imports(sub, target, root, depth + 1)
-    return problems
-
-
 # Calls whose first string argument names a file the engine reads: split inserts `i("a.glb")`,
 # tiling part meshes `mesh("a.glb", ...)` and example assemblies `assembly("a.glb")`.
 _FILE_CALLS = {"op": {"i"}, "call": {"mesh", "assembly"}}
 
 
 def confined_files(grammar: Any, root: Path) -> list[dict]:
-    """Diagnostics for files named in the grammar (inserted assets, part meshes, examples)
-    that lie outside the grammar's folder. Paths are relative to the grammar's folder, as the
-    engine reads them."""
+    """Diagnostics, at check time, for the literal file names of the grammar (inserted assets,
+    part meshes, examples, asset folders) that lie outside the grammar's folder, so the editor
+    underlines them before anything is derived. Only a convenience: names computed at derive
+    time (consts, attrs, concatenations, fileRandom) are refused where the file is opened, by
+    `grammarkit.confine`, whatever this finds."""
     from grammarkit.ir import Node
 
     problems = []
 
-    def check(value: str, node: Any) -> None:
-        target = (root / value).resolve()
-        if not target.is_relative_to(root):
-            span = getattr(node, "span", None)
-            problems.append({"severity": "error", "code": "studio-outside-folder", "hint": None,
-                             "message": f"{value!r}: the studio only reads files in {root}",
-                             "file": span.file if span else None, "line": span.line if span else None,
-                             "column": span.column if span else None,
-                             "end_line": span.end_line if span else None,
-                             "end_column": span.end_column if span else None})
+    def check(value: str, node: Any, what: str) -> None:
+        span = getattr(node, "span", None)
+        base = Path(span.file).parent if span is not None and span.file else root
+        with confine.confined(root, who=WHO):
+            refused = confine.refusal(value, base=base, what=what, span=span)
+        if refused is not None:
+            problems.append(refused.to_json())
+
+    for folder in getattr(grammar, "asset_dirs", ()) or ():
+        check(folder, grammar, "asset folder")
 
     stack = [grammar]
     while stack:
@@ -146,10 +131,10 @@ def confined_files(grammar: Any, root: Path) -> list[dict]:
             first = node.args[0]
             if kind == "op":
                 first = first.value  # an operation's Arg wraps its expression
-            if getattr(first, "kind", None) == "str":
-                check(first.value, node)
+            if getattr(first, "kind", None) == "str" and not first.value.startswith("builtin:"):
+                check(first.value, node, "mesh file")
         if kind == "example" and node.source:
-            check(node.source, node)
+            check(node.source, node, "example file")
         stack.extend(getattr(node, f) for f in type(node).model_fields if f != "span")
     return problems
 
@@ -162,15 +147,15 @@ class Analysis:
 
         t0 = time.perf_counter()
         self.text = text
-        self.diagnostics = confined_imports(text, path, root)
         self.grammar = None
-        if not self.diagnostics:
-            grammar, diags = check_text(text, filename=str(path), registries=registries)
-            self.diagnostics = [d.to_json() for d in diags]
-            if grammar is not None:
-                self.diagnostics += confined_files(grammar, root)
-            if not any(d["severity"] == "error" for d in self.diagnostics):
-                self.grammar = grammar
+        # imports outside the folder are refused by the import resolver itself (confined by
+        # the Work operation that asked for this analysis), before it looks at the file
+        grammar, diags = check_text(text, filename=str(path), registries=registries)
+        self.diagnostics = [d.to_json() for d in diags]
+        if grammar is not None:
+            self.diagnostics += confined_files(grammar, root)
+        if not any(d["severity"] == "error" for d in self.diagnostics):
+            self.grammar = grammar
         self.seconds = time.perf_counter() - t0
         self.values: dict[str, Any] = {}
         if self.grammar is not None and self.grammar.family == "split":
@@ -214,6 +199,40 @@ def error_json(exc: BaseException) -> dict:
     return {"message": f"{type(exc).__name__}: {exc}", "diagnostics": []}
 
 
+def _confined(method: Callable) -> Callable:
+    """Run a Work operation confined to the grammar's folder (every file it opens is checked)."""
+
+    @functools.wraps(method)
+    def run(self: "Work", *args: Any, **kwargs: Any) -> Any:
+        with confine.confined(self.root, who=WHO):
+            return method(self, *args, **kwargs)
+
+    return run
+
+
+def _confined_steps(method: Callable) -> Callable:
+    """`_confined` for a generator: each step runs confined, and the policy is never left set
+    between steps (the consumer's code runs unconfined, and closing the generator elsewhere
+    cannot reset a context variable of another context)."""
+
+    @functools.wraps(method)
+    def run(self: "Work", *args: Any, **kwargs: Any) -> Iterator[Any]:
+        steps = method(self, *args, **kwargs)
+        try:
+            while True:
+                with confine.confined(self.root, who=WHO):
+                    try:
+                        item = next(steps)
+                    except StopIteration:
+                        return
+                yield item
+        finally:
+            with confine.confined(self.root, who=WHO), contextlib.suppress(Exception):
+                steps.close()
+
+    return run
+
+
 class Work:
     """The worker process's state: text analyses (LRU), the current model, the registries."""
 
@@ -252,6 +271,7 @@ class Work:
         return encode_result(Result(id="studio", index=0, model=model), fmt, self.registries)
 
     # -- operations (called by name from worker.py) ----------------------------------------------
+    @_confined
     def warm(self, text: str) -> dict:
         """Import the engine, read the plugins and analyse the text before the page asks."""
         out = self.check(text)
@@ -259,9 +279,11 @@ class Work:
             self.derive(text, {}, 0)
         return out
 
+    @_confined
     def check(self, text: str) -> dict:
         return self.analysis(text).summary()
 
+    @_confined
     def derive(self, text: str, attrs: dict, seed: int, example: int = 0,
                variation: int | None = None) -> dict:
         """The model of the text (split: derived with attrs and seed, or variation `variation`
@@ -312,6 +334,7 @@ class Work:
         out["facts"]["work_ms"] = round(1000 * (time.perf_counter() - t_in), 1)
         return out
 
+    @_confined
     def export(self, fmt: str, gallery: int | None = None) -> dict:
         """The model in the view (or the gallery's variant `gallery`) in format `fmt`."""
         fmt = str(fmt).lower()
@@ -328,6 +351,7 @@ class Work:
         name = getattr(model, "name", None) or self.path.stem
         return {"data": self.encode(model, fmt), "filename": f"{name}.{fmt}"}
 
+    @_confined
     def tree(self) -> dict:
         """The derivation tree of the current split model, compact: one row per shape
         [id, parent, rule, via, file index, line, terminal], the files listed once."""
@@ -351,6 +375,7 @@ class Work:
         self._tree = {"nodes": rows, "files": files}
         return self._tree
 
+    @_confined
     def pick(self, point: list[float], terminal: str | None = None) -> dict:
         """The terminal part under a clicked point (model frame, Z up): among the parts named
         `terminal` (all parts if None), the one whose scope box is nearest the point, ties to
@@ -393,6 +418,7 @@ class Work:
             node = parents.get(node, -1)
         return out[::-1]
 
+    @_confined
     def node_box(self, nodes: list[int]) -> dict:
         """The terminal parts below the shapes `nodes` (their scopes: origin, axes, size)."""
         if self.model_kind != "split":
@@ -409,6 +435,7 @@ class Work:
         parts = [q.to_dict() for q in self.model.parts if q.node in below]
         return {"parts": parts[:5000], "count": len(parts)}
 
+    @_confined
     def format_text(self, text: str) -> dict:
         """The canonical text of the grammar (grammarkit's printer), imports kept as written."""
         from grammarkit.dsl import parse
@@ -416,6 +443,7 @@ class Work:
 
         return {"text": format_grammar(parse(text, filename=str(self.path)))}
 
+    @_confined_steps
     def gallery(self, text: str, n: int, seed: int, backend: str | None = None,
                 iterations: int = 1, options: dict | None = None, attrs: dict | None = None,
                 timeout: float | None = None) -> Iterator[dict]:
@@ -435,9 +463,10 @@ class Work:
         t0 = time.perf_counter()
         count = 0
         self.gallery_models = []
+        # workers=1: the confinement is this process's (a worker process would not inherit it)
         for result in iter_results(g, backend=backend, n=n, seed=seed, iterations=iterations,
                                    options=opts, attrs=attrs if g.family == "split" else None,
-                                   timeout=timeout, registries=self.registries):
+                                   timeout=timeout, workers=1, registries=self.registries):
             model = result.model
             item: dict[str, Any] = {"id": result.id, "index": result.index, "seed": result.seed,
                                     "parents": list(result.parents),
@@ -461,6 +490,7 @@ class Work:
                "shortfall": None if count >= n else f"the back end made {count} of {n} variants "
                                                      "(it found no more distinct valid ones)"}
 
+    @_confined
     def backends(self, text: str) -> dict:
         a = self.analysis(text)
         family = a.grammar.family if a.ok else None
@@ -468,6 +498,7 @@ class Work:
                 "backends": sorted(name for name, spec in self.registries.backends.items()
                                    if family in spec.families)}
 
+    @_confined
     def sketch(self, strokes: list, width: int, height: int, object_type: str, text: str) -> dict:
         """The sketch recognizer's top candidates for a drawing (see sketching.py)."""
         from .sketching import recognize_sketch
@@ -477,6 +508,7 @@ class Work:
             raise StudioError("sketching needs a split grammar without errors")
         return recognize_sketch(strokes, width, height, object_type, text, self.path, a.grammar)
 
+    @_confined
     def sketch_canvas(self, object_type: str, text: str) -> dict:
         """The canvas an object type is drawn on (size and anchor outline; see sketching.py)."""
         from .sketching import sketch_canvas
