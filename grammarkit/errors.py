@@ -12,7 +12,6 @@ and exits non-zero; it never shows a traceback for them.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import TYPE_CHECKING, Iterable, Literal
 
 if TYPE_CHECKING:  # pragma: no cover - spans are IR (pydantic); this module stays import-light

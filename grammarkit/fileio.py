@@ -326,7 +326,6 @@ class FolderLock:
     def acquire(self) -> "FolderLock":
         import json
         import shlex
-        import sys
         import time
 
         try:

@@ -92,7 +92,7 @@ def _check_image(path: Path, option: str) -> None:
               flag_value=Path("."), help="the derivation tree as JSON: a file for one model; for "
               "a folder, give the flag alone and each result gets <id>.tree.json")
 @click.option("--variations", type=click.IntRange(min=1, max=MAX_MODELS), default=None,
-              help=f"split grammar: N variations (attrs resampled, choices re-rolled) into the -o folder")
+              help="split grammar: N variations (attrs resampled, choices re-rolled) into the -o folder")
 @click.option("--backend", default=None, help="back end (default: split for split grammars, "
               "graph-sampler for tiling grammars; see `grammarkit plugins`)")
 @click.option("-n", "count", type=click.IntRange(min=1, max=MAX_MODELS), default=None,

@@ -195,11 +195,15 @@ def iter_results(grammar: Any, *, backend: str | None = None, n: int = 1, seed: 
                        progress=progress, timeout=timeout, format=None, preview=False,
                        time_limit=time_limit)
     count = 0
-    for result in _drive(spec, request):
-        if count >= n:
-            break
-        count += 1
-        yield result
+    try:
+        for result in _drive(spec, request):
+            if count >= n:
+                break
+            count += 1
+            yield result
+    finally:
+        if executor is None:  # made for this call: its worker processes end with it
+            request.executor.close()
 
 
 def encode_result(result: Result, fmt: str, registries: Any) -> bytes:
@@ -271,9 +275,13 @@ def run_backend(grammar: Any, *, out: "str | Path | ModelFile", backend: str | N
         sink: Any = out
     else:
         sink = OutputFolder(Path(out), run, protected=protected, overwrite=overwrite)
-    with sink as folder:  # a folder stays locked until the run ends
-        return _write_results(spec, request, folder, registries, n, fmt, preview, on_result, t0,
-                              time_limit)
+    try:
+        with sink as folder:  # a folder stays locked until the run ends
+            return _write_results(spec, request, folder, registries, n, fmt, preview, on_result,
+                                  t0, time_limit)
+    finally:
+        if executor is None:  # made for this call: its worker processes end with it
+            request.executor.close()
 
 
 def shortfall_reason(request: Request, stats: Any, time_limit: float | None) -> str:

@@ -30,7 +30,6 @@ manifest listing exactly the complete items; running the same batch again contin
 from __future__ import annotations
 
 import io
-import os
 import time
 from dataclasses import asdict, dataclass, field
 from pathlib import Path

@@ -47,7 +47,7 @@ from dataclasses import dataclass
 from typing import Any, Callable, Iterable, Iterator
 
 from ..errors import GrammarkitError
-from .executor import WorkerError, _main_without_phantom_file, _portable_error, default_workers
+from .executor_protocol import WorkerError, default_workers, main_without_phantom_file, portable_error
 
 __all__ = ["DaskExecutor", "DaskSession", "DaskUnavailable", "SchedulerUnreachable", "parse_address"]
 
@@ -169,7 +169,7 @@ def _run_chunk(recipe: _Recipe, fn: Callable[[Any, Any], Any], items: list) -> t
             try:
                 out.append((True, fn(state, item)))
             except Exception as exc:  # noqa: BLE001 - returned to the parent, raised in order
-                out.append((False, _portable_error(exc)))
+                out.append((False, portable_error(exc)))
                 break
         return out, time.perf_counter() - t0
     finally:
@@ -310,7 +310,7 @@ class DaskExecutor:
                 # spawned workers re-import the main script: hide a main "file" that is not one
                 # (code from standard input); its HTTP server (health checks) moves off a port
                 # another cluster holds, which is no news to the user
-                with _main_without_phantom_file(), warnings.catch_warnings():
+                with main_without_phantom_file(), warnings.catch_warnings():
                     warnings.filterwarnings("ignore", message=r"Port \d+ is already in use")
                     self.cluster = distributed.LocalCluster(
                         n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None,

@@ -18,28 +18,31 @@ Functions passed to `session`, `update` and `map` must be picklable (module-leve
 `LocalExecutor` runs everything in this process until the work is worth parallelising: it
 times the items it runs itself and starts worker processes only when the remaining work is
 larger than what starting them costs (spawning a Python that imports numpy and manifold3d
-takes about a second per worker here). Workers persist for the life of the process, so a
-second run pays nothing; they die with the parent (PR_SET_PDEATHSIG on Linux, and EOF on
-their pipe elsewhere), ignore Ctrl-C (the parent handles it), and a session interrupted
+takes about a second per worker here). Workers belong to the executor that started them and
+persist until its `close()`, so a second run on the same executor pays nothing; they die
+with the parent (PR_SET_PDEATHSIG on Linux, and EOF on their pipe elsewhere), ignore Ctrl-C (the parent handles it), and a session interrupted
 while work is out drops the workers it used.
 
-A distributed engine plugs in by implementing the same three calls (`Executor` below);
+A distributed engine plugs in by implementing the same three calls (`Executor`, in
+grammarkit.run.executor_protocol);
 back ends never see which one runs them.
 """
 from __future__ import annotations
 
 import itertools
 import multiprocessing as mp
-import os
 import pickle
 import signal
 import sys
 import threading
 import time
-import traceback
+import weakref
 from collections import deque
-from contextlib import contextmanager
-from typing import Any, Callable, Iterable, Iterator, Protocol, Sequence
+from typing import Any, Callable, Iterable, Iterator, Sequence
+
+from .executor_protocol import (  # noqa: F401 - the protocol, re-exported where it always was
+    Executor, Session, WorkerError, default_workers, main_without_phantom_file, portable_error,
+)
 
 __all__ = ["Executor", "LocalExecutor", "Session", "WorkerError", "default_workers", "make_executor"]
 
@@ -49,32 +52,6 @@ SPAWN_SECONDS = 1.5
 # Aim for chunks of about this much work: small enough that Ctrl-C and load balancing react
 # quickly, large enough that pipe traffic stays negligible.
 CHUNK_SECONDS = 0.15
-
-
-class WorkerError(RuntimeError):
-    """A worker process died or its function raised something that could not be sent back."""
-
-
-def default_workers() -> int:
-    try:
-        return max(1, len(os.sched_getaffinity(0)))
-    except AttributeError:  # pragma: no cover - non-Linux
-        return max(1, os.cpu_count() or 1)
-
-
-class Session(Protocol):
-    def update(self, fn: Callable[..., None], *args: Any) -> None: ...
-    def map(self, fn: Callable[[Any, Any], Any], items: Iterable[Any]) -> Iterator[Any]: ...
-    def close(self) -> None: ...
-
-
-class Executor(Protocol):
-    """What back ends use for parallel work (see the module docstring)."""
-
-    workers: int
-
-    def session(self, init: Callable[..., Any], *args: Any) -> Session: ...
-    def close(self) -> None: ...
 
 
 # ---------------------------------------------------------------------------------------------
@@ -91,16 +68,6 @@ def _die_with_parent() -> None:
         libc.prctl(1, signal.SIGKILL)  # PR_SET_PDEATHSIG
     except Exception:  # noqa: BLE001 - best effort; EOF on the pipe still ends the worker
         pass
-
-
-def _portable_error(exc: BaseException) -> BaseException:
-    """`exc` if it survives pickling, else a WorkerError carrying its text."""
-    try:
-        pickle.loads(pickle.dumps(exc))
-        return exc
-    except Exception:  # noqa: BLE001
-        text = "".join(traceback.format_exception_only(type(exc), exc)).strip()
-        return WorkerError(text)
 
 
 def _worker_main(conn: Any) -> None:  # pragma: no cover - runs in the child process
@@ -139,7 +106,7 @@ def _serve(conn: Any) -> None:  # pragma: no cover - runs in the child process
                     try:
                         out.append((True, fn(state, item)))
                     except Exception as exc:  # noqa: BLE001 - returned to the parent, in order
-                        out.append((False, _portable_error(exc)))
+                        out.append((False, portable_error(exc)))
                         break
                 conn.send(("done", chunk, out))
             elif kind == "drop":
@@ -148,26 +115,9 @@ def _serve(conn: Any) -> None:  # pragma: no cover - runs in the child process
                 return
         except Exception as exc:  # noqa: BLE001 - an init/update failure ends this worker's use
             try:
-                conn.send(("failed", _portable_error(exc)))
+                conn.send(("failed", portable_error(exc)))
             except (OSError, pickle.PicklingError):
                 return
-
-
-@contextmanager
-def _main_without_phantom_file() -> Iterator[None]:
-    """Spawned children re-import the parent's main script from `__main__.__file__`. Code run
-    from standard input or a notebook has a `__file__` that is no file ('<stdin>'), and the
-    child would die looking for it: hide it while starting (the work never lives in it)."""
-    main = sys.modules.get("__main__")
-    path = getattr(main, "__file__", None)
-    if path is None or os.path.isfile(path):
-        yield
-        return
-    del main.__file__  # type: ignore[union-attr]
-    try:
-        yield
-    finally:
-        main.__file__ = path  # type: ignore[union-attr]
 
 
 class _Worker:
@@ -175,7 +125,7 @@ class _Worker:
         ctx = mp.get_context("spawn")  # fork deadlocks in manifold3d's TBB thread pool
         self.conn, child = ctx.Pipe()
         self.proc = ctx.Process(target=_worker_main, args=(child,), daemon=True)
-        with _main_without_phantom_file():
+        with main_without_phantom_file():
             self.proc.start()
         child.close()
         self.ready = False
@@ -194,55 +144,77 @@ class _Worker:
         self.proc.join(timeout=5)
 
 
-_POOL: list[_Worker] = []  # persistent workers of this process
-_POOL_LOCK = threading.Lock()
 _SESSION_IDS = itertools.count(1)
 
 
-def _take_workers(count: int) -> list[_Worker]:
-    """`count` workers for a session: live idle ones first, new ones started for the rest."""
-    with _POOL_LOCK:
-        _POOL[:] = [w for w in _POOL if w.alive()]
-        free = [w for w in _POOL if not getattr(w, "busy", False)]
-        taken = free[:count]
-        while len(taken) < count:
-            w = _Worker()
-            _POOL.append(w)
-            taken.append(w)
-        for w in taken:
-            w.busy = True  # type: ignore[attr-defined]
-        return taken
+class WorkerPool:
+    """The worker processes of one executor: started on demand, reused by its later sessions,
+    stopped by `close()` (the executor's). They also die with this process."""
+
+    def __init__(self) -> None:
+        self._workers: list[_Worker] = []
+        self._lock = threading.Lock()
+        _POOLS.add(self)
+
+    def take(self, count: int) -> list[_Worker]:
+        """`count` workers for a session: live idle ones first, new ones started for the rest."""
+        with self._lock:
+            self._workers[:] = [w for w in self._workers if w.alive()]
+            free = [w for w in self._workers if not getattr(w, "busy", False)]
+            taken = free[:count]
+            while len(taken) < count:
+                w = _Worker()
+                self._workers.append(w)
+                taken.append(w)
+            for w in taken:
+                w.busy = True  # type: ignore[attr-defined]
+            return taken
+
+    def release(self, workers: Sequence[_Worker], *, broken: bool) -> None:
+        with self._lock:
+            for w in workers:
+                w.busy = False  # type: ignore[attr-defined]
+                if broken or not w.alive():
+                    w.kill()
+                    if w in self._workers:
+                        self._workers.remove(w)
+
+    def idle(self) -> int:
+        """Live workers not used by a session (a later session starts with these for free)."""
+        with self._lock:
+            return sum(1 for w in self._workers if w.alive() and not getattr(w, "busy", False))
+
+    def pids(self) -> list[int]:
+        with self._lock:
+            return [w.proc.pid for w in self._workers if w.alive()]
+
+    def close(self) -> None:
+        """Stop every worker of this pool."""
+        with self._lock:
+            for w in self._workers:
+                try:
+                    w.conn.send(("stop",))
+                except (OSError, BrokenPipeError):
+                    pass
+            for w in self._workers:
+                w.proc.join(timeout=5)
+                if w.proc.is_alive():
+                    w.kill()
+            self._workers.clear()
 
 
-def _release(workers: Sequence[_Worker], *, broken: bool) -> None:
-    with _POOL_LOCK:
-        for w in workers:
-            w.busy = False  # type: ignore[attr-defined]
-            if broken or not w.alive():
-                w.kill()
-                if w in _POOL:
-                    _POOL.remove(w)
+_POOLS: "weakref.WeakSet[WorkerPool]" = weakref.WeakSet()
 
 
 def shutdown_workers() -> None:
-    """Stop every persistent worker of this process (they also end with it)."""
-    with _POOL_LOCK:
-        for w in _POOL:
-            try:
-                w.conn.send(("stop",))
-            except (OSError, BrokenPipeError):
-                pass
-        for w in _POOL:
-            w.proc.join(timeout=5)
-            if w.proc.is_alive():
-                w.kill()
-        _POOL.clear()
+    """Stop the workers of every local executor of this process (tests, notebooks)."""
+    for pool in list(_POOLS):
+        pool.close()
 
 
 def idle_workers() -> int:
-    """Live workers not used by a session (a second run starts with these for free)."""
-    with _POOL_LOCK:
-        return sum(1 for w in _POOL if w.alive() and not getattr(w, "busy", False))
+    """Live idle workers of every local executor of this process."""
+    return sum(pool.idle() for pool in list(_POOLS))
 
 
 # ---------------------------------------------------------------------------------------------
@@ -292,7 +264,7 @@ class _LocalSession:
     def _worth_it(self, per_item: float, remaining: int) -> bool:
         work = per_item * remaining
         workers = self.executor.workers
-        startup = max(0, workers - idle_workers()) * SPAWN_SECONDS / max(1, min(workers, 2))
+        startup = max(0, workers - self.executor.pool.idle()) * SPAWN_SECONDS / max(1, min(workers, 2))
         return work * (1.0 - 1.0 / workers) > startup + self.executor.min_parallel_seconds
 
     def _start_workers(self, count: int) -> None:
@@ -301,7 +273,7 @@ class _LocalSession:
         except Exception:  # noqa: BLE001 - any pickling failure means: stay in this process
             self.local_only = True
             return
-        self.workers = _take_workers(count)
+        self.workers = self.executor.pool.take(count)
         for w in self.workers:
             if w.ready:
                 w.conn.send(("init", self.sid, self.init, self.args, list(self.log)))
@@ -378,7 +350,7 @@ class _LocalSession:
         except BaseException:
             # results of chunks still out would arrive later on the pipes: drop those workers
             if busy or out:
-                _release(self.workers, broken=True)
+                self.executor.pool.release(self.workers, broken=True)
                 self.workers = []
             raise
 
@@ -402,7 +374,7 @@ class _LocalSession:
         import warnings
 
         self.workers.remove(w)
-        _release([w], broken=True)
+        self.executor.pool.release([w], broken=True)
         if not self.workers:
             self.local_only = True
             warnings.warn("grammarkit: worker processes could not start; continuing in this "
@@ -436,7 +408,7 @@ class _LocalSession:
                     w.conn.send(("drop", self.sid))
                 except (OSError, BrokenPipeError):
                     pass
-        _release(self.workers, broken=False)
+        self.executor.pool.release(self.workers, broken=False)
         self.workers = []
 
     def __enter__(self) -> "_LocalSession":
@@ -467,12 +439,15 @@ class LocalExecutor:
             self.workers = 1
         self.parallel = parallel
         self.min_parallel_seconds = float(min_parallel_seconds)
+        self.pool = WorkerPool()  # this executor's worker processes, stopped by close()
 
     def session(self, init: Callable[..., Any], *args: Any) -> _LocalSession:
         return _LocalSession(self, init, args)
 
     def close(self) -> None:
-        """Nothing to release: workers persist for the next run (see shutdown_workers)."""
+        """Stop the worker processes this executor started (its later sessions would have
+        reused them; a closed executor starts new ones if used again)."""
+        self.pool.close()
 
     def __enter__(self) -> "LocalExecutor":
         return self

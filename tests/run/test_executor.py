@@ -11,7 +11,6 @@ import time
 
 import pytest
 
-from grammarkit.run import executor as ex
 from grammarkit.run.executor import LocalExecutor, WorkerError
 
 
@@ -66,18 +65,30 @@ def test_an_error_is_raised_at_its_place_after_the_results_before_it():
     assert got == [1, 2, 3]
 
 
-def test_workers_persist_across_sessions():
-    run(2, "always", [list(range(8))])
-    pids = sorted(w.proc.pid for w in ex._POOL)
-    run(2, "always", [list(range(8))])
-    assert sorted(w.proc.pid for w in ex._POOL) == pids
+def test_workers_persist_across_sessions_and_close_with_their_executor():
+    exe = LocalExecutor(2, parallel="always")
+    for _ in range(2):
+        with exe.session(make_state, 3) as session:
+            assert len(list(session.map(compute, range(8)))) == 8
+        pids = sorted(exe.pool.pids())
+        assert len(pids) == 2
+        if _ == 0:
+            first = pids
+    assert pids == first  # the second session reused the executor's workers
+    procs = [w.proc for w in exe.pool._workers]
+    exe.close()  # the pool belongs to the executor: closing it stops them
+    assert exe.pool.pids() == [] and not any(p.is_alive() for p in procs)
+    other = LocalExecutor(2, parallel="always")
+    assert other.pool.pids() == []  # another executor never sees them
+    other.close()
 
 
 def test_auto_stays_in_process_for_small_work():
-    before = len(ex._POOL)
-    out = run(2, "auto", [list(range(20))])
+    with LocalExecutor(2, parallel="auto") as exe:
+        with exe.session(make_state, 3) as session:
+            out = list(session.map(compute, range(20)))
+        assert exe.pool.pids() == []
     assert {r[2] for r in out} == {os.getpid()}
-    assert len(ex._POOL) == before
 
 
 def test_auto_goes_parallel_when_the_work_pays():
@@ -89,8 +100,10 @@ def test_auto_goes_parallel_when_the_work_pays():
 def test_interruption_mid_map_drops_the_workers_it_used(monkeypatch):
     import multiprocessing.connection
 
-    run(2, "always", [list(range(4))])  # workers up
-    used = [w.proc for w in ex._POOL]
+    exe = LocalExecutor(2, parallel="always")
+    with exe.session(make_state, 1) as session:
+        list(session.map(slow, range(4)))  # workers up
+    used = [w.proc for w in exe.pool._workers]
     real = multiprocessing.connection.wait
     calls = []
 
@@ -102,13 +115,15 @@ def test_interruption_mid_map_drops_the_workers_it_used(monkeypatch):
 
     monkeypatch.setattr(multiprocessing.connection, "wait", interrupted)
     with pytest.raises(KeyboardInterrupt):
-        with LocalExecutor(2, parallel="always").session(make_state, 1) as session:
+        with exe.session(make_state, 1) as session:
             list(session.map(slow, range(64)))
     monkeypatch.undo()
     for p in used:
         p.join(timeout=5)
     assert not any(p.is_alive() for p in used)
-    assert run(2, "always", [list(range(6))])[5][0] == 15  # fresh workers, no stale replies
+    with exe.session(make_state, 3) as session:  # fresh workers, no stale replies
+        assert list(session.map(compute, range(6)))[5][0] == 15
+    exe.close()
 
 
 def test_workers_die_with_their_parent(tmp_path):
@@ -116,12 +131,12 @@ def test_workers_die_with_their_parent(tmp_path):
         import sys, time
         sys.path.insert(0, {str(os.path.dirname(__file__))!r})
         from test_executor import make_state, slow
-        from grammarkit.run import executor as ex
+
         from grammarkit.run.executor import LocalExecutor
         s = LocalExecutor(2, parallel="always").session(make_state, 1)
         it = s.map(slow, range(100000))
         next(it)
-        print(" ".join(str(w.proc.pid) for w in ex._POOL), flush=True)
+        print(" ".join(str(p) for p in s.executor.pool.pids()), flush=True)
         time.sleep(60)
     """)
     proc = subprocess.Popen([sys.executable, "-c", script], stdout=subprocess.PIPE, text=True)
