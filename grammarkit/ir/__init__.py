@@ -11,6 +11,7 @@ from .split import (
     Nil, OpCall, Pattern, Push, Repeat, Rule, Seq, Snippet, Successor, Terminal, Use, Variants,
     VariantOption,
 )
+from .walk import block_branches, block_seqs, child_seqs, successor_names, walk, walk_seqs
 from .tiling import (
     ConstraintDef, CountRange, DockDef, ExampleDef, InlinePart, NeighborRule, PartDef, Placement,
     SiteDef, UpDef,
