@@ -26,16 +26,20 @@ def _trimmed(solid: Any, s: Shape) -> Any:
     """Clip an inserted solid or surface by the shape's trim planes (CGA: the bisector planes
     at the corners of the faces comp(f) made; a cornice inserted along a facade is mitred at
     the building's corners). The planes are in world coordinates; the solid is in the scope's."""
+    box = None  # the solid's bounding box, asked again only after a cut (asking evaluates the solid)
     for point, normal in s.trims:
         ln = [sum(normal[k] * s.ax[i][k] for k in range(3)) for i in range(3)]  # world -> scope
         lp = [sum((point[k] - s.o[k]) * s.ax[i][k] for k in range(3)) for i in range(3)]
         offset = ln[0] * lp[0] + ln[1] * lp[1] + ln[2] * lp[2]
-        x0, y0, z0, x1, y1, z1 = solid.bounding_box()
+        if box is None:
+            box = solid.bounding_box()
+        x0, y0, z0, x1, y1, z1 = box
         # the lowest value of dot(n, p) over the bounding box: nothing to cut when it is kept
         low = sum(min(n * a, n * b) for n, a, b in zip(ln, (x0, y0, z0), (x1, y1, z1)))
         if low >= offset - 1e-9:
             continue
         solid = solid.trim_by_plane(tuple(ln), offset)
+        box = None
     return solid
 
 
