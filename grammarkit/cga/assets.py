@@ -15,6 +15,7 @@ import os
 from pathlib import Path
 from typing import Any, Sequence
 
+from .. import ir as _ir
 from ..ir import Binary, Call, Function, Grammar, Num, Ref, Str
 from .report import ImportReport
 
@@ -33,7 +34,9 @@ def relative_dirs(dirs: Sequence[Path], output: "str | Path | None") -> tuple[st
 
 
 def supports_asset_dirs() -> bool:
-    return "asset_dirs" in Grammar.model_fields
+    """Whether the language has `asset_dir` statements (INTERFACES.md item 1: the IR's
+    `AssetDir` statement, read back as `Grammar.asset_dirs`)."""
+    return getattr(_ir, "AssetDir", None) is not None
 
 
 def _is_material_map(node: dict) -> bool:
@@ -86,9 +89,10 @@ def place_assets(grammar: Grammar, report: ImportReport, output: "str | Path | N
             return [walk(v) for v in node]
         return node
     data = walk(data)
-    if dirs and supports_asset_dirs():
-        data["asset_dirs"] = tuple(dirs)
     out = Grammar.model_validate(data)
+    if dirs and supports_asset_dirs():
+        lines = tuple(_ir.AssetDir(value=Str(value=d)) for d in dirs)
+        out = out.model_copy(update={"statements": lines + tuple(out.statements)})
     if wrapped[0]:
         named = {name: relative_dirs([d], output)[0] for name, d in (projects or {}).items()}
         out = out.model_copy(update={"statements": (_lookup_function(fname, dirs, named), *out.statements)})

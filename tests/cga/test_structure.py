@@ -168,7 +168,12 @@ def test_every_emitted_operation_exists():
     operations = set(default_registries().operations)
     literal = _emitted_names_in_source()
     assert len(literal) > 30
-    assert literal - operations == set()
+    # rotate(mode, system, x, y, z) is emitted only when the registry has it (INTERFACES.md
+    # item 2: the engine side comes with the split helper); the handler asks the registry
+    guarded = {"rotate"}
+    assert literal - operations <= guarded
+    src = (CGA / "translate" / "handlers" / "transform.py").read_text()
+    assert '"rotate" not in h.t.operations' in src
     # and what the corpus really emits (factories name their operation from a variable)
     emitted: set[str] = set()
     from grammarkit.cga import translate_cga

@@ -39,6 +39,7 @@ class RuleCtx:
 class TranslatorAPI(Protocol):
     """The part of the translator handlers use."""
     missing_assets: str
+    operations: frozenset[str]   # the grammarkit operations that exist (the registry's names)
     values: list
     value_names: dict[str, str]
     frame_change: str | None

@@ -44,7 +44,7 @@ class EntriesMixin:
                              counting=rctx.counting)
                 out.extend(self.split_entries(entry.children[0], frame, rctx, ctx))
                 continue
-            if entry.data in ("bare_entry", "bare_name_entry", "merged_entry"):
+            if entry.data in ("bare_entry", "bare_name_entry", "merged_entry", "seq_entry"):
                 raise Untranslatable("split:entry", "a split entry without a size", span)
             mode, key_tree = hoist_size(entry.children[0].children[0])
             key = translate_expr(key_tree, ctx)
@@ -59,7 +59,7 @@ class EntriesMixin:
             span = self._span(entry)
             if entry.data not in ("entry", "merged_entry"):
                 self._count_block(Tree("block", [entry]), frame, rctx) if entry.data not in (
-                    "bare_entry", "bare_name_entry") else None
+                    "bare_entry", "bare_name_entry", "seq_entry") else None
                 self._record("selector", "?", "dropped", span, feature="comp:entry",
                              message="a comp entry without a selector", counting=rctx.counting)
                 continue

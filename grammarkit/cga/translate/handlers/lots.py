@@ -20,6 +20,7 @@ from ..context import (
     need,
     register,
 )
+from .roofs import comp_fe_values, is_comp_fe
 
 
 # -- lots (grammarkit/split/lots.py) --------------------------------------------------------------
@@ -33,19 +34,31 @@ def _h_setback(gk: str):
         # setback(comp(fe) { all: expr }) is CGA's long form of setbackPerEdge(expr)
         if isinstance(dist_tree, Tree) and dist_tree.data == "func_block_call":
             inner = _comp_fe_all(dist_tree) if gk == "setback" else None
+            if inner is None and gk == "setback" and is_comp_fe(dist_tree):
+                # comp(fe) { front: 3 | all: 0 }: per edge, the first entry that takes it
+                notes: list = []
+                d = comp_fe_values(dist_tree, h.frame, h.ctx, h.span, notes)
+                return _setback_call(h, "setbackPerEdge", d, notes)
             if inner is None:
                 raise Untranslatable("setback:array", "per-edge distances other than "
-                                     "comp(fe) { all: ... }", h.span)
+                                     "comp(fe) { ... }", h.span)
             op, dist_tree = "setbackPerEdge", inner
-        d = translate_expr(dist_tree, h.ctx)
-        entries = h.t.comp_entries(h.block, h.frame, h.rctx, "edges")
-        if not entries:
-            raise Untranslatable("setback:no-selector", "none of its selectors is supported", h.span)
-        call = OpCall(name=op, args=(Arg(value=d),), block=tuple(entries), span=h.span)
-        if len(h.args) == 2:
-            return [call], (f"{gk}:uvSet", "the uv set of uv selectors is ignored")
-        return [call], None
+        return _setback_call(h, op, translate_expr(dist_tree, h.ctx), [])
     return handler
+
+
+def _setback_call(h: HandlerContext, op: str, d: Any, notes: list):
+    entries = h.t.comp_entries(h.block, h.frame, h.rctx, "edges")
+    if not entries:
+        raise Untranslatable("setback:no-selector", "none of its selectors is supported", h.span)
+    call = OpCall(name=op, args=(Arg(value=d),), block=tuple(entries), span=h.span)
+    if len(h.args) == 2 and not notes:
+        return [call], (f"{h.name}:uvSet", "the uv set of uv selectors is ignored")
+    if len(h.args) == 2:
+        notes = notes + ["the uv set of uv selectors is ignored"]
+    if notes:
+        return [call], (f"{h.name}:options", "; ".join(dict.fromkeys(notes)))
+    return [call], None
 
 
 for _gk in ("setback", "setbackPerEdge", "setbackToArea"):
@@ -56,11 +69,11 @@ def _comp_fe_all(tree: Tree) -> Any:
     """The expression of `comp(fe) { all: expr }` (CGA's comp function), or None."""
     name = next((c.value for c in tree.children if isinstance(c, Token)), None)
     args = call_args(tree)
-    block = next((c for c in tree.children if isinstance(c, Tree) and c.data == "block"), None)
+    block = next((c for c in tree.children if isinstance(c, Tree) and c.data in ("block", "fblock")), None)
     if name != "comp" or len(args) != 1 or axis_name(args[0]) != "fe" or block is None:
         return None
     entries = [e for e in block.children if isinstance(e, Tree)]
-    if len(entries) != 1 or entries[0].data != "entry":
+    if len(entries) != 1 or entries[0].data not in ("entry", "merged_entry"):
         return None
     key = entries[0].children[0].children[0]
     if not (isinstance(key, Tree) and key.data == "ref" and key.children[0].value == "all"):
@@ -133,13 +146,15 @@ def _h_scatter(h: HandlerContext):
     if dist not in ("uniform", "gaussian"):
         raise Untranslatable("scatter:distribution", f"scatter distribution {dist!r}", h.span)
     entries = [e for e in (h.block.children if h.block is not None else ()) if isinstance(e, Tree)]
-    if len(entries) != 1 or entries[0].data not in ("bare_entry", "bare_name_entry"):
-        raise Untranslatable("scatter:block", "scatter needs a block of one rule call { Rule }", h.span)
+    if len(entries) != 1 or entries[0].data not in ("bare_entry", "bare_name_entry", "seq_entry"):
+        raise Untranslatable("scatter:block", "scatter needs a block of one entry { ops Rule }", h.span)
     e = entries[0]
-    item = Tree("call" if e.data == "bare_entry" else "name", e.children)
+    # { Rule }, { Rule(args) } or a sequence of operations and calls { t(0, 0, 1) Tree }
+    items = list(e.children) if e.data == "seq_entry" else [
+        Tree("call" if e.data == "bare_entry" else "name", e.children)]
     # CGA turns a point's y (its up axis) to the surface normal, grammarkit its z: CGA's y-up
     # frame (Y); in a volume or the scope the points keep the shape's axes and frame
-    body = h.t.body_items([item], "Y" if domain == "surface" else h.frame, h.rctx) or [Terminal(name=h.rctx.gk, span=h.span)]
+    body = h.t.body_items(items, "Y" if domain == "surface" else h.frame, h.rctx) or [Terminal(name=h.rctx.gk, span=h.span)]
     call_args = [Arg(value=Ref(name=domain)), Arg(value=translate_expr(h.args[1], h.ctx)), Arg(value=Ref(name=dist))]
     approx = None
     if len(h.args) >= 4:

@@ -156,10 +156,10 @@ def _entry_expr(body: Any) -> Any:
         return Tree("func_call", body.children)
     if body.data == "name":
         return Tree("ref", body.children)
-    return None
+    return body  # an fblock entry: already an expression
 
 
-def _is_comp_fe(tree: Any) -> bool:
+def is_comp_fe(tree: Any) -> bool:
     if not (isinstance(tree, Tree) and tree.data == "func_block_call"):
         return False
     name = next((c.value for c in tree.children if not isinstance(c, Tree)), None)
@@ -168,15 +168,15 @@ def _is_comp_fe(tree: Any) -> bool:
     return name == "comp" and len(inner) == 1 and axis_name(inner[0]) == "fe"
 
 
-def _comp_fe_values(tree: Tree, frame: str, ctx: Any, span: Any, notes: list) -> Any:
+def comp_fe_values(tree: Tree, frame: str, ctx: Any, span: Any, notes: list) -> Any:
     """CGA's comp function `comp(fe) { sel: v | ... }` (an array: for each face edge the value
     of the first entry whose selector takes it) as one expression evaluated per edge:
     `select(comp.sel == "front", v1, select(comp.index == 2, v2, ...))`."""
 
-    block = next(c for c in tree.children if isinstance(c, Tree) and c.data == "block")
+    block = next(c for c in tree.children if isinstance(c, Tree) and c.data in ("block", "fblock"))
     arms: list = []
     for entry in (e for e in block.children if isinstance(e, Tree)):
-        if entry.data != "entry":
+        if entry.data not in ("entry", "merged_entry"):  # `=` and `:` mean the same for values
             raise Untranslatable("envelope:comp-entry", "a comp(fe) function entry that is not `selector: value`", span)
         key = entry.children[0].children[0]
         value_tree = _entry_expr(entry.children[-1])
@@ -225,8 +225,8 @@ def _per_edge_arg(tree: Any, frame: str, ctx: Any, span: Any, notes: list) -> An
     """A float[] argument of envelope: `comp(fe) { ... }`, an array literal `[a, b, c]`
     (grammarkit's tuple `(a, b, c)`), or any other expression (its value must be an array of
     one value per edge, or a number for every edge)."""
-    if _is_comp_fe(tree):
-        return _comp_fe_values(tree, frame, ctx, span, notes)
+    if is_comp_fe(tree):
+        return comp_fe_values(tree, frame, ctx, span, notes)
     if isinstance(tree, Tree) and tree.data == "array":
         rows = [c for c in tree.children if isinstance(c, Tree) and c.data == "args"]
         if len(rows) != 1:
@@ -247,7 +247,7 @@ def _h_envelope(h: HandlerContext):
     if direction not in ("normal", "world.up"):
         raise Untranslatable("envelope:direction", f"envelope direction {direction!r}", h.span)
     gk_direction = Arg(value=Ref(name="normal" if direction == "normal" else "worldUp"))
-    per_edge = len(h.args) == 4 and any(_is_comp_fe(a) or (isinstance(a, Tree) and a.data == "array")
+    per_edge = len(h.args) == 4 and any(is_comp_fe(a) or (isinstance(a, Tree) and a.data == "array")
                                       for a in h.args[2:])
     if per_edge:
         notes: list = []

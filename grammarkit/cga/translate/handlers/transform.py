@@ -223,3 +223,39 @@ def _h_set_pivot(h: HandlerContext):
     return [], ("setPivot:orientation", f"setPivot({orientation}, ...): later rotations turn about "
                 "the scope's axes, not the pivot's")
 
+
+
+_ROTATE_SYSTEMS = ("scope", "pivot", "object", "world")
+
+
+@register("rotate")
+def _h_rotate(h: HandlerContext):
+    """CGA's rotate(mode, coordSystem, x, y, z) -> the engine's rotate(mode, system, x, y, z)
+    (INTERFACES.md item 2). Angles are about CGA's axes: in frame Z and for a face's scope they
+    are grammarkit's; CGA's world and a lot-like scope (frame Y) are y-up, so about CGA's y is
+    about grammarkit's z and about CGA's z about grammarkit's -y: one call per non-zero angle in
+    CGA's order (x, y, z), as for r()."""
+    need(h.args, 5, 5, "rotate", h.span)
+    mode, system = axis_name(h.args[0]), axis_name(h.args[1])
+    if mode not in ("abs", "rel"):
+        raise Untranslatable("rotate:mode", f"rotate mode {mode!r}", h.span)
+    if system not in _ROTATE_SYSTEMS:
+        raise Untranslatable("rotate:system", f"rotate coordinate system {system!r}", h.span)
+    if "rotate" not in h.t.operations:
+        raise Untranslatable("op:rotate", "the engine has no rotate(mode, system, x, y, z) operation "
+                             "(INTERFACES.md item 2)", h.span)
+    angles = [translate_expr(a, h.ctx) for a in h.args[2:]]
+    head = (Arg(value=Str(value=mode)), Arg(value=Str(value=system)))
+    y_up = system == "world" or h.frame == "Y"
+    if not y_up:
+        return [OpCall(name="rotate", args=head + tuple(Arg(value=a) for a in angles), span=h.span)], None
+    steps = [OpCall(name="rotate", args=head + s.args, span=h.span)
+             for s in _turns("r", angles, "Y", h.span)]
+    if not steps:
+        steps = [OpCall(name="rotate", args=head + tuple(Arg(value=Num(value=0)) for _ in range(3)),
+                        span=h.span)]
+    if mode == "abs" and len(steps) > 1:
+        # absolute angles about several axes: set the first, then turn on by the others
+        rel = (Arg(value=Str(value="rel")), Arg(value=Str(value=system)))
+        steps = steps[:1] + [s.model_copy(update={"args": rel + s.args[2:]}) for s in steps[1:]]
+    return steps, None
