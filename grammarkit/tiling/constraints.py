@@ -15,6 +15,8 @@ naming the parts involved; an empty list means the constraint holds.
   every A part reaches some B part through contacts; with `downhill=true` every step must not
   climb (centroid height may not rise by more than the tolerance), as a ball track needs.
 - `count(T, lo, hi)`: the number of T parts is within lo..hi (hi may be omitted).
+- `deformable(T)`: T parts may be deformed copies of their prototype (validate's rigid-copy
+  check skips them; `grammarkit.tiling.rigid`).
 - `filled(T, "site")`: every T part has a neighbour at that site wherever the site opens inside
   the shape's outline (holes; `grammarkit.tiling.holes`).
 """
@@ -220,6 +222,10 @@ def grammarkit_constraints():  # noqa: ANN201
                    doc="every step must not climb (ball tracks)")),
             "there is an entry-type part and every one reaches an exit-type part through contacts",
             check_path),
+        ConstraintSpec(
+            "deformable", (Param("type", "string", doc="part type"),),
+            "parts of the type may be deformed copies of their prototype (no rigid-copy check; "
+            "see grammarkit.tiling.rigid)", lambda graph, args, context=None: []),
         ConstraintSpec(
             "filled",
             (Param("type", "string", doc="part type"), Param("site", "string", doc="one of its sites")),

@@ -77,6 +77,8 @@ class PartSpec:
     orders: tuple[int, ...]  # per allowed up: turn symmetry order about it (1: none)
     declared: bool = False  # `symmetry(...)` given (else found from the geometry)
     mirror: bool = False  # its mirror image counts as the same part
+    # the prototype's vertices (modelling coordinates), for the rigid-copy check (rigid.py)
+    vertices: np.ndarray | None = field(default=None, compare=False, repr=False)
 
 
 @dataclass(frozen=True)
@@ -471,7 +473,7 @@ def _part_specs(grammar: "Grammar", up: str | None, env: dict[str, Any], functio
             orders = tuple(1 for _ in ups)  # no up axis: the geometry's full symmetry is used instead
         else:
             orders = tuple(turn_order(V, F[:3, 3], u) for u in ups)
-        out[pd.name] = PartSpec(pd.name, F, size, np.array(ups), orders, pd.symmetry is not None, pd.mirror)
+        out[pd.name] = PartSpec(pd.name, F, size, np.array(ups), orders, pd.symmetry is not None, pd.mirror, V)
     return out
 
 

@@ -157,12 +157,12 @@ def validate(grammar_or_rules: "Grammar | Rules", assembly: Assembly, *, toleran
              graph: nx.Graph | None = None, docks: bool = True, max_violations: int = 1000,
              registries: Any = None, orientation: bool = True,
              progress: Callable[[str], Any] | None = None,
-             constraint_context: dict | None = None) -> Report:
+             constraint_context: dict | None = None, rigid: bool = True) -> Report:
     """Check `assembly` against the grammar's rules; `graph` (if given) must be its shape graph.
 
     `docks=False` skips the docking-placement check (type pairs, neighbourhoods, orientation,
     required sites and constraints are still checked); `orientation=False` skips the
-    orientation check. At most `max_violations` are listed (a broken 10,000-part model stays
+    orientation check, `rigid=False` the rigid-copy check (rigid.py). At most `max_violations` are listed (a broken 10,000-part model stays
     readable). `registries` (a grammarkit.registry.Registries) gives the global constraints;
     default: the installed plugins'. `progress(stage)` is called as each stage starts.
     `constraint_context`: extra entries for the global constraints' context (caches a caller
@@ -205,6 +205,10 @@ def validate(grammar_or_rules: "Grammar | Rules", assembly: Assembly, *, toleran
         if orientation:
             say("orientation")
             for v in orientation_violations(rules, shape, range(len(shape.nodes))):
+                add(v)
+        if rigid:
+            say("rigid parts")
+            for v in rigid_violations(rules, shape, np.arange(len(shape.nodes))):
                 add(v)
         if docks and (rules.configs or rules.docks):
             say("docking placements")
@@ -386,6 +390,23 @@ def orientation_violations(rules: Rules, shape: _Shape, idx) -> list[Violation]:
             out.append(Violation("orientation", f"{what}: the direction {_direction_text(d[j])} of its "
                                  f"part frame points up (allowed: {', '.join(allowed)}; "
                                  f"{rules.angle_tolerance:g} degrees)", shape.nodes[i], t, obs, allowed))
+    return out
+
+
+def rigid_violations(rules: Rules, shape: _Shape, idx) -> list[Violation]:  # noqa: ANN001
+    """Parts that are not rigid copies of their prototypes (rigid.py), unless `deformable`."""
+    from .rigid import RIGID_TOLERANCE, rigid_errors
+
+    idx = np.asarray(idx, dtype=np.int64)
+    if not len(idx) or not any(getattr(p, "vertices", None) is not None for p in rules.parts.values()):
+        return []
+    out = []
+    for i, err in rigid_errors(rules, shape, _poses(rules, shape, idx), idx):
+        t = shape.types[i]
+        out.append(Violation("rigid", f"is not a rigid copy of its prototype: a vertex is off by {100 * err:.3g}% "
+                             f"of the part's diagonal after the best rigid placement (allowed "
+                             f"{100 * RIGID_TOLERANCE:g}%; `constraint deformable({t})` allows deformed {t} parts)",
+                             shape.nodes[i], t, f"{100 * err:.3g}%", f"<= {100 * RIGID_TOLERANCE:g}%"))
     return out
 
 
