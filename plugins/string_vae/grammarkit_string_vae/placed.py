@@ -7,9 +7,10 @@ string grammatical but most sampled castles still cannot be built: a ring of tow
 closes only when its turns add up. Here every letter the decoder writes is *placed* at once:
 
 - the new part docks to the part it hangs from (its parent in the string) with one of the
-  pair's edge categories (categories.py: a rigid placement seen in the training shapes);
-  the categories are tried in an order that steers towards the parts whose ring labels are
-  still open (the nearest first), else by how often the category occurs;
+  pair's edge categories (categories.py: a rigid placement seen in the training shapes); every
+  category is kept as a hypothesis: a beam of `width` distinct layouts per written prefix,
+  scored by the categories' training frequencies (in the second half of the budget, minus a
+  growing penalty for the distance to the open rings' docking spots);
 - a placement is *masked out* when the part would touch a placed part that it may not join:
   any part that is not its parent and does not own an open ring label (no collision), or a
   ring owner in a placement that is no docking category of the pair (no free docking site);
@@ -23,9 +24,10 @@ closes only when its turns add up. Here every letter the decoder writes is *plac
   the sample starts from, times 1 + `slack`; a random training string's for the prior), so
   samples have the training sizes.
 
-The search is depth-first in the network's order (most likely allowed token first), at most
-`branching` tokens per step and `expansions` steps in all; a latent point whose search runs out
-is retried with sampled tokens (`retries` times). What comes out is a string, its graph, and a
+The search is depth-first in the network's order (most likely allowed token first; a letter that
+some layout can place against an open ring's owner goes first), at most `branching` tokens per
+step whose beam survives and `expansions` steps in all; a latent point whose search runs out is
+retried with sampled tokens (`retries` times). What comes out is a string, its graph, and a
 frame and category per part and edge: `Instantiator.build` makes the shape and validates it
 (the part of the grammar that only the finished shape can show: `grounded`, sites, the
 recomputed contact graph); nothing is yielded that fails.
