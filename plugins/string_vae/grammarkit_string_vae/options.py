@@ -23,7 +23,7 @@ class StringVAEOptions(BaseModel):
         "masked", description="masked: grammar-constrained, valid by construction; free: the paper's "
         "decoding, invalid strings dropped; placed: string and edge categories decoded together, every "
         "step masked by what can still be placed in 3D (needs categories; see docs/string-vae.md)")
-    width: int = Field(8, ge=1, description="placed decoding: placements kept per written prefix")
+    width: int = Field(16, ge=1, description="placed decoding: placements kept per written prefix")
     placed_steps: int = Field(150, ge=1, description="placed decoding: search steps per latent point")
     slack: float = Field(0.15, ge=0, description="placed decoding: the length prior's slack (budget = the "
                          "start string's length x (1 + slack))")

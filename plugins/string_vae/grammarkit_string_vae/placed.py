@@ -7,9 +7,10 @@ string grammatical but most sampled castles still cannot be built: a ring of tow
 closes only when its turns add up. Here every letter the decoder writes is *placed* at once:
 
 - the new part docks to the part it hangs from (its parent in the string) with one of the
-  pair's edge categories (categories.py: a rigid placement seen in the training shapes);
-  the categories are tried in an order that steers towards the parts whose ring labels are
-  still open (the nearest first), else by how often the category occurs;
+  pair's edge categories (categories.py: a rigid placement seen in the training shapes); every
+  category is kept as a hypothesis: a beam of `width` distinct layouts per written prefix,
+  scored by the categories' training frequencies (in the second half of the budget, minus a
+  growing penalty for the distance to the open rings' docking spots);
 - a placement is *masked out* when the part would touch a placed part that it may not join:
   any part that is not its parent and does not own an open ring label (no collision), or a
   ring owner in a placement that is no docking category of the pair (no free docking site);
@@ -23,9 +24,10 @@ closes only when its turns add up. Here every letter the decoder writes is *plac
   the sample starts from, times 1 + `slack`; a random training string's for the prior), so
   samples have the training sizes.
 
-The search is depth-first in the network's order (most likely allowed token first), at most
-`branching` tokens per step and `expansions` steps in all; a latent point whose search runs out
-is retried with sampled tokens (`retries` times). What comes out is a string, its graph, and a
+The search is depth-first in the network's order (most likely allowed token first; a letter that
+some layout can place against an open ring's owner goes first), at most `branching` tokens per
+step whose beam survives and `expansions` steps in all; a latent point whose search runs out is
+retried with sampled tokens (`retries` times). What comes out is a string, its graph, and a
 frame and category per part and edge: `Instantiator.build` makes the shape and validates it
 (the part of the grammar that only the finished shape can show: `grounded`, sites, the
 recomputed contact graph); nothing is yielded that fails.
@@ -65,6 +67,7 @@ class _Hyp:
     touched: dict  # parts the current part touches besides its parent, not yet joined: category
     score: float = 0.0
     rank: float | None = None  # score minus the homing penalty, when ranked by it
+    layout: tuple = ()  # per part: its rounded position and orientation (`_layout_key`)
 
 
 class _OutOfSteps(Exception):
@@ -76,7 +79,7 @@ class PlacedDecoder:
 
     def __init__(self, vae: Any, instantiator: Any, *, expansions: int = 150, branching: int = 2,
                  retries: int = 2, slack: float = 0.15, pressure: int = 40, temperature: float = 0.0,
-                 width: int = 8, homing: float = 1.0):
+                 width: int = 16, homing: float = 1.0):
         self.vae = vae
         self.model = vae.model
         self.vocab = vae.vocab
@@ -129,6 +132,25 @@ class PlacedDecoder:
         local = self._low[key]
         return float(((local @ F[:3, :3].T + F[:3, 3]) @ up).min())
 
+    def _layout_key(self, ty: str, vy: str, Fy: np.ndarray) -> bytes:
+        """A part's variant, position and frame, rounded. (The frame itself, not the canonical
+        one modulo the part's symmetries: children are placed from the frame, so two frames
+        that differ by a symmetry place them differently.)"""
+        size = max(self.lib.sizes.values()) or 1.0
+        return (str(vy).encode() + np.round(Fy[:3, 3] / (1e-3 * size)).astype(np.int64).tobytes()
+                + np.round(Fy[:3, :3] / 1e-3).astype(np.int64).tobytes())
+
+    @staticmethod
+    def _distinct(beam: list) -> list:
+        """One hypothesis per distinct layout: the same frames of all parts leave the same
+        future, however the categories that led there differ."""
+        seen: dict[tuple, _Hyp] = {}
+        for h in beam:
+            key = (h.layout, tuple(sorted(h.touched)))
+            if key not in seen or h.score > seen[key].score:
+                seen[key] = h
+        return list(seen.values())
+
     def _spots(self, types: list, frames: list, o: int) -> list:
         """Where a part joined to part `o` can sit (frame origins), by every category of o's type."""
         to, Fo = types[o], frames[o]
@@ -150,9 +172,14 @@ class PlacedDecoder:
         owners = set(ctx.state.rings.values())
         d = np.linalg.norm(P - Fy[:3, 3], axis=1)
         # an open ring's owner must stay reachable with the tokens left (each part one step)
+        # from a part that can still grow: the new one or the owner of an open branch
         left = ctx.state.a.max_len - ctx.state.length
+        stack = [q for q in ctx.state.stack if q >= 0]
         for o in owners:
-            if o != parent and d[o] > (left + 1) * self.step_max:
+            if o == parent:
+                continue
+            near = min([d[o]] + [float(np.linalg.norm(P[o] - P[q])) for q in stack])
+            if near > (left + 1) * self.step_max:
                 return None, "reach"
         radius = np.array([self.geom._r(T[p], V[p]) for p in range(n)]) + self.geom._r(ty, vy)
         touched: dict[int, int] = {}
@@ -193,15 +220,21 @@ class PlacedDecoder:
                 if k is not None:
                     cats[(parent, len(hyp.frames))] = k
                     score += self.logfreq[k]
-                out.append(_Hyp(hyp.frames + [Fy], hyp.variants + [vy], cats, touched, score))
-        if len(out) > self.width and self.homing:
-            # keep the hypotheses whose open rings can close soonest: the new part's distance
-            # to the nearest docking spot of each open ring's owner, in docking steps
-            owners = [o for o in set(ctx.state.rings.values())]
+                out.append(_Hyp(hyp.frames + [Fy], hyp.variants + [vy], cats, touched, score,
+                                layout=hyp.layout + (self._layout_key(ty, vy, Fy),)))
+        if len(out) > 1:
+            out = self._distinct(out)
+        st = ctx.state
+        # in the second half of the budget the beam keeps the hypotheses whose open rings can
+        # close soonest: the new part's distance to the nearest docking spot of each open
+        # ring's owner, in docking steps, weighs more and more (not when placing a given string)
+        weight = self.homing * min(1.0, max(0.0, 2.0 * st.length / st.a.max_len - 1.0)) if ctx.forced is None else 0
+        if len(out) > self.width and weight > 0:
+            owners = [o for o in set(st.rings.values())]
             if owners:
                 for hyp in out:
                     y = hyp.frames[-1][:3, 3]
-                    hyp.rank = hyp.score - self.homing * sum(
+                    hyp.rank = hyp.score - weight * sum(
                         min(float(np.linalg.norm(p - y)) for p in self._spots(ctx.types, hyp.frames, o))
                         for o in owners) / self.step_max
         out.sort(key=lambda h: -(h.rank if h.rank is not None else h.score))
@@ -283,7 +316,7 @@ class PlacedDecoder:
                     cats = dict(h.cats)
                     cats[(owner, st.current)] = h.touched[owner]
                     rest = {p: k for p, k in h.touched.items() if p != owner}
-                    out.append(_Hyp(h.frames, h.variants, cats, rest, h.score))
+                    out.append(_Hyp(h.frames, h.variants, cats, rest, h.score, layout=h.layout))
             return out
         if kind == "ring":  # opens
             return beam
@@ -302,7 +335,9 @@ class PlacedDecoder:
             ctx.result = beam[0]
             return True
         ctx.steps += 1
-        ctx.deepest = max(ctx.deepest, st.length)
+        if st.length > ctx.deepest:
+            ctx.deepest = st.length
+            self.deepest_text = f"{st.graph_text()} (budget {st.a.max_len}, open rings {len(st.rings)}, beam {len(beam)})"
         if ctx.steps > ctx.limit:
             raise _OutOfSteps
         allowed = st.allowed()
@@ -313,11 +348,18 @@ class PlacedDecoder:
             if allowed and self.pressure:
                 allowed = st.closing(allowed, self.pressure, ctx.soft_end)
             order = self._ordered(ctx, logits, allowed)
+        beams = {}
+        if ctx.forced is None and st.rings and any(self.vocab.kind(t)[0] == "node" for t in order):
+            # a letter that meets a part whose ring is open (so closes it) goes first: rings
+            # close as soon as the geometry lets them, not only when the network remembers
+            beams = {t: self._next_beam(ctx, beam, t) for t in order if self.vocab.kind(t)[0] == "node"}
+            closes = [t for t in order if any(hy.touched for hy in beams.get(t, ()))]
+            order = closes + [t for t in order if t not in closes]
         tried = 0
         for t in order:
             if tried >= self.branching:
                 break
-            nb = self._next_beam(ctx, beam, t)
+            nb = beams[t] if t in beams else self._next_beam(ctx, beam, t)
             if not nb:
                 continue
             tried += 1
