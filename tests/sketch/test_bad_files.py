@@ -172,3 +172,19 @@ def test_train_shipped_streams_progress_lines(capsys):
     out = capsys.readouterr().out.splitlines()
     assert code == 0 and out[0].endswith("Roof: started") and out[-1].endswith("Roof: finished (exit 0)")
     assert any(line.endswith("Roof: epoch 1") for line in out)
+
+
+def test_swapped_network_weights_name_the_file(tmp_path):
+    pytest.importorskip("torch")
+    from grammarkit_sketch.models import ModelFileError, load_models
+    from grammarkit_sketch.recognizer import get_recognizer
+
+    def swap(data):  # Roof's classifier (more classes) in Ledge's place
+        data["types"]["Ledge"]["classifier"] = data["types"]["Roof"]["classifier"]
+
+    p = _tampered(tmp_path, swap)
+    rec = get_recognizer(p)
+    r = _recognize(ROOT / "docs" / "images" / "sketch_roof.png", "--type", "Ledge", "--models", p)
+    assert r.exit_code == 1 and "Traceback" not in r.output
+    with pytest.raises(ModelFileError, match=f"{p}: the models file holds networks of another layout"):
+        rec.logits(load_models(p).types["Ledge"], __import__("numpy").zeros((128, 128), "float32"))

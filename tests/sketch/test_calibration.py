@@ -150,13 +150,14 @@ def test_fine_tune_starts_from_the_trained_weights_and_keeps_the_regressors(rec)
     from grammarkit_sketch.training import TrainConfig, fine_tune_classifier
 
     tm = rec.models.types["Ledge"]
+    before = dict(tm.metrics)
     cfg = TrainConfig(samples=4, classifier_epochs=1, lr=5e-4, style="augmented", seed=7, cache=None)
     tuned = fine_tune_classifier(rec.library, tm, cfg)
     ft = tuned.metrics["fine_tune"]
     assert ft["style"] == "augmented" and ft["val_accuracy_after"] >= ft["val_accuracy_before"]
     assert tuned.regressors is tm.regressors and tuned.classes == tm.classes
     assert set(tuned.classifier) == set(tm.classifier)
-    assert "fine_tune" not in tm.metrics  # the original is not modified
+    assert tm.metrics == before  # the original is not modified
     again = fine_tune_classifier(rec.library, tm, cfg)  # same settings and seed, same weights
     assert all((again.classifier[k].float() == tuned.classifier[k].float()).all() for k in tuned.classifier)
 
@@ -176,3 +177,16 @@ def test_calibration_script_reads_held_out_logits_with_their_classes(rec):
     assert set(labels) <= set(range(len(tm.classes)))
     with pytest.raises(SystemExit):
         script.main(["-o", str(script.SHIPPED)])  # never the shipped file without the flag
+
+
+def test_the_shipped_weights_are_fine_tuned_and_calibrated():
+    pytest.importorskip("torch")
+    from grammarkit_sketch.models import load_models
+    from grammarkit_sketch.recognizer import redraw_threshold_of, temperature_of
+
+    m = load_models()
+    assert m.meta["fine_tune"]["style"] == "augmented"
+    for t, tm in m.types.items():
+        assert temperature_of(tm) >= 1.0 and 0.0 <= redraw_threshold_of(tm) <= 0.6, t
+        cal = tm.metrics["calibration"]
+        assert cal["redraw_share"] <= 0.05 and cal["drawings"] > 0, t

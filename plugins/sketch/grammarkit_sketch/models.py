@@ -34,10 +34,12 @@ class RegressorModel:
     state: dict
     width: int = 16
     net: Any = field(default=None, repr=False)
+    source: str = field(default="", repr=False)  # the models file, for error messages
 
     def network(self) -> Any:
         if self.net is None:
-            self.net = _load_net(build_regressor(len(self.params), self.width), self.state)
+            self.net = _load_net(build_regressor(len(self.params), self.width), self.state,
+                                 self.source)
         return self.net
 
 
@@ -52,10 +54,12 @@ class TypeModel:
     width: int = 16
     metrics: dict = field(default_factory=dict)
     net: Any = field(default=None, repr=False)
+    source: str = field(default="", repr=False)  # the models file, for error messages
 
     def network(self) -> Any:
         if self.net is None:
-            self.net = _load_net(build_classifier(len(self.classes), self.width), self.classifier)
+            self.net = _load_net(build_classifier(len(self.classes), self.width), self.classifier,
+                                 self.source)
         return self.net
 
 
@@ -100,11 +104,12 @@ def _half(state: Mapping[str, Any]) -> dict:
     return out
 
 
-def _load_net(net: Any, state: Mapping[str, Any]) -> Any:
+def _load_net(net: Any, state: Mapping[str, Any], source: str = "") -> Any:
     try:
         net.load_state_dict({k: (v.float() if v.is_floating_point() else v) for k, v in state.items()})
     except (RuntimeError, AttributeError) as exc:
-        raise ModelFileError("the models file holds networks of another layout than this grammarkit "
+        where = f"{source}: " if source else ""
+        raise ModelFileError(f"{where}the models file holds networks of another layout than this grammarkit "
                              f"builds ({str(exc).splitlines()[0]}); retrain with grammarkit train sketch",
                              None, code="sketch-retrain") from None
     net.eval()
@@ -188,10 +193,12 @@ def load_models(path: str | Path | None = None, library: SnippetLibrary | None =
     try:
         types = {}
         for t, d in data["types"].items():
-            regs = {s: RegressorModel(list(r["params"]), list(r["hidden"]), r["state"], int(r["width"]))
+            regs = {s: RegressorModel(list(r["params"]), list(r["hidden"]), r["state"], int(r["width"]),
+                                      source=str(p))
                     for s, r in d["regressors"].items()}
             types[t] = TypeModel(StageSpec.from_dict(d["stage"]), [list(c) for c in d["classes"]],
-                                 d["classifier"], regs, int(d["width"]), dict(d.get("metrics", {})))
+                                 d["classifier"], regs, int(d["width"]), dict(d.get("metrics", {})),
+                                 source=str(p))
         files = {str(rel): bytes(t.numpy().tobytes()) for rel, t in data.get("library_files", {}).items()}
         models = SketchModels(str(data["library_hash"]), str(data["library_name"]), types,
                               dict(data.get("meta", {})), str(p), files)
