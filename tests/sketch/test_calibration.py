@@ -190,3 +190,19 @@ def test_the_shipped_weights_are_fine_tuned_and_calibrated():
         assert temperature_of(tm) >= 1.0 and 0.0 <= redraw_threshold_of(tm) <= 0.6, t
         cal = tm.metrics["calibration"]
         assert cal["redraw_share"] <= 0.05 and cal["drawings"] > 0, t
+
+
+def test_training_with_the_augmented_style_from_the_cli(tmp_path):
+    pytest.importorskip("torch")
+    from click.testing import CliRunner
+
+    from grammarkit.cli import main
+    from grammarkit_sketch.models import load_models
+
+    out = tmp_path / "aug.models"
+    r = CliRunner().invoke(main, ["train", "sketch", "--library", str(LIBRARY), "-o", str(out),
+                                  "--samples", "20", "--classifier-epochs", "1", "--types", "Ledge",
+                                  "--classifiers-only", "--no-cache", "--style", "augmented"])
+    assert r.exit_code == 0, r.output
+    m = load_models(out)
+    assert m.meta["config"]["style"] == "augmented" and list(m.types) == ["Ledge"]
