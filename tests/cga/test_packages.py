@@ -215,3 +215,15 @@ Tier3 --> extrude(20) comp(f) { top: R. | side: F. }
     model = grammarkit.derive(res.grammar, seed=0, lot=LOTS["rect"])
     box = _bbox(model)
     assert box[1][1] <= 12.0 + 0.01 and abs(box[1][2] - 30.0) < 0.01
+
+
+def test_all_faces_selector_translates_both_orientations():
+    # comp(f) { all: T } hands T horizontal and vertical faces; T extrudes: the horizontal
+    # faces are translated as such (their volume's top is the cap), the others as facades
+    res = imported("Lot --> extrude(10) comp(f) { all: T }\nT --> extrude(2) comp(f) { top: R. | side: S. }\n")
+    lot_line = next(ln for ln in res.text.splitlines() if ln.startswith("Lot -->"))
+    assert "{ horizontal: T_h | all: T }" in lot_line
+    assert "T_h --> extrude(2) comp(f) { top: R. | side: S. }" in res.text
+    # comp(f) { 1: T }: face 1 of a lot's volume is its top, horizontal
+    res = imported("Lot --> extrude(10) comp(f) { 1: T }\nT --> extrude(2) comp(f) { top: R. | side: S. }\n")
+    assert "T --> extrude(2) comp(f) { top: R. | side: S. }" in res.text

@@ -72,3 +72,12 @@ def test_untranslatable_constructs_are_located_warnings():
     r = translate_cga("Lot --> extrude(10)\n  copyUV(0, 1) X\n", filename="t.cga")
     warn = [d for d in r.diagnostics if d.severity == "warning"]
     assert [(d.span.line, d.span.column) for d in warn] == [(2, 3)]
+
+
+@pytest.mark.parametrize("op", ["extrude(2)", "offset(-1)"])
+def test_extrude_and_offset_on_volumes_pass_through(op):
+    # CGA applies them per face of a volume; the engine does too (INTERFACES.md item 3), so
+    # the importer passes them on unchanged and without a warning
+    r = imported(f"Lot --> extrude(10) {op} X\n")
+    assert line(r, "Lot") == f"Lot --> extrude(10) {op} X."
+    assert not [d for d in r.diagnostics if d.severity == "warning"]

@@ -1,6 +1,8 @@
 """The entries of split and comp blocks, and asset lookup."""
 from __future__ import annotations
 
+import dataclasses
+
 from pathlib import Path
 
 from lark import Tree
@@ -94,7 +96,8 @@ class EntriesMixin:
             elif sel is not None and key_tree.data == "number":
                 # an index: CGA's and grammarkit's face orders agree (bottom 0, top 1, sides)
                 mapped = (int(float(sel)),) if float(sel).is_integer() and float(sel) >= 0 else None
-                body_frame = "Z"
+                # faces 0 and 1 of a lot-like volume are its bottom and top: horizontal
+                body_frame = "H" if frame == "Y" and mode == "faces" and mapped in ((0,), (1,)) else "Z"
             else:
                 mapped = frames.comp_selectors(frame, sel) if sel else None
                 # a lot-like volume's top and bottom are horizontal faces (RuleCtx.horizontal)
@@ -114,6 +117,14 @@ class EntriesMixin:
                              message=approx_sel, counting=rctx.counting)
             else:
                 self._record("selector", sel, "translated", span, counting=rctx.counting)
+            if mode == "faces" and frame == "Y" and sel in ("all", "nutant") and mapped is not None:
+                # horizontal and vertical faces alike: the horizontal ones first (first match
+                # wins), translated as horizontal faces (RuleCtx.horizontal), so that a volume
+                # extruded from either is scoped as CGA scopes it (no guess)
+                quiet = dataclasses.replace(rctx, counting=False)  # counted once, above
+                flat = self._body(entry.children[-1].children, "H", quiet) or [Terminal(name=rctx.gk, span=span)]
+                if flat != body:
+                    out.append(Branch(key=Ref(name="horizontal"), body=Seq(items=tuple(flat)), span=span))
             for gsel in mapped:
                 key = Num(value=float(gsel)) if isinstance(gsel, int) else Ref(name=gsel)
                 out.append(Branch(key=key, body=Seq(items=tuple(body)), span=span))
