@@ -6,8 +6,9 @@
 For each shipped example grammar (grammars/tiling: castle, balltrack, facade, wfc/coast) and
 each tiling back end (graph sampler, substructure search; the string VAE when its model for
 the grammar loads), the back end is asked for --n variants through the public run API
-(`grammarkit.run.api.run_backend`, the path of `grammarkit derive`, default options, a
-graceful --time-limit per run). Every output file is read back (`read_assembly`) and checked:
+(`grammarkit.run.api.run_backend`, the path of `grammarkit derive`, default options but the
+substructure search's patience (--patience 60: it bounds a search that finds nothing), and a
+graceful --time-limit per run where the run API offers it). Every output file is read back (`read_assembly`) and checked:
 
 - valid:      `validate` with the shipped grammar and its defaults accepts it;
 - supported:  every part is carried to the examples' ground through contacts from below, or
@@ -111,7 +112,7 @@ class ExampleStats:
         return bool(err <= RIGID_TOLERANCE * diag)
 
 
-def run_one(path: Path, backend: str, n: int, seed: int, time_limit: float) -> dict:
+def run_one(path: Path, backend: str, n: int, seed: int, time_limit: float, patience: int = 60) -> dict:
     from grammarkit.run.api import run_backend
 
     out = Path(tempfile.mkdtemp(prefix=f"bench_quality_{path.stem}_{backend}_"))
@@ -122,6 +123,10 @@ def run_one(path: Path, backend: str, n: int, seed: int, time_limit: float) -> d
 
         if "time_limit" in inspect.signature(run_backend).parameters:
             kwargs["time_limit"] = time_limit
+        if backend == "substructure":  # bound the work of a search that finds nothing (patience)
+            from grammarkit_substructure.options import SubstructureOptions
+
+            kwargs["options"] = SubstructureOptions(patience=patience)
         summary = run_backend(str(path), backend=backend, out=out, n=n, seed=seed, workers=1, **kwargs)
     except Exception as exc:  # noqa: BLE001 - a back end that cannot run on this grammar is a row
         return {"error": f"{type(exc).__name__}: {str(exc)[:120]}"}
@@ -137,6 +142,8 @@ def main(argv=None) -> int:  # noqa: ANN001
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--time-limit", type=float, default=120.0, help="graceful budget per run (seconds)")
     ap.add_argument("--examples", nargs="+", default=list(EXAMPLES), choices=list(EXAMPLES))
+    ap.add_argument("--patience", type=int, default=60,
+                    help="substructure: stop after this many candidates in a row gave nothing new")
     ap.add_argument("--backends", nargs="+", default=["graph-sampler", "substructure", "string-vae"])
     args = ap.parse_args(argv)
     skipped: list[str] = []
@@ -149,7 +156,7 @@ def main(argv=None) -> int:  # noqa: ANN001
     for name in args.examples:
         stats = ExampleStats(load(EXAMPLES[name]))
         for backend in args.backends:
-            r = run_one(EXAMPLES[name], backend, args.n, args.seed, args.time_limit)
+            r = run_one(EXAMPLES[name], backend, args.n, args.seed, args.time_limit, args.patience)
             if "error" in r and backend == "string-vae":
                 skipped.append(f"{name}/string-vae: {r['error']}")  # its model did not load: no row
                 continue

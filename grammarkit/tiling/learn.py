@@ -110,7 +110,8 @@ class _TypeInfo:
         self.orders: list[int] = []
 
     def spec(self) -> PartSpec:
-        return PartSpec(self.name, self.frame, self.size, np.array(self.ups), tuple(self.orders), True, False)
+        return PartSpec(self.name, self.frame, self.size, np.array(self.ups), tuple(self.orders), True, False,
+                        self.V)
 
 
 def _observed_ups(d: np.ndarray, cos_tol: float) -> list[np.ndarray]:
@@ -569,6 +570,18 @@ def learn(assemblies: Sequence[Assembly | str | os.PathLike], name: str = "learn
         return Grammar(name=_identifier(name, set()), statements=tuple(out + examples_st))
 
     grammar = build()
+    # types whose example parts are not all rigid copies of the prototype (a longer ledge on a
+    # wider facade): declared deformable, so the examples pass the rigid-copy check
+    from .rigid import rigid_errors
+
+    rules = _rules_for(grammar, info, up)
+    bent = sorted({ex.types[i] for ex in examples
+                   for i, _ in rigid_errors(rules, ex.shape, ex.poses, np.arange(len(ex.types)))})
+    for t in bent:
+        notes.append(f"deformable({t}): its example parts are not all rigid copies of the first one")
+        extra.append(ConstraintDef(name="deformable", args=(Arg(value=Ref(name=t)),)))
+    if bent:
+        grammar = build()
     if sites and docks:
         # required sites: those every part of the type has filled in every example
         say("required sites")

@@ -86,7 +86,7 @@ def test_manifest_records_parents_and_the_operation(written):
 def test_progress_reports_attempts_valid_and_new(written):
     _, summary, calls = written
     bars = [c for c in calls if c[0] == "bar"]
-    assert bars and bars[0][1].startswith("iteration 1/3")
+    assert bars and bars[0][1].startswith("iteration 1/64")  # the cap: max(--iterations, max-iterations)
     adv = [c for c in calls if c[0] == "advance"]
     assert sum(c[1] for c in adv) == summary.stats["attempts"]
     assert {"attempts", "valid", "new"} <= set(adv[-1][2])

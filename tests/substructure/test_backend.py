@@ -10,6 +10,7 @@ from grammarkit.dsl import load
 from grammarkit.run import run_backend
 from grammarkit.tiling import read_assembly, rules_from_grammar, validate
 from grammarkit_substructure import substructure
+from grammarkit_substructure.options import SubstructureOptions
 
 ROOT = Path(__file__).resolve().parents[2]
 CASTLE = ROOT / "grammars" / "tiling" / "castle"
@@ -53,17 +54,35 @@ def test_non_rigid_embedding_keeps_parts_watertight(castle):
 
 
 @pytest.fixture(scope="module")
-def written(tmp_path_factory):
+def adapting(tmp_path_factory):
+    """The castle with its rescaled types declared deformable: what the substructure search
+    needs to adapt parts (`repair=true`, greedy rescaling along z). With the shipped castle
+    grammar every part must stay a rigid copy, and no castle embedding stands on the ground."""
+    import shutil
+
+    folder = tmp_path_factory.mktemp("deformable_castle")
+    for f in CASTLE.glob("*.glb"):
+        shutil.copy(f, folder / f.name)
+    text = GRAMMAR.read_text() + "constraint deformable(Gate)\nconstraint deformable(Tower)\nconstraint deformable(Wall)\n"
+    (folder / "castle.grammar").write_text(text)
+    return folder / "castle.grammar"
+
+
+ADAPT = SubstructureOptions(repair=True)
+
+
+@pytest.fixture(scope="module")
+def written(tmp_path_factory, adapting):
     out = tmp_path_factory.mktemp("subs") / "variants"
-    summary = run_backend(load(GRAMMAR), out=out, backend="substructure", n=4, seed=7, workers=1)
-    return out, summary
+    summary = run_backend(load(adapting), out=out, backend="substructure", n=4, seed=7, workers=1, options=ADAPT)
+    return out, summary, adapting
 
 
 def test_derive_writes_new_valid_watertight_variants(written):
-    out, summary = written
+    out, summary, grammar = written
     files = sorted(out.glob("variant_*.glb"))
     assert len(files) == 4
-    rules = rules_from_grammar(load(GRAMMAR))
+    rules = rules_from_grammar(load(grammar))
     for f in files:
         asm = read_assembly(f)
         assert validate(rules, asm).ok
@@ -71,18 +90,24 @@ def test_derive_writes_new_valid_watertight_variants(written):
     rows = [json.loads(line) for line in (out / "manifest.jsonl").read_text().splitlines()]
     assert [r["id"] for r in rows] == [f.stem for f in files]
     assert all(r["parents"] and "operation" in r for r in rows)
+    # the rescaled parts are declared (the grammar) and reported (the manifest); the shipped,
+    # rigid castle grammar rejects them
+    assert any(r["metrics"]["repaired"] for r in rows)
+    shipped = rules_from_grammar(load(GRAMMAR))
+    repaired = [f for f, r in zip(files, rows) if r["metrics"]["repaired"]]
+    assert all("rigid" in {v.rule for v in validate(shipped, read_assembly(f)).violations} for f in repaired)
 
 
 def test_cli_validate_accepts_the_variants(written):
-    out, _ = written
-    r = gk("validate", GRAMMAR, *sorted(out.glob("variant_*.glb")))
+    out, _, grammar = written
+    r = gk("validate", grammar, *sorted(out.glob("variant_*.glb")))
     assert r.returncode == 0, r.stdout + r.stderr
 
 
 def test_same_seed_same_files(written, tmp_path):
-    out, _ = written
+    out, _, grammar = written
     again = tmp_path / "again"
-    run_backend(load(GRAMMAR), out=again, backend="substructure", n=4, seed=7, workers=1)
+    run_backend(load(grammar), out=again, backend="substructure", n=4, seed=7, workers=1, options=ADAPT)
     for f in sorted(out.glob("variant_*.glb")):
         assert (again / f.name).read_bytes() == f.read_bytes()
 
