@@ -134,7 +134,8 @@ def main() -> int:
     ap.add_argument("--fast-budget", type=int, default=400, help="backtracking rows: insertions per try")
     ap.add_argument("--skip-e2e", action="store_true")
     ap.add_argument("--parts", default="accuracy,instantiation,sampled,e2e",
-                    help="comma-separated parts to run: accuracy, instantiation, sampled, e2e")
+                    help="comma-separated parts to run: accuracy, instantiation, sampled, e2e; or `fresh` alone "
+                         "(accuracy on a new sampler run) or `shipped` alone (end to end from the shipped models)")
     ap.add_argument("--sampled-graphs", type=int, default=30, help="sampled part: VAE samples instantiated")
     ap.add_argument("--sampler-seconds", type=float, default=None,
                     help="end-to-end: the graph sampler's row (default: --e2e-seconds)")
@@ -148,6 +149,9 @@ def main() -> int:
                     help="the `fresh` part: held-out graphs from a new graph-sampler run with this seed (the "
                          "shipped dataset used seed 1), scored with --default-model (default: builtin:castle)")
     ap.add_argument("--fresh-iterations", type=int, default=4, help="the `fresh` part: sampler iterations")
+    ap.add_argument("--shipped-rows", default="consistent,placed,placed-small,sampler",
+                    help="the `shipped` part's rows (the graph sampler last: the ratios are against it)")
+    ap.add_argument("--max-tokens", type=int, default=40, help="the `shipped` part's placed-small row")
     args = ap.parse_args()
     if args.quick:
         args.graphs, args.iterations, args.train_seconds, args.test_graphs, args.e2e_seconds = 60, 2, 40, 10, 30
@@ -170,6 +174,9 @@ def main() -> int:
     grammar = load(ROOT / "grammars" / "tiling" / args.example / f"{args.example}.grammar")
     if set(args.parts.split(",")) == {"fresh"}:
         fresh_accuracy(args, grammar)
+        return 0
+    if set(args.parts.split(",")) == {"shipped"}:
+        shipped_end_to_end(args, grammar)
         return 0
     full = dataset(args)
     rng = np.random.default_rng(args.seed)
@@ -413,6 +420,30 @@ def instantiation_tables(args, grammar, models, test_ds, inst, decoder, cats) ->
     print(f"\nNaive estimate (the paper's): a cycle of L parts with c configurations per edge closes with "
           f"probability (1/c)^L; here c = {n_cat:.1f} on average per type pair, so a 15-part cycle: "
           f"{(1 / n_cat) ** 15:.2e} (paper: 1/6^15 = {6.0 ** -15:.2e}).")
+
+
+def shipped_end_to_end(args, grammar) -> None:  # noqa: ANN001
+    """Valid 3D shapes per minute from the shipped models (no training, no dataset): masked
+    decoding with the cycle-consistent search, placed decoding, and the graph sampler, in one run."""
+    ship = {"model": f"builtin:{args.example}", "mode": "perturb", "categories": f"builtin:{args.example}"}
+    catalogue = {
+        "consistent": ("string-vae: masked decoding, default predictor, cycle-consistent search", "string-vae",
+                       {**ship, "search": "consistent"}),
+        "placed": ("string-vae: placed decoding (string and categories together, width 16)", "string-vae",
+                   {**ship, "decoding": "placed"}),
+        "placed-small": (f"string-vae: placed decoding, started from training strings of <= {args.max_tokens} tokens",
+                         "string-vae", {**ship, "decoding": "placed", "max_tokens": str(args.max_tokens)}),
+        "sampler": ("graph sampler (isomorphism dedupe)", "graph-sampler", {"dedupe": "isomorphism"}),
+    }
+    runs = [catalogue[k] for k in args.shipped_rows.split(",")]
+    print(f"\n## End to end from the shipped models: valid 3D shapes per minute, {args.e2e_seconds:.0f} s per row\n")
+    rows_: list = []
+    e2e_rows(args, grammar, rows_, runs)
+    base_rate = (rows_[-1][3] or None) if runs[-1][1] == "graph-sampler" else None
+    for r in rows_:
+        r.append(f"{r[3] / base_rate:.4f}x" if base_rate else "-")
+    print(table(["back end", "valid shapes", "seconds", "shapes per minute", "mean parts", "load average after",
+                 "vs graph sampler"], rows_))
 
 
 def end_to_end(args, grammar, models, full) -> None:  # noqa: ANN001

@@ -74,3 +74,15 @@ def test_derive_placed_writes_only_valid_shapes_and_names_the_bottleneck(tmp_pat
         assert validate(castle_grammar, read_assembly(out / e["file"])).ok
     if len(entries) < 2:
         assert "made " in res.output and "bottleneck is" in res.output, res.output
+
+
+def test_max_tokens_starts_sampling_only_from_short_training_strings(shipped):
+    from grammarkit_string_vae.sampling import Sampler, SamplingSettings
+
+    vae, _inst, _dec = shipped
+    sampler = Sampler(vae, SamplingSettings(max_tokens=30, batch=2), seed=0)
+    pool = sampler.pool
+    assert len(pool) and all(len(vae.train_strings[i]) <= 30 for i in pool)
+    assert len(pool) < len(vae.train_strings)
+    assert len(Sampler(vae, SamplingSettings(), seed=0).pool) == len(vae.train_strings)
+    assert sampler._targets([(int(pool[0]),)]) == [len(vae.train_strings[int(pool[0])])]  # the length prior

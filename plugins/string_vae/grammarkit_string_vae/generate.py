@@ -33,13 +33,16 @@ def generate(request: Request) -> Iterator[Result]:
     settings = SamplingSettings(decoding=opts.decoding, temperature=opts.temperature,
                                 magnitude=opts.magnitude, steps=opts.steps,
                                 local_magnitude=opts.local_magnitude, points=opts.points,
-                                path_length=opts.path_length, batch=opts.batch)
+                                path_length=opts.path_length, batch=opts.batch, max_tokens=opts.max_tokens)
     if opts.decoding == "placed" and not opts.categories:
         raise GrammarkitError("--option decoding=placed needs edge categories: --option categories=FILE.edges "
                               "(or builtin:castle)")
     if opts.decoding == "placed":  # seconds per point: small batches, so the time budget is polled often
-        settings = SamplingSettings(**{**settings.__dict__, "batch": min(opts.batch, 4)})
+        settings = SamplingSettings(**{**settings.__dict__, "batch": min(opts.batch, 2)})
     sampler = Sampler(vae, settings, seed=request.seed)
+    # placed decoding takes seconds per latent point: the sampler polls the graceful budget and
+    # the hard deadline between points (the hard one then raises at the loop's check below)
+    sampler.stop = lambda: request.time_is_up() or (request.deadline is not None and time.monotonic() > request.deadline)
     train = GraphSet()
     for g in sampler.train_graphs:
         train.add(g)

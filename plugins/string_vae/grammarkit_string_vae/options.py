@@ -25,6 +25,8 @@ class StringVAEOptions(BaseModel):
         "step masked by what can still be placed in 3D (needs categories; see docs/string-vae.md)")
     width: int = Field(16, ge=1, description="placed decoding: placements kept per written prefix")
     placed_steps: int = Field(150, ge=1, description="placed decoding: search steps per latent point")
+    max_tokens: Optional[int] = Field(None, ge=2, description="size control: perturb, interpolate and path "
+                                      "start only from training points whose string has at most this many tokens")
     slack: float = Field(0.15, ge=0, description="placed decoding: the length prior's slack (budget = the "
                          "start string's length x (1 + slack))")
     temperature: float = Field(0.0, ge=0, description="0: most likely token; > 0: sample tokens")

@@ -46,6 +46,7 @@ class SamplingSettings:
     points: int = 8  # interpolate: points per segment; path: points per path segment
     path_length: int = 32
     batch: int = 128  # seeds decoded together
+    max_tokens: int | None = None  # size control: start only from training points whose string is this short
 
 
 @dataclass
@@ -73,6 +74,7 @@ class Sampler:
     decoded_points: int = 0  # every latent point decoded (the yield's denominator)
     valid_points: int = 0
     placed: object = None  # decoding "placed": the placed.PlacedDecoder that decodes each point
+    stop: object = None  # a callable: True when the run's time is up (placed decoding polls it per point)
 
     def __post_init__(self) -> None:
         self.rng = np.random.default_rng(self.seed)
@@ -87,6 +89,15 @@ class Sampler:
             self._train_graphs = [decode(s, self.vae.alphabet).graph for s in self.vae.train_strings]
         return self._train_graphs
 
+    @property
+    def pool(self) -> np.ndarray:
+        """Indices of the training points sampling may start from (all, or those whose string
+        has at most `max_tokens` tokens)."""
+        S = self.vae.train_strings
+        m = self.settings.max_tokens
+        idx = np.arange(len(S)) if m is None else np.array([i for i, t in enumerate(S) if len(t) <= m], dtype=np.int64)
+        return idx if len(idx) else np.arange(len(S))
+
     def _targets(self, parents: list[tuple[int, ...]]) -> list[int]:
         """The length prior: per latent point, the length of the training strings it starts
         from (their mean), or a random training string's."""
@@ -98,8 +109,11 @@ class Sampler:
         self._calls += 1
         if self.settings.decoding == "placed":
             targets = self._targets(parents or [()] * len(z))
-            out = [self.placed.decode(z[i], targets[i], seed=self.seed * 7919 + self._calls * 1009 + i)
-                   for i in range(len(z))]
+            out = []
+            for i in range(len(z)):  # seconds per point: the time budget is polled between points
+                if self.stop is not None and self.stop():
+                    break
+                out.append(self.placed.decode(z[i], targets[i], seed=self.seed * 7919 + self._calls * 1009 + i))
             self._count(out)
             return out
         out = decode_latents(self.vae.model, torch.from_numpy(np.ascontiguousarray(z, dtype=np.float32)),
@@ -124,7 +138,7 @@ class Sampler:
         todo = list(range(len(centres)))
         D = centres.shape[1]
         for k in range(1, steps + 1):
-            if not todo:
+            if not todo or (self.stop is not None and self.stop()):
                 break
             m = magnitude * k / steps
             z = centres[todo] + self.rng.uniform(-m, m, size=(len(todo), D))
@@ -145,7 +159,8 @@ class Sampler:
 
     def perturb(self, count: int) -> list[Sample | None]:
         mu = self.vae.train_mu.numpy()
-        idx = self.rng.integers(0, len(mu), size=count)
+        pool = self.pool
+        idx = pool[self.rng.integers(0, len(pool), size=count)]
         return self._search(mu[idx], [[int(i)] for i in idx], self.settings.magnitude, self.settings.steps,
                             "perturb", [(int(i),) for i in idx])
 
@@ -155,7 +170,7 @@ class Sampler:
         P = self.settings.points
         ts = np.arange(1, P + 1) / (P + 1)
         for _ in range(pairs):
-            a, b = (int(x) for x in self.rng.choice(len(mu), size=2, replace=False))
+            a, b = (int(x) for x in self.rng.choice(self.pool, size=2, replace=False))
             centres = mu[a] + ts[:, None] * (mu[b] - mu[a])
             out += self._search(centres, [[a, b]] * P, self.settings.local_magnitude, self.settings.local_steps,
                                 "interpolate", [(a, b)] * P)
@@ -194,7 +209,7 @@ class Sampler:
         P = max(1, self.settings.points // 4)
         ts = np.arange(1, P + 1) / (P + 1)
         for _ in range(paths):
-            a, b = (int(x) for x in self.rng.choice(len(mu), size=2, replace=False))
+            a, b = (int(x) for x in self.rng.choice(self.pool, size=2, replace=False))
             route = self.latent_path(a, b)
             centres, avoid, parents = [], [], []
             for p, q in zip(route, route[1:]):

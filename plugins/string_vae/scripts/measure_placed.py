@@ -23,6 +23,8 @@ def main() -> None:
     ap.add_argument("--width", type=int, default=8)
     ap.add_argument("--steps", type=int, default=150)
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--max-tokens", type=int, default=None, help="perturb only training points whose string is at "
+                    "most this long")
     a = ap.parse_args()
 
     from grammarkit.dsl import load
@@ -39,8 +41,9 @@ def main() -> None:
     mu = vae.train_mu.numpy()
     built = valid = 0
     t0 = time.perf_counter()
+    seeds = [j for j, t in enumerate(vae.train_strings) if a.max_tokens is None or len(t) <= a.max_tokens]
     for i in range(a.samples):
-        j = int(rng.integers(len(mu)))
+        j = seeds[int(rng.integers(len(seeds)))]
         d = dec.decode(mu[j] + rng.uniform(-0.25, 0.25, size=mu.shape[1]), len(vae.train_strings[j]), seed=i)
         if d.valid:
             valid += 1
