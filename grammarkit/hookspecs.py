@@ -35,15 +35,21 @@ import pluggy
 if TYPE_CHECKING:  # pragma: no cover - types only
     import click
 
+    from .plugins import Application
     from .registry import BackendSpec, ConstraintSpec, ExporterSpec, FitSpec, FunctionSpec, OperationSpec, Registries
 
+# Every hook receives `app`, the one grammarkit.plugins.Application of the process (created
+# at the edge: the command line, the Python API): `app.registries` holds what the other
+# plugins provide, `app.version` grammarkit's version. pluggy passes only the arguments an
+# implementation names, so `def grammarkit_operations():` keeps working. Do not read, in a
+# hook, the kind that hook is collecting (that would ask the hook for itself).
 PROJECT = "grammarkit"
 hookspec = pluggy.HookspecMarker(PROJECT)
 hookimpl = pluggy.HookimplMarker(PROJECT)
 
 
 @hookspec
-def grammarkit_operations() -> Iterable["OperationSpec"]:
+def grammarkit_operations(app: "Application") -> Iterable["OperationSpec"]:
     """Split operations this plugin provides (e.g. `extrude`, `split`, `roofGable`).
 
     Return `OperationSpec`s. The checker validates calls against `params`/`block`; the split
@@ -55,12 +61,12 @@ def grammarkit_operations() -> Iterable["OperationSpec"]:
 
 
 @hookspec
-def grammarkit_functions() -> Iterable["FunctionSpec"]:
+def grammarkit_functions(app: "Application") -> Iterable["FunctionSpec"]:
     """Expression functions usable in grammar text (`rand(lo, hi)`, `min(a, b)`, ...)."""
 
 
 @hookspec
-def grammarkit_constraints() -> Iterable["ConstraintSpec"]:
+def grammarkit_constraints(app: "Application") -> Iterable["ConstraintSpec"]:
     """Global constraints of tiling grammars (`constraint NAME(args)` in grammar text).
 
     `check(graph, args, context)` receives the shape graph (networkx, nodes with attribute
@@ -70,7 +76,7 @@ def grammarkit_constraints() -> Iterable["ConstraintSpec"]:
 
 
 @hookspec
-def grammarkit_backends() -> Iterable["BackendSpec"]:
+def grammarkit_backends(app: "Application") -> Iterable["BackendSpec"]:
     """Back ends for `grammarkit derive --backend NAME` and `grammarkit.run.run_backend`.
 
     Return `grammarkit.run.BackendSpec`s. A back end's `run(request)` is a generator that
@@ -80,23 +86,23 @@ def grammarkit_backends() -> Iterable["BackendSpec"]:
 
 
 @hookspec
-def grammarkit_exporters() -> Iterable["ExporterSpec"]:
+def grammarkit_exporters(app: "Application") -> Iterable["ExporterSpec"]:
     """File formats models can be written in (`--format` / output suffix)."""
 
 
 @hookspec
-def grammarkit_cli_commands() -> Iterable["click.Command"]:
+def grammarkit_cli_commands(app: "Application") -> Iterable["click.Command"]:
     """Extra `grammarkit` subcommands (click commands). Names must not clash with built-ins."""
 
 
 @hookspec
-def grammarkit_train_commands() -> Iterable["click.Command"]:
+def grammarkit_train_commands(app: "Application") -> Iterable["click.Command"]:
     """Subcommands of `grammarkit train` (click commands), one per trainable model kind, e.g.
     `grammarkit train string-vae DATASET -o model.vae`. Names must be unique across plugins."""
 
 
 @hookspec
-def grammarkit_insert_fits() -> Iterable["FitSpec"]:
+def grammarkit_insert_fits(app: "Application") -> Iterable["FitSpec"]:
     """Ways to fit an inserted asset into a scope, named in grammar text as
     `i("asset.glb", fit=NAME)`; see `grammarkit.registry.FitSpec`."""
 

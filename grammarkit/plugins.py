@@ -197,6 +197,69 @@ class GuardedFunction:
             raise ValueError(f"plugin {self.plugin!r} failed: {type(exc).__name__}: {exc}") from None
 
 
+class Application:
+    """The one object every hook receives (`def grammarkit_backends(app): ...`), created with
+    the plugin manager at the edge (the command line, the top-level Python API), as pytest's
+    `Config` or datasette's `Datasette`: what a plugin may ask of grammarkit, in one place.
+
+    registries: what every plugin provides (`grammarkit.registry.Registries`); a hook must
+                not read the kind it is itself collecting.
+    manager:    the PluginManager (plugins, their problems).
+    version:    grammarkit's version."""
+
+    def __init__(self, manager: "PluginManager"):
+        self.manager = manager
+
+    @property
+    def registries(self) -> Registries:
+        return self.manager.registries()
+
+    @property
+    def version(self) -> str:
+        try:
+            return md.version(BUILTIN_DISTRIBUTION)
+        except md.PackageNotFoundError:  # pragma: no cover - run from a source tree
+            return "unknown"
+
+
+@dataclass(frozen=True)
+class Contribution:
+    """What one hook implementation returned, as the guard hands it to pluggy: the plugin's
+    name and its items (hook wrappers see these in pluggy's result list)."""
+
+    plugin: str
+    items: tuple
+
+
+class _GuardedHook:
+    """Wraps one hook implementation inside pluggy's call (pluggy still orders and calls it,
+    hook wrappers still run): what it prints goes to stderr, whatever it raises (even
+    SystemExit) or returns that is not a list is recorded against its plugin and it
+    contributes nothing, so one broken plugin never stops the others. Ctrl-C is obeyed."""
+
+    def __init__(self, manager: "PluginManager", plugin: str, hook: str, function: Callable):
+        self.manager, self.plugin, self.hook, self.function = manager, plugin, hook, function
+        self.__name__ = getattr(function, "__name__", hook)
+
+    def __call__(self, *args: Any) -> Contribution | None:
+        info = self.manager._infos.setdefault(self.plugin, PluginInfo(name=self.plugin))
+        try:
+            with _plugin_output():
+                items = _items(self.function(*args))
+        except KeyboardInterrupt:
+            raise  # the user's stop, obeyed (not recorded against the plugin)
+        except TypeError as exc:
+            if str(exc).startswith("returned "):
+                info.errors.append(f"hook {self.hook} {exc}; ignored")
+            else:
+                info.errors.append(f"hook {self.hook} raised TypeError: {exc}")
+            return None
+        except BaseException as exc:  # noqa: BLE001 - isolate the broken plugin (sys.exit too)
+            info.errors.append(f"hook {self.hook} raised {type(exc).__name__}: {exc}")
+            return None
+        return Contribution(self.plugin, tuple(items))
+
+
 class PluginManager:
     """Finds plugins and caches their contributions per kind."""
 
@@ -212,6 +275,7 @@ class PluginManager:
         self._lock = threading.RLock()
         self.disabled = set(disabled) if disabled is not None else _env_names(os.environ.get(DISABLE_ENV))
         self.builtins_only = _env_flag(os.environ.get(NO_PLUGINS_ENV)) if builtins_only is None else builtins_only
+        self.app = Application(self)
         if load_entry_points:
             self._load_entry_points()
 
@@ -243,6 +307,8 @@ class PluginManager:
                 self._pm.register(obj, name=ep.name)
             except Exception as exc:  # noqa: BLE001 - e.g. a hook with a wrong signature
                 info.errors.append(f"failed to register: {type(exc).__name__}: {exc}")
+                continue
+            self._guard(obj, ep.name)
         for name in sorted(self.disabled - found):
             self._infos[name] = PluginInfo(name=name, disabled=True, errors=[
                 f"{DISABLE_ENV} names {name!r}, but no plugin of that name is installed"])
@@ -251,6 +317,7 @@ class PluginManager:
         """Register a plugin object at run time (tests, notebooks). Clears the caches."""
         with self._lock:
             self._pm.register(plugin, name=name)
+            self._guard(plugin, name)
             self._runtime.add(name)
             self._infos[name] = PluginInfo(name=name, version=version,
                                            module=getattr(plugin, "__name__", type(plugin).__name__))
@@ -273,30 +340,32 @@ class PluginManager:
             info.errors[:] = [e for e in info.errors if e.startswith(("failed to", DISABLE_ENV))]
 
     # -- collecting ----------------------------------------------------------------------
+    def _guard(self, plugin: object, name: str) -> None:
+        """Wrap each of the plugin's hook implementations (not its hook wrappers) in a guard."""
+        for caller in self._pm.get_hookcallers(plugin) or ():
+            for impl in caller.get_hookimpls():
+                if impl.plugin is plugin and not (impl.hookwrapper or getattr(impl, "wrapper", False)) \
+                        and not isinstance(impl.function, _GuardedHook):
+                    impl.function = _GuardedHook(self, name, caller.name, impl.function)
+
     def _call(self, kind: _Kind) -> list[tuple[PluginInfo, list]]:
-        """Every hook implementation's items, in pluggy's call order, validated."""
+        """Every hook implementation's items, in pluggy's call order, validated. The hook is
+        called through pluggy (so `tryfirst`/`trylast` and hook wrappers apply), with the one
+        Application as `app`; each implementation runs inside its guard (_GuardedHook)."""
         hook = getattr(self._pm.hook, kind.hook)
         out = []
-        # get_hookimpls() lists implementations in the order pluggy sorted them (trylast ...
-        # tryfirst); pluggy calls them from the end of that list.
-        for impl in reversed(hook.get_hookimpls()):
-            if impl.hookwrapper or getattr(impl, "wrapper", False):
-                continue
-            info = self._infos.setdefault(impl.plugin_name, PluginInfo(name=impl.plugin_name))
-            try:
-                with _plugin_output():
-                    items = _items(impl.function())
-            except KeyboardInterrupt:
-                raise  # the user's stop, obeyed (not recorded against the plugin)
-            except TypeError as exc:
-                if str(exc).startswith("returned "):
-                    info.errors.append(f"hook {kind.hook} {exc}; ignored")
-                else:
-                    info.errors.append(f"hook {kind.hook} raised TypeError: {exc}")
-                continue
-            except BaseException as exc:  # noqa: BLE001 - isolate the broken plugin (sys.exit too)
-                info.errors.append(f"hook {kind.hook} raised {type(exc).__name__}: {exc}")
-                continue
+        try:
+            results = hook(app=self.app)
+        except KeyboardInterrupt:
+            raise
+        except BaseException as exc:  # noqa: BLE001 - a hook wrapper broke: name the hook
+            raise PluginError(f"hook {kind.hook}: a hook wrapper failed: {type(exc).__name__}: "
+                              f"{exc}") from None
+        for contribution in results:
+            if not isinstance(contribution, Contribution):  # a wrapper added a raw result
+                contribution = Contribution("a hook wrapper", tuple(_items(contribution)))
+            info = self._infos.setdefault(contribution.plugin, PluginInfo(name=contribution.plugin))
+            items = list(contribution.items)
             good = []
             for item in items:
                 problem = _problem(item, kind)

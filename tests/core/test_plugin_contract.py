@@ -255,3 +255,60 @@ def test_plugins_lists_each_backends_options():
     assert infos["graph-sampler"]["backend_options"]["graph-sampler"]
     r = gk(["plugins"])
     assert "split --option variations (bool = False)" in r.stdout
+
+
+# -- hooks receive the one Application; pluggy's call with per-plugin guards ---------------------
+def test_hooks_receive_the_application_and_argument_free_hooks_keep_working():
+    from grammarkit.plugins import Application
+
+    seen = []
+
+    class WithApp:
+        @hookimpl
+        def grammarkit_operations(self, app):
+            seen.append(app)
+            return [OperationSpec(name="with_app", apply=lambda *a: None)]
+
+    class Plain:
+        @hookimpl
+        def grammarkit_operations(self):
+            return [OperationSpec(name="plain_op", apply=lambda *a: None)]
+
+    pm = PluginManager(load_entry_points=False)
+    pm.register(WithApp(), "with-app")
+    pm.register(Plain(), "plain")
+    assert {"with_app", "plain_op"} <= set(pm.operations())
+    assert len(seen) == 1 and isinstance(seen[0], Application) and seen[0] is pm.app
+    assert seen[0].registries is pm.registries()
+
+
+def test_hook_wrappers_run_and_a_broken_plugin_is_isolated_inside_pluggys_call():
+
+    calls = []
+
+    class Wrapper:
+        @hookimpl(wrapper=True)
+        def grammarkit_operations(self):
+            calls.append("before")
+            result = yield
+            calls.append(("after", sorted(c.plugin for c in result)))
+            return result
+
+    class Broken:
+        @hookimpl
+        def grammarkit_operations(self, app):
+            raise RuntimeError("boom")
+
+    class Good:
+        @hookimpl
+        def grammarkit_operations(self):
+            return [OperationSpec(name="good_op", apply=lambda *a: None)]
+
+    pm = PluginManager(load_entry_points=False)
+    for name, plugin in (("wrapper", Wrapper()), ("broken", Broken()), ("good", Good())):
+        pm.register(plugin, name)
+    assert "good_op" in pm.operations()
+    assert calls == ["before", ("after", ["good"])]  # the wrapper saw the guarded results
+    infos = {i.name: i for i in pm.plugins()}
+    assert any("raised RuntimeError: boom" in e for e in infos["broken"].errors)
+    assert infos["good"].ok
