@@ -92,11 +92,14 @@ class SplitChecks:
 
     def rule_near_misses(self, name: str, scope: _Scope) -> list[str]:
         """Rules (and snippet-bound names) visible in `scope` that `name` is a near miss of."""
-        key = (id(scope.rules), id(scope.outer_rules))
+        # one finder per rule table (the grammar's, or a snippet's with the grammar's around it),
+        # not per scope: every rule body has a scope of its own, and a finder indexes all names
+        key = (id(scope.rules), id(scope.outer_rules) if scope.outer_rules else 0)
         finder = self._near_misses.get(key)
         if finder is None:
             names = set(scope.rules) | set(scope.outer_rules) | set(self.anchors) | set(self.defaults)
-            finder = self._near_misses[key] = (NearMisses(names), scope)  # scope: keeps the ids alive
+            # the tables are kept with the finder, so their ids stay theirs
+            finder = self._near_misses[key] = (NearMisses(names), scope.rules, scope.outer_rules)
         return finder[0](name)
 
     def check_op(self, op: OpCall, scope: _Scope) -> None:
@@ -290,6 +293,7 @@ class SplitChecks:
 
         seen: set[str] = set()
         todo = [start.name]
+        variants = self.g.variants  # a filter over every statement: once, not per reached name
         while todo:
             n = todo.pop()
             if n in seen:
@@ -304,7 +308,7 @@ class SplitChecks:
                 bound.append(self.snippets[self.anchors[n].snippet])
             elif n in self.defaults and self.defaults[n].snippet in self.snippets:
                 bound.append(self.snippets[self.defaults[n].snippet])
-            for v in self.g.variants:
+            for v in variants:
                 if v.object_type == n:
                     bound.extend(self.snippets[o.snippet] for o in v.options if o.snippet in self.snippets)
             for s in bound:

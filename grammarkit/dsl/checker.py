@@ -47,7 +47,7 @@ class Checker(SplitChecks, TilingChecks):
         # user functions (`func`): name -> arity -> first definition
         self.user_functions: dict[str, dict[int, Function]] = {}
         self._fold_table: FunctionTable | None = None
-        self._near_misses: dict[tuple[int, int], tuple[NearMisses, Any]] = {}
+        self._near_misses: dict[tuple[int, int], tuple[NearMisses, Any, Any]] = {}
 
     # -- entry -----------------------------------------------------------------------------
     def run(self) -> list[Diagnostic]:

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import difflib
 import functools
-from typing import Iterable
+from typing import Any, Iterable
 
 __all__ = ["NearMisses", "closest_first", "edit_distance", "known_hint"]
 
@@ -54,44 +54,84 @@ def edit_distance(a: str, b: str, limit: int = NEAR_MISS_DISTANCE) -> int:
 
 class NearMisses:
     """The names of `known` that a misspelt `name` was probably meant to be: equal ignoring
-    case, or within NEAR_MISS_DISTANCE edits. Built once per set of names: each name is indexed
-    by the strings left after deleting up to two of its characters (symmetric deletion), so a
-    query looks at a few candidates, not at every name, even for grammars of 60,000 rules."""
+    case, or within NEAR_MISS_DISTANCE edits. The edit distance is computed only for names
+    that pass a cheap necessary condition (lengths within 2, and character counts within 2:
+    the "bag distance" is a lower bound of the edit distance), so a query stays fast and
+    memory stays linear even for grammars of 60,000 rules (numpy filters those in one pass)."""
+
+    _NUMPY_FROM = 64  # more names than this: filter with numpy (imported lazily)
 
     def __init__(self, known: Iterable[str]):
         self.known = frozenset(known)
+        self._names = sorted(self.known)
         self._folded: dict[str, list[str]] = {}
-        self._deletes: dict[str, set[str]] | None = None  # built on the first query
-        for k in sorted(self.known):
+        for k in self._names:
             self._folded.setdefault(k.casefold(), []).append(k)
-
-    def _index(self) -> dict[str, set[str]]:
-        if self._deletes is None:
-            self._deletes = {}
-            for k in self.known:
-                for variant in _deletions(k):
-                    self._deletes.setdefault(variant, set()).add(k)
-        return self._deletes
+        self._matrix: Any = None  # (lengths, character histograms) for the numpy filter
+        self._answers: dict[str, list[str]] = {}  # a misspelling often repeats
 
     def __call__(self, name: str) -> list[str]:
         """Near misses of `name`, closest first (ties in sorted order); [] for a known name."""
         if name in self.known:
             return []
-        same_case = [k for k in self._folded.get(name.casefold(), ()) if k != name]
-        index = self._index()
-        candidates: set[str] = set()
-        for variant in _deletions(name):
-            candidates |= index.get(variant, set())
-        scored = sorted((edit_distance(name, k), k) for k in candidates)
-        near = [k for d, k in scored if d <= NEAR_MISS_DISTANCE and k not in same_case]
-        return same_case + near
+        if name not in self._answers:
+            same_case = [k for k in self._folded.get(name.casefold(), ()) if k != name]
+            scored = sorted((edit_distance(name, k), k) for k in self._candidates(name))
+            near = [k for d, k in scored if d <= NEAR_MISS_DISTANCE and k not in same_case]
+            self._answers[name] = same_case + near
+        return list(self._answers[name])
+
+    def _candidates(self, name: str) -> list[str]:
+        limit = NEAR_MISS_DISTANCE
+        if len(self._names) <= self._NUMPY_FROM:
+            return [k for k in self._names if abs(len(k) - len(name)) <= limit]
+        import numpy as np
+
+        if self._matrix is None:
+            lengths = np.array([len(k) for k in self._names], dtype=np.int64)
+            codes = _COLUMN[np.frombuffer("".join(self._names).encode("utf-8", "replace"), dtype=np.uint8)]
+            if len(codes) != int(lengths.sum()):  # non-ASCII names: count them one by one
+                codes = np.array([_ALPHABET.get(ch, len(_ALPHABET)) for k in self._names for ch in k],
+                                 dtype=np.int64)
+            width = len(_ALPHABET) + 1
+            rows = np.repeat(np.arange(len(self._names)), lengths)
+            hist = np.bincount(rows * width + codes, minlength=len(self._names) * width)
+            self._matrix = (lengths, hist.reshape(len(self._names), width).astype(np.int16))
+        lengths, hist = self._matrix
+        close = np.flatnonzero(np.abs(lengths - len(name)) <= limit)
+        h = np.zeros(hist.shape[1], dtype=np.int16)
+        for ch in name:
+            h[_ALPHABET.get(ch, len(_ALPHABET))] += 1
+        diff = hist[close] - h
+        # bag distance = max(characters in excess, characters missing); total = excess - missing
+        excess = np.maximum(diff, 0).sum(axis=1)
+        missing = excess - diff.sum(axis=1)
+        keep = close[np.maximum(excess, missing) <= limit]
+        return [self._names[i] for i in keep.tolist()]
 
 
-def _deletions(word: str, depth: int = NEAR_MISS_DISTANCE) -> set[str]:
-    """`word` and every string made by deleting up to `depth` of its characters."""
-    out = {word}
-    frontier = {word}
-    for _ in range(depth):
-        frontier = {w[:i] + w[i + 1:] for w in frontier for i in range(len(w))}
-        out |= frontier
-    return out
+# the characters of names (`[A-Za-z_][A-Za-z0-9_]*`); any other shares the last column
+_ALPHABET = {ch: i for i, ch in enumerate("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789_")}
+
+
+def _column_table() -> Any:
+    import numpy as np
+
+    table = np.full(256, len(_ALPHABET), dtype=np.int64)
+    for ch, col in _ALPHABET.items():
+        table[ord(ch)] = col
+    return table
+
+
+class _LazyColumn:
+    """`_COLUMN[bytes]`: the histogram column of each byte (numpy, built on first use)."""
+
+    table: Any = None
+
+    def __getitem__(self, codes: Any) -> Any:
+        if _LazyColumn.table is None:
+            _LazyColumn.table = _column_table()
+        return _LazyColumn.table[codes]
+
+
+_COLUMN = _LazyColumn()

@@ -6,7 +6,6 @@ does) does not import trimesh; the writers are imported on first use.
 from __future__ import annotations
 
 from importlib import import_module
-from pathlib import Path
 from typing import Any
 
 from ..hookspecs import hookimpl

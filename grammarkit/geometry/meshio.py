@@ -296,6 +296,8 @@ def read_gltf_solids(path: str | Path) -> list[GltfSolid] | None:
 
 
 def _solids_from_doc(doc: dict, binary: bytes | None, root: dict, path: Path) -> list[GltfSolid]:
+    # One function on purpose: the accessor reader and the colour lookup are closures over this
+    # document's buffers and materials, shared by both layouts (formats 2 and 3) read below.
     buffers: list[bytes] = []
     for i, buf in enumerate(doc.get("buffers", [])):
         uri = buf.get("uri")

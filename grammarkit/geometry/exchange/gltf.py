@@ -270,24 +270,9 @@ def _build_gltf(scene: Scene, textures: str = "embed", base: Path | None = None)
             prims_by_group.setdefault(g, []).append(prim)
         if textured:
             _textured_primitives(b, solid, F, textured, prims_by_group)
-        single = len(prims_by_group) == 1 and len(solid.groups) == 1
-        if single:
-            (prims,) = prims_by_group.values()
-            b.meshes.append({"name": solid.name, "primitives": prims})
-            node_entry["mesh"] = len(b.meshes) - 1
-            if solid.key is not None:
-                shared_mesh[solid.key] = node_entry["mesh"]
-            all_labels.append(solid.groups[0][0])
-        else:
-            kids = []
-            for g, prims in sorted(prims_by_group.items()):
-                gname, gextras = solid.groups[g]
-                b.meshes.append({"name": gname, "primitives": prims})
-                extras = dict(gextras)
-                extras["label"] = len(all_labels)
-                all_labels.append(gname)
-                kids.append(b.node({"name": gname, "mesh": len(b.meshes) - 1, "extras": to_jsonable(extras)}))
-            node_entry["children"] = kids
+        node_entry.update(_per_terminal_meshes(b, solid, prims_by_group, all_labels))
+        if solid.key is not None and "mesh" in node_entry:
+            shared_mesh[solid.key] = node_entry["mesh"]
         children.append(b.node(node_entry))
     if not b.meshes:
         raise ShapeError("nothing to export: the model has no triangles")
@@ -300,6 +285,26 @@ def _build_gltf(scene: Scene, textures: str = "embed", base: Path | None = None)
     binary = b"".join(b.chunks) + b"\0" * pad
     doc["buffers"][0]["byteLength"] = b.size
     return doc, binary
+
+
+def _per_terminal_meshes(b: _GltfBuilder, solid: Solid, prims_by_group: dict[int, list[dict]],
+                         all_labels: list[str]) -> dict:
+    """The solid node's mesh (one group) or its terminal child nodes, each with a mesh of one
+    primitive per material: the layout of surfaces, textured solids and one-material parts."""
+    if len(prims_by_group) == 1 and len(solid.groups) == 1:
+        (prims,) = prims_by_group.values()
+        b.meshes.append({"name": solid.name, "primitives": prims})
+        all_labels.append(solid.groups[0][0])
+        return {"mesh": len(b.meshes) - 1}
+    kids = []
+    for g, prims in sorted(prims_by_group.items()):
+        gname, gextras = solid.groups[g]
+        b.meshes.append({"name": gname, "primitives": prims})
+        extras = dict(gextras)
+        extras["label"] = len(all_labels)
+        all_labels.append(gname)
+        kids.append(b.node({"name": gname, "mesh": len(b.meshes) - 1, "extras": to_jsonable(extras)}))
+    return {"children": kids}
 
 
 def _one_primitive(b: _GltfBuilder, solid: Solid, faces: np.ndarray, pos: int, skey: np.ndarray,
