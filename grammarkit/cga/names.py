@@ -8,13 +8,11 @@ from __future__ import annotations
 
 import re
 
-# grammarkit's reserved words (docs/language.md); kept here so that importing the CGA
-# translator does not load the .grammar parser.
-GK_KEYWORDS = frozenset({
-    "grammar", "import", "attr", "const", "func", "snippet", "use", "as", "default", "for", "variants",
-    "case", "else", "NIL", "true", "false", "part", "site", "at", "facing", "mirror", "dock",
-    "rot", "neighbors", "in", "constraint", "example",
-})
+from ..dsl.parser import KEYWORDS
+
+# grammarkit's reserved words, the parser's own list (importing dsl.parser builds no tables:
+# get_parser() does that lazily), so a new keyword such as asset_dir is escaped here too.
+GK_KEYWORDS = KEYWORDS
 
 _BAD = re.compile(r"[^A-Za-z0-9_]")
 
