@@ -21,6 +21,8 @@ from .requires import require_learning
 
 
 def generate(request: Request) -> Iterator[Result]:
+    # One loop over samples with its bookkeeping (skips, where graphs were lost, instantiation
+    # statistics, stopping rules): long, but split up it would pass a dozen counters around.
     require_learning("the string-vae back end")
     from .graphs import GraphSet
     from .modelfile import load_vae
