@@ -29,9 +29,7 @@ LOTS = {"rect": [(0.0, 0.0), (20.0, 0.0), (20.0, 12.0), (0.0, 12.0)],
 # only the footprint (x, y) and the floor are compared
 RANDOM_HEIGHT = {"extrusion_rule", "simple_rule2019"}
 # known differences, each a reason (the packages still import and derive as they come)
-KNOWN = {("parthenon", "lshape"): "the temple's column rows on an L-shaped lot differ by 0.54 m",
-         ("candler", "rect"): "i() drops the asset's own UVs (engine): tileUV() on an inserted asset fails",
-         ("candler", "lshape"): "i() drops the asset's own UVs (engine): tileUV() on an inserted asset fails"}
+KNOWN = {("parthenon", "lshape"): "the temple's column rows on an L-shaped lot differ by 0.54 m"}
 
 py7zr = pytest.importorskip("py7zr", reason="7z rule packages need the optional py7zr (grammarkit[cga])")
 
@@ -82,8 +80,6 @@ def test_package_imports_and_derives_as_it_comes(rpk, lot_name, tmp_path, monkey
     third = tmp_path / "third"
     third.mkdir()
     monkeypatch.chdir(third)
-    if (rpk.stem, lot_name) in KNOWN and "UVs" in KNOWN[(rpk.stem, lot_name)]:
-        pytest.xfail(KNOWN[(rpk.stem, lot_name)])
     model = grammarkit.derive(grammarkit.parse(text, filename=str(out)), seed=0, lot=LOTS[lot_name])
     assert model.triangle_count > 0
     ref = np.array(REFERENCE[rpk.stem][lot_name]["bbox"])

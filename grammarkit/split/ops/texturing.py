@@ -156,12 +156,21 @@ def op_project_uv(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
     return c
 
 
-def _uv_affine(s: Shape, k: int, op: str, a: tuple) -> Shape:
+def _no_uvs(ctx: Any, s: Shape, k: int, op: str) -> Shape:
+    """A uv operation on a shape without texture coordinates in set `k` changes nothing, as in
+    CityEngine (an inserted asset's own UVs are not kept yet): a warning, not the end of the
+    whole model (issue 26: one tileUV() on an asset aborted candler)."""
+    ctx.warn(f"rule {s.rule_name!r}: {op}: the shape has no texture coordinates in uv set {k} "
+             f"(projectUV({k}) first); nothing changed")
+    return s
+
+
+def _uv_affine(ctx: Any, s: Shape, k: int, op: str, a: tuple) -> Shape:
     """Compose the baked uv map of set `k` with the 2 x 3 affine map `a` of the uv plane."""
     st = _state(s)
     m = st.get_uv(k)
     if m is None:
-        raise ValueError(f"{op}: the shape has no texture coordinates in uv set {k} (projectUV({k}) first)")
+        return _no_uvs(ctx, s, k, op)
     (a00, a01, a02), (a10, a11, a12) = a
     u, v = m
     new = (tuple(a00 * u[i] + a01 * v[i] + (a02 if i == 3 else 0.0) for i in range(4)),
@@ -177,7 +186,7 @@ def op_translate_uv(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
     """`translateUV(uvset, du, dv)`: add (du, dv) to the texture coordinates (texture units)."""
     k = _uv_set(args[0], "translateUV()")
     du, dv = (_finite(v, "translateUV()") for v in args[1:3])
-    return _uv_affine(s, k, "translateUV()", ((1.0, 0.0, du), (0.0, 1.0, dv)))
+    return _uv_affine(ctx, s, k, "translateUV()", ((1.0, 0.0, du), (0.0, 1.0, dv)))
 
 
 @operation("scaleUV", (Param("uvset"), Param("u"), Param("v")),
@@ -186,7 +195,7 @@ def op_scale_uv(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
     """`scaleUV(uvset, fu, fv)`: multiply the texture coordinates by (fu, fv)."""
     k = _uv_set(args[0], "scaleUV()")
     fu, fv = (_finite(v, "scaleUV()") for v in args[1:3])
-    return _uv_affine(s, k, "scaleUV()", ((fu, 0.0, 0.0), (0.0, fv, 0.0)))
+    return _uv_affine(ctx, s, k, "scaleUV()", ((fu, 0.0, 0.0), (0.0, fv, 0.0)))
 
 
 @operation("rotateUV", (Param("uvset"), Param("angle")),
@@ -196,7 +205,7 @@ def op_rotate_uv(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
     k = _uv_set(args[0], "rotateUV()")
     a = math.radians(_finite(args[1], "rotateUV()"))
     c, sn = math.cos(a), math.sin(a)
-    return _uv_affine(s, k, "rotateUV()", ((c, -sn, 0.0), (sn, c, 0.0)))
+    return _uv_affine(ctx, s, k, "rotateUV()", ((c, -sn, 0.0), (sn, c, 0.0)))
 
 
 @operation("deleteUV", (Param("uvset"),), doc="Remove the texture coordinates of a uv set.")
@@ -341,12 +350,12 @@ def op_tile_uv(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
     h = _finite(args[2], "tileUV(): the texture height")
     m = _state(s).get_uv(k)
     if m is None:
-        raise ValueError(f"tileUV(): the shape has no texture coordinates in uv set {k} (projectUV({k}) first)")
+        return _no_uvs(ctx, s, k, "tileUV()")
     f = []
     for row, size in zip(m, (w, h)):
         grad = math.sqrt(row[0] ** 2 + row[1] ** 2 + row[2] ** 2)
         f.append(1.0 if abs(size) < 1e-12 or grad < 1e-15 else 1.0 / (size * grad))
-    return _uv_affine(s, k, "tileUV()", ((f[0], 0.0, 0.0), (0.0, f[1], 0.0)))
+    return _uv_affine(ctx, s, k, "tileUV()", ((f[0], 0.0, 0.0), (0.0, f[1], 0.0)))
 
 
 NORMALIZE_AXES = ("uv", "u", "v")
@@ -375,4 +384,4 @@ def op_normalize_uv(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
     for i, (lo, hi) in enumerate(_uv_range(s, m)):
         if "uv"[i] in which and hi - lo > 1e-12:
             a[i][i], a[i][2] = 1.0 / (hi - lo), -lo / (hi - lo)
-    return _uv_affine(s, k, "normalizeUV()", (tuple(a[0]), tuple(a[1])))
+    return _uv_affine(ctx, s, k, "normalizeUV()", (tuple(a[0]), tuple(a[1])))

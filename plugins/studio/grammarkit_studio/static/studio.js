@@ -202,6 +202,7 @@ function showGLB(buffer, onShown, isStale) {
   loader.parse(buffer, "", (gltf) => {
     if (isStale && isStale()) { disposeTree(gltf.scene); return; } // a newer model was shown meanwhile
     const t1 = performance.now();
+    applyRuns(gltf.scene);
     const frame = modelFrameOf(gltf.scene);
     const holder = new THREE.Group();
     if (!frame.upright) holder.rotation.x = -Math.PI / 2;
@@ -220,6 +221,32 @@ function showGLB(buffer, onShown, isStale) {
     S.models += 1;
     if (onShown) onShown();
   }, (err) => setError({ message: `could not show the model: ${err.message || err}` }));
+}
+// A closed solid is ONE glTF primitive (so that it reads back watertight everywhere); its
+// terminals' materials ride in the primitive's extras as runs of triangles (docs/derive.md,
+// "Files"). Give each run its material back as a three.js geometry group.
+function applyRuns(scene) {
+  scene.traverse((o) => {
+    const gk = o.isMesh && o.geometry.userData && o.geometry.userData.grammarkit;
+    if (!gk || !Array.isArray(gk.runs) || !Array.isArray(gk.materials)) return;
+    const base = Array.isArray(o.material) ? o.material[0] : o.material;
+    const mats = gk.materials.map((m) => {
+      const pbr = m.pbrMetallicRoughness || {};
+      const c = pbr.baseColorFactor || [1, 1, 1, 1];
+      const mat = base.clone();
+      mat.name = m.name || "";
+      mat.color.setRGB(c[0], c[1], c[2]); // glTF colour factors are linear, as three's working space
+      mat.metalness = pbr.metallicFactor ?? 1;
+      mat.roughness = pbr.roughnessFactor ?? 1;
+      mat.opacity = c[3] ?? 1;
+      mat.transparent = mat.opacity < 1;
+      return mat;
+    });
+    o.geometry.clearGroups();
+    for (const [, m, first, count] of gk.runs) o.geometry.addGroup(first * 3, count * 3, m);
+    base.dispose();
+    o.material = mats;
+  });
 }
 function disposeTree(obj) {
   obj.traverse((o) => {
@@ -268,7 +295,7 @@ S.project = (p) => {
 S.hitAt = (clientX, clientY) => {
   const hit = raycast(clientX, clientY);
   if (!hit) return null;
-  return { point: S.frameNode.worldToLocal(hit.point.clone()).toArray(), terminal: terminalOf(hit.object) };
+  return { point: S.frameNode.worldToLocal(hit.point.clone()).toArray(), terminal: terminalOfHit(hit) };
 };
 S.render = render;
 
@@ -279,6 +306,17 @@ function raycast(clientX, clientY) {
   raycaster.setFromCamera(ndc, camera);
   const hits = raycaster.intersectObject(modelRoot, true).filter((h) => h.object.isMesh);
   return hits.length ? hits[0] : null;
+}
+// On a one-primitive solid the terminals are child nodes without a mesh, and the hit face's
+// run (see applyRuns) names the child: runs are [child, material, first face, face count].
+function terminalOfHit(hit) {
+  const gk = hit.object.geometry && hit.object.geometry.userData && hit.object.geometry.userData.grammarkit;
+  if (gk && Array.isArray(gk.runs) && hit.faceIndex != null) {
+    const run = gk.runs.find(([, , first, count]) => hit.faceIndex >= first && hit.faceIndex < first + count);
+    const node = run && hit.object.children[run[0]];
+    if (node && node.userData && typeof node.userData.terminal === "string") return node.userData.terminal;
+  }
+  return terminalOf(hit.object);
 }
 function terminalOf(object) {
   for (let o = object; o; o = o.parent) {
