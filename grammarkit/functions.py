@@ -16,6 +16,7 @@ import re
 from pathlib import Path
 from typing import Any, Iterable
 
+from . import confine
 from .hookspecs import hookimpl
 from .registry import BUILTIN_ASSET_NAMES, FunctionSpec
 
@@ -138,7 +139,7 @@ def project_folder(base: Path) -> Path:
     """The folder file searches start from: the grammar's folder, or its parent when the
     grammar sits in a CityEngine project's `rules/` folder (an `assets/` folder beside it and
     none inside it)."""
-    if not (base / "assets").is_dir() and (base.parent / "assets").is_dir():
+    if not (base / "assets").is_dir() and confine.allows(base.parent) and (base.parent / "assets").is_dir():
         return base.parent
     return base
 
@@ -193,6 +194,7 @@ def search_files(query: str, base: "str | Path") -> list[str]:
     search order); a leading `/` is dropped. `Name=`, `Ext=`, `Path=`, `Project=` match the
     file name, the extension, the path, the project folder's name."""
     project = project_folder(Path(base).resolve())
+    confine.check(project, what="fileSearch folder")  # the folder it walks (fileRandom searches too)
     terms = str(query).split()
     if not terms:
         return []
@@ -231,6 +233,7 @@ def file_exists(path: str, base: "str | Path") -> bool:
     if not p:
         return False
     q = Path(p)
+    confine.check(p, base=base, what="file")  # refused whether or not the file exists
     return (q if q.is_absolute() else Path(base) / q).is_file()
 
 

@@ -9,6 +9,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
+from .. import confine
 from ..errors import Diagnostic, GrammarError
 from ..ir import AssetDir, Case, Choice, Grammar, Import, OpCall, Push, Repeat, Rule, Seq, Snippet, Successor
 from ..ir.split import Branch
@@ -64,6 +65,10 @@ def _expand(grammar: Grammar, chain: list[str], done: set[str], diagnostics: lis
                                           code="import-path"))
             continue
         target = base / s.path
+        refused = confine.refusal(s.path, base=base, what="import", span=s.span)
+        if refused is not None:  # before anything looks at the file: its existence is not told
+            diagnostics.append(refused)
+            continue
         try:
             key = _key(str(target))
             found = target.is_file()

@@ -28,6 +28,7 @@ from pathlib import Path
 import numpy as np
 import trimesh
 
+from .. import confine
 from ..errors import ShapeError
 
 __all__ = ["MESH_SUFFIXES", "GltfSolid", "face_labels", "flatten", "gltf_root_extras", "load_mesh",
@@ -216,6 +217,7 @@ def _check_external_files(path: Path) -> None:
     """Refuse a glTF whose external buffers or images are not regular files: reading a named
     pipe blocks forever and a device such as /dev/zero never ends (issue 19)."""
     import stat as stat_mod
+    from urllib.parse import unquote
 
     loaded = _gltf_json(path)
     if loaded is None:
@@ -228,6 +230,8 @@ def _check_external_files(path: Path) -> None:
             if not isinstance(uri, str) or uri.startswith("data:") or "://" in uri:
                 continue  # embedded data; URLs are refused by the loader itself
             target = path.parent / uri
+            for name in {uri, unquote(uri)}:  # loaders may read the URI percent-decoded
+                confine.check(name, base=path.parent, what=f"the external {kind[:-1]} file of {path.name}")
             try:
                 mode = os.stat(target).st_mode
             except (OSError, ValueError):
@@ -235,6 +239,9 @@ def _check_external_files(path: Path) -> None:
             if not stat_mod.S_ISREG(mode):
                 raise ShapeError(f"{path}: the external file {uri!r} of its {kind} is not a "
                                  "regular file (a named pipe, a device or a folder)")
+
+
+check_external_files = _check_external_files  # public: the tiling reader refuses the same files
 
 
 def gltf_root_extras(path: str | Path) -> dict:
@@ -308,6 +315,7 @@ def _solids_from_doc(doc: dict, binary: bytes | None, root: dict, path: Path) ->
         elif uri.startswith("data:"):
             buffers.append(base64.b64decode(uri.split(",", 1)[1]))
         else:
+            confine.check(uri, base=path.parent, what=f"the external buffer file of {path.name}")
             buffers.append((path.parent / uri).read_bytes())
     cache: dict[int, np.ndarray] = {}
 
@@ -452,6 +460,7 @@ def load_mesh(path: str | Path, *, weld_vertices: bool = True,
     `single=True` (e.g. for `i("part.glb")`). Raises `ShapeError` naming the file when it is
     missing, not a mesh, empty, or has NaN/inf coordinates."""
     path = Path(path)
+    confine.check(path, what="mesh file")
     if not path.exists():
         raise ShapeError(f"{path}: mesh file not found")
     if not path.is_file():

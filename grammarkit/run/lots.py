@@ -48,6 +48,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Iterator, Mapping, Sequence
 
+from .. import confine
 from ..errors import GrammarkitError
 from ..geometry.footprints import area as polygon_area
 
@@ -304,6 +305,7 @@ def read_lots(path: str | Path, *, seed: int = 0, degrees: str = "project", hole
     if units not in ("auto", "metres", "degrees"):
         raise GrammarkitError(f"units= must be 'auto', 'metres' or 'degrees', not {units!r}")
     path = Path(path)
+    confine.check(path, what="lots file")
     try:
         data = path.read_bytes()
     except OSError as exc:

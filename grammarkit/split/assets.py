@@ -20,6 +20,8 @@ from typing import Any
 import manifold3d
 import numpy as np
 
+from .. import confine
+
 __all__ = ["ASSET_CACHE_VERSION", "BUILTINS", "asset_cache_path", "builtin_asset", "load_asset",
            "load_asset_mesh", "load_asset_solid"]
 
@@ -49,6 +51,7 @@ def asset_cache_path(data: bytes) -> Path:
     return cache_dir() / "assets" / f"{digest}.npz"
 
 
+@confine.guarded("mesh file")
 @lru_cache(maxsize=64)
 def load_asset_mesh(path: str) -> Any:
     """The asset as one trimesh (a Scene's nodes in world coordinates), read once per process."""
@@ -96,6 +99,7 @@ def _write_cache(path: Path, vert_properties: np.ndarray, tri_verts: np.ndarray)
         pass  # a read-only or missing cache folder: nothing is cached
 
 
+@confine.guarded("mesh file")
 @lru_cache(maxsize=64)
 def load_asset_solid(path: str) -> manifold3d.Manifold:
     """The closed solid of a mesh file (ShapeError naming the file if it is not one)."""
@@ -164,6 +168,7 @@ def builtin_asset(name: str) -> Any:
                      + ", ".join("builtin:" + b for b in BUILTINS))
 
 
+@confine.guarded("mesh file")
 @lru_cache(maxsize=64)
 def load_asset(path: str) -> Any:
     """The asset of `i(path)`: a manifold3d solid when the mesh is closed (cached on disk, see

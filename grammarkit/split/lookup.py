@@ -8,6 +8,8 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any, Callable
 
+from .. import confine
+
 
 def asset_dirs_of(grammar: Any, base_dir: str | None) -> tuple[str, ...]:
     """The grammar's `asset_dir` folders as absolute paths (relative ones are relative to the
@@ -27,7 +29,7 @@ def find_asset(name: str, base: Path, asset_dirs: tuple[str, ...]) -> str:
     """The absolute path of asset `name` (absolute names and `builtin:` ones as they are)."""
     if not name or name.startswith("builtin:"):
         return name
-    key = (name, base, asset_dirs)
+    key = (name, base, asset_dirs, confine.current())  # a folder outside a policy is never found
     hit = _FOUND.get(key)
     if hit is not None:
         return hit
@@ -42,11 +44,13 @@ def _search(name: str, base: Path, asset_dirs: tuple[str, ...]) -> str:
     if Path(name).is_absolute():
         return str(Path(name).resolve())
     first = (base / name).resolve()
-    if first.is_file() or not asset_dirs:
+    if not asset_dirs or (confine.allows(first) and first.is_file()):
         return str(first)
     for folder in asset_dirs:
         candidate = Path(folder) / name
-        if candidate.is_file():
+        # a candidate outside the studio's folder is passed over before anything looks at it
+        # (its existence is not told); the caller checks the path it is given
+        if confine.allows(candidate) and candidate.is_file():
             return str(candidate.resolve())
     return str(first)
 

@@ -37,6 +37,7 @@ from typing import Any
 
 import numpy as np
 
+from ... import confine
 from ...errors import ShapeError
 from ...jsonable import to_jsonable
 from .scene import DEFAULT_RGBA, Material, Scene, Solid, solids_of, srgb_to_linear
@@ -164,6 +165,8 @@ class _GltfBuilder:
             return self.image_index[path]
         mime = {".png": "image/png", ".jpg": "image/jpeg", ".jpeg": "image/jpeg"}.get(Path(path).suffix.lower())
         file = Path(path)
+        if not path.startswith("builtin:"):
+            confine.check(path, what="texture file")  # the image is read into the file: not from outside
         if mime is None or path.startswith("builtin:") or not file.is_file():
             self.image_index[path] = None
             return None

@@ -5,6 +5,7 @@ import math
 from pathlib import Path
 from typing import Any
 
+from ... import confine
 from ...registry import Param
 from ..shape import VOLUME, Shape
 from .helpers import lazy_module, operation
@@ -57,6 +58,7 @@ def op_insert(ctx: Any, s: Shape, args: Any, block: Any) -> Shape | None:
         path = Path(rel)
     else:
         path = Path(rel) if Path(rel).is_absolute() else (Path(ctx.base_dir or ".") / rel).resolve()
+        confine.check(rel, base=ctx.base_dir or ".", what="mesh file")  # before is_file: tells no existence
         if not path.is_file():
             raise ValueError(f"i(): mesh file not found: {path}")
         asset = load_asset(str(path)) if fit == "scale" else None

@@ -23,6 +23,7 @@ import math
 from functools import lru_cache
 from typing import Any
 
+from ... import confine
 from ...registry import Param
 from ..shape import Shape
 from .helpers import hex_color, operation
@@ -259,6 +260,8 @@ def set_material(ctx: Any, s: Shape, key: str, value: Any) -> Shape:
         value = bool(value)
     elif sub.endswith("map"):
         value = str(value)
+        if value and not value.startswith("builtin:"):  # before _is_file: tells no existence
+            confine.check(value, base=ctx.base_dir or ".", what="texture file")
         if value and not value.startswith("builtin:") and not _is_file(value, ctx.base_dir or "."):
             ctx.warn(f"set({key}, ...): texture file not found: {value} (the material is exported "
                      "without it)")
