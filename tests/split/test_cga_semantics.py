@@ -21,7 +21,9 @@ f 1/1 4/4 3/3 2/2\nf 5/1 6/2 7/3 8/4\nf 1/1 2/2 6/3 5/4\nf 2/1 3/2 7/3 6/4\nf 3/
 
 def _with_asset_dirs(grammar, dirs):
     """The grammar as the dsl's `asset_dir "..."` statements make it (Grammar.asset_dirs)."""
-    return grammar.model_copy(update={"asset_dirs": tuple(dirs)})
+    from grammarkit.ir import AssetDir
+
+    return grammar.model_copy(update={"statements": (*grammar.statements, *(AssetDir.of(d) for d in dirs))})
 
 
 # -- asset lookup: the grammar's folder, then each asset_dir ------------------------------------

@@ -38,9 +38,9 @@ def test_normalize_uv_spans_zero_to_one():
     assert r == pytest.approx([0, 0, 1, 1], abs=1e-3)  # the solid is grown by the 1 mm weld
 
 
-def test_without_texture_coordinates_is_an_error():
-    with pytest.raises(DerivationError, match="projectUV"):
-        grammarkit.derive("Lot --> tileUV(0, 2, 2) F.\n", lot=LOT)
+def test_without_texture_coordinates_tile_uv_warns_and_changes_nothing():
+    m = grammarkit.derive("Lot --> tileUV(0, 2, 2) F.\n", lot=LOT)  # CityEngine's behaviour
+    assert any("tileUV(): the shape has no texture coordinates in uv set 0" in w for w in m.warnings)
     with pytest.raises(DerivationError, match="projectUV"):
         grammarkit.derive("Lot --> normalizeUV(0, uv, separatePerFace) F.\n", lot=LOT)
 
