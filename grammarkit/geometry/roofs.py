@@ -416,5 +416,5 @@ def mansard(poly: Polygon, angle: float, height: float, top_angle: float = 15.0,
 def keep_below_plane(solid: Manifold, nx: float, ny: float, c: float, slope: float, base: float = 0.0) -> Manifold:
     """The part of `solid` under the plane that starts at height `base` on the line
     {p: (nx, ny) . p = c} and rises at `slope` (rise over run) towards +(nx, ny): what a
-    roof plane or a zoning envelope's slanted side keeps (grammarkit/split/envelope.py)."""
+    roof plane or a zoning envelope's slanted side keeps (grammarkit/split/ops/envelope.py)."""
     return _keep_below(solid, nx, ny, c, slope, base)

@@ -559,7 +559,7 @@ class _Compiler:
         grammar's); a const, a parameter or an unknown name is an error at the name."""
         ref = call.args[0].value
         name = ref.name
-        if name.startswith("material."):  # CGA's material attributes (grammarkit.split.texturing)
+        if name.startswith("material."):  # CGA's material attributes (grammarkit.split.ops.texturing)
             return name
         if name in scope.local_attrs and name not in self.grammar_attrs:
             return f"{scope.anchor}.{name}"

@@ -83,7 +83,7 @@ class Tag:
                  material: str | None, node: int, role: str, texturing: Any = None):
         self.name, self.rule, self.object_type = name, rule, object_type
         self.color, self.material, self.node, self.role = color, material, node, role
-        # CGA texturing state (grammarkit.split.texturing.Texturing) or None
+        # CGA texturing state (grammarkit.split.ops.texturing.Texturing) or None
         self.texturing = texturing
 
     def to_dict(self) -> dict:

@@ -462,7 +462,7 @@ class Model:
     def _uvs(self, V: np.ndarray, F: np.ndarray, tags: np.ndarray, uv_set: int) -> np.ndarray | None:
         """Texture coordinates (n, 3, 2) of triangles `F` (with tags `tags`, -1: none) in uv set
         `uv_set`, NaN where the terminal has none; None when no triangle has any. Each tag's
-        UVs are an affine map of the world position (grammarkit.split.texturing)."""
+        UVs are an affine map of the world position (grammarkit.split.ops.texturing)."""
         raw = self._ctx.tags
         maps = np.full((len(raw) + 1, 2, 4), np.nan)
         any_uv = False

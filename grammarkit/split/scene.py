@@ -22,7 +22,7 @@ def rgba_of(hex_color: str | None, default: str) -> tuple[int, int, int, int]:
 
 def _material(name: str | None, rgba: tuple, cga: tuple) -> Any:
     """The exporters' Material for a terminal's name, colour and CGA material attributes
-    (`set(material.*)`, `texture()`: grammarkit.split.texturing)."""
+    (`set(material.*)`, `texture()`: grammarkit.split.ops.texturing)."""
     from ..geometry.exporters import Material
 
     if not cga:

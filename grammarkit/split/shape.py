@@ -70,7 +70,7 @@ class Shape:
         self.on: tuple | None = None
         self.trims: tuple = ()  # CGA trim planes (world point, world normal) for inserts
         self.trim_on = True  # CGA's trim.vertical: whether i() clips by the trim planes
-        # CGA texturing state (grammarkit.split.texturing.Texturing): projections, baked UVs,
+        # CGA texturing state (grammarkit.split.ops.texturing.Texturing): projections, baked UVs,
         # material attributes; None until a texturing operation runs
         self.tex: Any = None
         self.csel = ""  # comp.sel: the selector of the block branch that made the shape

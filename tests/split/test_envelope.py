@@ -1,4 +1,4 @@
-"""`envelope(direction, max_height, front_base, front_angle, ...)` (grammarkit/split/envelope.py):
+"""`envelope(direction, max_height, front_base, front_angle, ...)` (grammarkit/split/ops/envelope.py):
 the zoning envelope of a lot, a watertight solid whose volume matches the closed form."""
 from __future__ import annotations
 

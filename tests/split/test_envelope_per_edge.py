@@ -1,4 +1,4 @@
-"""`envelopePerEdge(direction, max_height, base_height, angle)` (grammarkit/split/envelope.py):
+"""`envelopePerEdge(direction, max_height, base_height, angle)` (grammarkit/split/ops/envelope.py):
 CGA's `envelope(direction, maxHeight, baseHeights, angles)`, with the base height and angle
 evaluated on every edge (`expr` parameters, handed over unevaluated by the split compiler) or
 taken from arrays of one value per edge."""

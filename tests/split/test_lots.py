@@ -1,5 +1,5 @@
 """CGA's lot and massing operations: setback, setbackPerEdge, setbackToArea, shapeL/U/O and
-innerRectangle (grammarkit/split/lots.py): edge selection, mitred corners, remainders, areas."""
+innerRectangle (grammarkit/split/ops/lots.py): edge selection, mitred corners, remainders, areas."""
 from __future__ import annotations
 
 import math

@@ -1,4 +1,4 @@
-"""CGA's print(value) (grammarkit/split/ops.py op_print): derivation messages on
+"""CGA's print(value) (grammarkit/split/ops/ op_print): derivation messages on
 Model.messages, in the tree JSON, and printed by `grammarkit derive`; imported from CGA."""
 from __future__ import annotations
 

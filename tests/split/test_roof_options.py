@@ -1,4 +1,4 @@
-"""CGA's roof options (grammarkit/split/ops.py, grammarkit/geometry/roofs.py): the gable's
+"""CGA's roof options (grammarkit/split/ops/, grammarkit/geometry/roofs.py): the gable's
 ridge along an edge index and its two overhangs, the shed's low edge by index, and byHeight
 for the gable, hip and shed roofs."""
 from __future__ import annotations

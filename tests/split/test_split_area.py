@@ -1,4 +1,4 @@
-"""`splitArea(axis) { area: A | ~area: B }*` (grammarkit/split/area_split.py): split's sizes
+"""`splitArea(axis) { area: A | ~area: B }*` (grammarkit/split/ops/area_split.py): split's sizes
 (absolute, relative, floating, repeat groups) in area units; the parts' areas are exact on
 non-rectangular faces."""
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""CGA's tileUV and normalizeUV (grammarkit/split/texturing.py) on baked texture coordinates."""
+"""CGA's tileUV and normalizeUV (grammarkit/split/ops/texturing.py) on baked texture coordinates."""
 from __future__ import annotations
 
 import numpy as np

@@ -23,7 +23,7 @@ from ..context import (
 from .roofs import comp_fe_values, is_comp_fe
 
 
-# -- lots (grammarkit/split/lots.py) --------------------------------------------------------------
+# -- lots (grammarkit/split/ops/lots.py) --------------------------------------------------------------
 def _h_setback(gk: str):
     def handler(h: HandlerContext):
         if h.block is None:

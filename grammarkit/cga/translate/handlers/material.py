@@ -91,7 +91,7 @@ def _h_set(h: HandlerContext):
 
 
 
-# -- texturing (grammarkit/split/texturing.py) -----------------------------------------------------
+# -- texturing (grammarkit/split/ops/texturing.py) -----------------------------------------------------
 # A CGA axis letter of setupProjection -> (grammarkit letter, reversed). World axes are y-up in
 # CGA and z-up in grammarkit, as the lot's scope (frame Y); a face's scope is the identity.
 def _projection_axis(frame: str, world: bool, letter: str) -> tuple[str, bool]:

@@ -137,7 +137,7 @@ def _h_roof_shed(h: HandlerContext):
 
 # -- envelope ------------------------------------------------------------------------------------
 # grammarkit's edge selectors -> the side `comp.sel` names on a per-edge shape
-# (grammarkit/split/lots.py: edge_shape); "all" is every edge
+# (grammarkit/split/ops/lots.py: edge_shape); "all" is every edge
 _SEL_SIDES = {"front": ("front",), "bottom": ("front",), "back": ("back",), "top": ("back",),
               "left": ("left",), "right": ("right",), "side": ("left", "right"), "all": None}
 
