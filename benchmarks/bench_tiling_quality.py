@@ -28,7 +28,6 @@ rule does not make its outputs plausible. Deterministic for a seed (the seconds 
 from __future__ import annotations
 
 import argparse
-import sys
 import tempfile
 import time
 from pathlib import Path
