@@ -15,9 +15,9 @@ graceful --time-limit per run where the run API offers it). Every output file is
               sideways where the examples need it (support.sideways_runs, no span bound);
 - span:       no run of parts held only sideways is longer than the examples' longest;
 - counts:     every part type's count lies within the examples' min..max;
-- rigid:      every part is a rigid copy of its type's prototype (a proper rotation and a
-              translation: after the best such fit, no vertex is off by more than 0.1% of the
-              part's diagonal);
+- rigid:      every part is a rigid copy of an example part of its type (a proper rotation
+              and a translation: after the best such fit, no vertex is off by more than 0.1%
+              of the part's diagonal);
 - no holes:   no site opens inside the shape's outline without a neighbour, for the sites every
               example fills wherever they open inside (holes.filled_sites);
 - plausible:  all five.
@@ -28,7 +28,6 @@ rule does not make its outputs plausible. Deterministic for a seed (the seconds 
 from __future__ import annotations
 
 import argparse
-import sys
 import tempfile
 import time
 from pathlib import Path
@@ -70,7 +69,16 @@ class ExampleStats:
         counts = [[sum(p.type == t for p in a.parts) for t in types] for a in self.examples]
         self.count_range = {t: (min(c[k] for c in counts), max(c[k] for c in counts)) for k, t in enumerate(types)}
         self.filled = filled_sites(self.rules, [_Shape(a, g) for a, g in zip(self.examples, graphs)], set())
-        self.protos = {t: np.asarray(part_prototype(grammar, t).vertices, dtype=np.float64) for t in types}
+        # the prototype and every differently shaped example part of the type (in its own
+        # frame): a facade's ledges differ in length between its examples, and are all genuine
+        self.protos: dict[str, list[np.ndarray]] = {
+            t: [np.asarray(part_prototype(grammar, t).vertices, dtype=np.float64)] for t in types}
+        for a in self.examples:
+            for p in a.parts:
+                inv = np.linalg.inv(np.asarray(p.transform, dtype=np.float64))
+                V = np.asarray(p.mesh.vertices, dtype=np.float64) @ inv[:3, :3].T + inv[:3, 3]
+                if not any(self._fits(P, V) for P in self.protos[p.type]):
+                    self.protos[p.type].append(V)
 
     def check(self, assembly) -> dict[str, bool]:
         from grammarkit.tiling.constraints import _support
@@ -98,11 +106,15 @@ class ExampleStats:
         }
 
     def rigid(self, part) -> bool:
-        """Is the part's mesh its prototype moved by a proper rotation and a translation?"""
-        P = self.protos.get(part.type)
+        """Is the part's mesh an example part of its type moved by a proper rotation and a
+        translation?"""
         Q = np.asarray(part.mesh.vertices, dtype=np.float64)
-        if P is None or len(P) != len(Q):
-            return False  # not a copy of the prototype's mesh at all
+        return any(self._fits(P, Q) for P in self.protos.get(part.type, ()))
+
+    @staticmethod
+    def _fits(P: np.ndarray, Q: np.ndarray) -> bool:
+        if len(P) != len(Q):
+            return False  # not a copy of this mesh at all
         pc, qc = P.mean(axis=0), Q.mean(axis=0)
         U, _, Vt = np.linalg.svd((P - pc).T @ (Q - qc))
         d = np.sign(np.linalg.det(Vt.T @ U.T)) or 1.0

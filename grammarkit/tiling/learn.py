@@ -54,17 +54,18 @@ import numpy as np
 
 from ..errors import ShapeError
 from ..ir import Grammar
-from ..ir.expr import Call, Num, Ref, Str
+from ..ir.expr import Ref, Str
 from ..ir.split import Arg
 from ..ir.tiling import (
-    ConstraintDef, CountRange, DockDef, ExampleDef, NeighborRule, PartDef, Placement, SiteDef, UpDef,
+    ConstraintDef, CountRange, DockDef, ExampleDef, NeighborRule, SiteDef, UpDef,
 )
 from .assembly import Assembly
-from .frames import local_frame, local_frames
+from .frames import local_frame
 from .graph import shape_graph
+from .learn_text import _dir_text, _identifier, _num, _part_def, _placement
 from .learn_stats import COUNT_MODES, SupportStats, count_statements, support_stats
 from .meanshift import mean_shift
-from .rules import DockPlacement, PartSpec, Rules, euler_degrees, rotation_matrix
+from .rules import PartSpec, Rules
 
 __all__ = ["ANGLE_SCALE_DEG", "DockSample", "NEIGHBOR_MODES", "docking_samples", "learn", "mean_shift"]
 
@@ -74,7 +75,6 @@ ANGLE_SCALE_DEG = 20.0
 # 1.5 m apart along a ledge (diagonal 3.4 m) stay separate sites.
 SITE_BANDWIDTH = 4.0
 NEIGHBOR_MODES = ("multisets", "ranges", "none")
-_DIGITS = 4
 
 
 class DockSample:
@@ -170,17 +170,6 @@ def _mean_placement(members: list[DockSample]) -> tuple[np.ndarray, np.ndarray]:
     U, _, Vt = np.linalg.svd(np.mean([m.R for m in members], axis=0))
     R = U @ np.diag([1.0, 1.0, np.sign(np.linalg.det(U @ Vt)) or 1.0]) @ Vt  # nearest rotation
     return t, R
-
-
-def _num(x: float) -> Num:
-    v = round(float(x), _DIGITS)
-    return Num(value=0.0 if v == 0 else v)
-
-
-def _placement(t: np.ndarray, R: np.ndarray) -> Placement:
-    rot = euler_degrees(R)
-    rot_node = None if all(abs(round(a, 2)) < 1e-9 for a in rot) else tuple(_num(round(a, 2)) for a in rot)
-    return Placement(at=tuple(_num(x) for x in t), rot=rot_node)
 
 
 class _Example:
@@ -464,7 +453,6 @@ def learn(assemblies: Sequence[Assembly | str | os.PathLike], name: str = "learn
     asms = [a if not any(np.linalg.det(np.asarray(p.transform)[:3, :3]) < 0 for p in a.parts)
             else Assembly([normalize_mirrored(p) for p in a.parts], a.name, a.meta) for a in asms]
     notes = notes if notes is not None else []
-    cos_tol = math.cos(math.radians(20.0))
     sites = sites and docks  # without placements, learned sites would constrain nothing
 
     # -- graphs, prototypes, poses ------------------------------------------------------------
@@ -613,13 +601,6 @@ def learn(assemblies: Sequence[Assembly | str | os.PathLike], name: str = "learn
     return grammar
 
 
-def _dir_text(u: np.ndarray) -> str:
-    k = int(np.argmax(np.abs(u)))
-    if abs(abs(u[k]) - 1.0) < 1e-9:
-        return ("+" if u[k] > 0 else "-") + "xyz"[k]
-    return "(" + ", ".join(f"{x:.4g}" for x in u) + ")"
-
-
 def _ranges(msets: set[tuple[str, ...]]) -> dict[str, tuple[int, int]]:
     types = sorted({t for m in msets for t in m})
     out = {}
@@ -676,38 +657,3 @@ def _uncovered(grammar: Grammar, info: dict[str, _TypeInfo], examples: list[_Exa
             for key, s in by_edge.get((ex.k, *sorted((a, b))), []):
                 out[key].append((s.t, s.R))
     return out
-
-
-def _part_def(ptype: str, asms: list[Assembly], paths: list[str | None], ti: _TypeInfo,
-              up: np.ndarray | None) -> PartDef:
-    """`part T = mesh("example.glb", "T.0") symmetry(zN) [up(...)]` naming the first example
-    part of type T, or for in-memory examples without a file a `box(w, d, h)` of that part's
-    local bounding box."""
-    for asm, path in zip(asms, paths):
-        for p in asm.parts:
-            if p.type != ptype:
-                continue
-            if ti.free:
-                return PartDef(name=ptype, geometry=Call(func="box", args=tuple(_num(x) for x in ti.extents)),
-                               up_any=True)
-            symmetry = "none" if ti.orders[0] <= 1 else f"z{ti.orders[0]}"
-            ups: tuple = ()
-            if len(ti.ups) > 1 or (up is not None and not np.allclose(ti.ups[0], up)):
-                ups = tuple(tuple(_num(x) for x in u) for u in ti.ups)
-            if path is not None:
-                geometry = Call(func="mesh", args=(Str(value=Path(path).as_posix()), Str(value=p.id)))
-            else:
-                geometry = Call(func="box", args=tuple(_num(x) for x in ti.extents))
-            return PartDef(name=ptype, geometry=geometry, symmetry=symmetry, up=ups)
-    raise AssertionError(ptype)  # every learned type comes from some part
-
-
-def _identifier(text: str, used: set[str]) -> str:
-    base = "".join(c if c.isalnum() or c == "_" else "_" for c in text) or "example"
-    if base[0].isdigit():
-        base = "_" + base
-    name, k = base, 2
-    while name in used:
-        name, k = f"{base}_{k}", k + 1
-    used.add(name)
-    return name

@@ -27,7 +27,7 @@ def test_derive_picks_the_graph_sampler_and_reports_growth(derived):
     out, summary = derived
     stats = summary["stats"]
     assert summary["backend"] == "graph-sampler" and stats["workers"] == 2
-    assert summary["written"] == 6 and stats["dedupe"] == "histogram"
+    assert summary["written"] == 6 and stats["dedupe"] == "isomorphism"  # the default
     assert [row["iteration"] for row in stats["growth"]][:2] == [0, 1]
     lines = (out / "manifest.jsonl").read_text().splitlines()
     assert len(lines) == 6 and len(list(out.glob("variant_*.glb"))) == 6

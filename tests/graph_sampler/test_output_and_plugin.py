@@ -66,7 +66,7 @@ def test_manifest_records_parents_and_the_operation(written):
     known = {"example:strip2", "example:strip3"}
     for i, r in enumerate(records(out)):
         assert {"id", "index", "seed", "parents", "metrics", "file"} <= set(r)
-        assert r["index"] == i and r["dedupe"] == "histogram" and r["seed"] == 3
+        assert r["index"] == i and r["dedupe"] == "isomorphism" and r["seed"] == 3
         assert set(r["parents"]) <= known  # parents come first (examples or earlier variants)
         op = r["operation"]
         assert [op["donor"], op["recipient"]] == r["parents"]

@@ -6,7 +6,7 @@ from grammarkit.tiling import shape_graph, validate
 from grammarkit_graph_sampler import geometry
 from grammarkit_graph_sampler.sampler import GraphSampler, SamplerOptions
 
-OPTS = SamplerOptions(attempts_per_shape=64, min_attempts=256, batch_size=16)
+OPTS = SamplerOptions(attempts_per_shape=64, min_attempts=256, batch_size=16, dedupe="histogram")
 KIT = None
 
 

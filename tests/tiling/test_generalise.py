@@ -72,3 +72,15 @@ def test_exact_multisets_are_one_option_away_and_overfit(training):
     accepted, held, rejected, cases = _measure(g)
     assert rejected == cases
     assert accepted < held  # neighbourhoods of tilings of other sizes no example showed
+
+
+def test_the_hand_written_tile_set_rejects_holes_and_keeps_its_borders_open():
+    from grammarkit.dsl import load
+
+    g = load(mc.__file__.replace("make_coast.py", "coast.grammar"))
+    for name, asm in interior_holes():
+        r = validate(g, asm)
+        assert {v.rule for v in r.violations} == {"constraint filled"}, (name, r.format())
+    tiling = mc.coast(6, 5, 2, 90)
+    corner = Assembly([p for p in tiling.parts if p.id != "Grass.0"], name="corner")  # not enclosed: no hole
+    assert validate(g, corner).ok

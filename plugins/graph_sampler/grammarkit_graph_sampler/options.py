@@ -31,8 +31,9 @@ class SamplerOptions(BaseModel):
     max_attempts: int = Field(100000, ge=1, description="attempts per iteration, at most")
     batch_size: int = Field(128, ge=1, description="attempts evaluated against the same state "
                             "(fixed: determinism)")
-    dedupe: Literal["histogram", "isomorphism"] = Field("histogram", description="what counts "
-                                                        "as new: type histogram or typed graph")
+    dedupe: Literal["histogram", "isomorphism"] = Field("isomorphism", description="what counts "
+                                                        "as new: typed graph (up to isomorphism) or type "
+                                                        "histogram (fewer: the castle runs dry at 32)")
     max_parts: Optional[int] = Field(None, ge=1, description="largest variant (default: 4 x the "
                                      "largest example)")
     max_match_steps: int = Field(2000, ge=1, description="assignments tried per boundary search")
