@@ -30,6 +30,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 import trimesh
 
+from .. import confine
 from ..errors import ShapeError
 from .assembly import Assembly, Part
 
@@ -70,6 +71,7 @@ def read_assembly(path: str | os.PathLike, *, grammar: "Grammar | None" = None,
     if not isinstance(path, (str, os.PathLike)):
         raise ShapeError(f"read_assembly: expected a file or folder path, got {type(path).__name__}")
     path = Path(path)
+    confine.check(path, what="mesh file")
     if not path.exists():
         raise ShapeError(f"{path}: no such file or folder")
     if path.is_dir():
@@ -170,6 +172,8 @@ def _open_parts(parts: list[Part]) -> list[str]:
 def _read_gltf(path: Path) -> list[Part]:
     from ..geometry.meshio import read_gltf_solids
 
+    confine.check(path, what="mesh file")  # also each file of a folder (a link may point out)
+
     solids = read_gltf_solids(path)  # grammarkit's own layout (format 2), in the Z-up frame
     if solids is not None:
         # a file edited elsewhere may hold parts outside the marked root (trimesh and Blender
@@ -186,6 +190,9 @@ def _read_gltf(path: Path) -> list[Part]:
             meta = {"source": str(path)}
             parts.append(Part(s.name, ptype, mesh, s.matrix.copy(), meta))
         return parts + strays
+    from ..geometry.meshio import check_external_files
+
+    check_external_files(path)  # its external buffers and images (a named pipe; outside the folder)
     try:
         scene = trimesh.load(str(path), force="scene")
     except Exception as exc:  # noqa: BLE001 - any parser failure means "not a mesh file"
@@ -315,6 +322,7 @@ def _read_obj(path: Path) -> list[Part]:
     """A small OBJ reader that keeps `o`/`g` groups as parts and reports file:line on errors."""
     from ..geometry.meshio import weld
 
+    confine.check(path, what="mesh file")  # also each file of a folder (a link may point out)
     try:
         text = path.read_text(encoding="utf-8")
     except UnicodeDecodeError:
@@ -374,6 +382,7 @@ def _read_obj(path: Path) -> list[Part]:
 
 
 def _single_part(path: Path) -> Part:
+    confine.check(path, what="mesh file")  # also each file of a folder (a link may point out)
     try:
         loaded = trimesh.load(str(path), force="mesh")
     except Exception as exc:  # noqa: BLE001
@@ -497,6 +506,7 @@ def part_prototype(grammar: "Grammar", type_name: str, *, cache: dict | None = N
                 raise ShapeError(f'{where}: mesh("file") or mesh("file", "PartId") takes file names', pd.span)
             f = Path(call.args[0].value)
             f = f if f.is_absolute() else _base_dir(grammar, pd) / f
+            confine.check(f, what="mesh file", span=pd.span)
             key = str(f.resolve()) if f.exists() else str(f)
             asm = cache.get(key) if cache is not None else None
             if asm is None:
@@ -531,6 +541,7 @@ def load_examples(grammar: "Grammar", *, check_types: bool = True, cache: dict |
             f = Path(ex.source)
             if not f.is_absolute():
                 f = _base_dir(grammar, ex) / f
+            confine.check(f, what="example file", span=ex.span)
             key = str(f.resolve()) if f.exists() else str(f)
             known = cache.get(key) if cache is not None and not check_types else None
             if known is not None:
