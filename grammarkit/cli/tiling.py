@@ -95,16 +95,23 @@ def _relative(path: Path, base: Path) -> str:
 @click.option("--tolerance", default=None, type=click.FloatRange(min=0.0),
               help="contact tolerance in model units (default: 0.001 x the model's diagonal)")
 @click.option("--no-docks", is_flag=True, help="write type pairs only, without docking placements")
-@click.option("--neighbors", "neighbors", default="multisets", show_default=True,
+@click.option("--neighbors", "neighbors", default="none", show_default=True,
               type=click.Choice(["multisets", "ranges", "none"]),
-              help="neighbourhood rules: exact multisets (Kalojanov), count ranges, or none (sites and docks only)")
+              help="neighbourhood rules: none (sites, docks, holes and counts only; generalises to "
+                   "held-out tilings), count ranges, or exact multisets (Kalojanov)")
 @click.option("--no-sites", is_flag=True, help="learn no docking sites (one dock per type pair)")
-@click.option("--no-counts", is_flag=True, help="infer no `count(T) == n` constraints")
+@click.option("--no-counts", is_flag=True, help="infer no `count(T, lo, hi)` constraints")
+@click.option("--counts", "count_mode", default="few", show_default=True, type=click.Choice(["few", "all"]),
+              help="count ranges for the types no example has more than 2 of (few), or for every type")
+@click.option("--count-slack", default=0, show_default=True, type=click.IntRange(min=0),
+              help="widen every learned count range by this many parts on each side")
+@click.option("--no-holes", is_flag=True, help="infer no `filled(T, site)` constraints (interior holes)")
 @click.option("--up", default="+z", show_default=True, type=click.Choice(["+x", "-x", "+y", "-y", "+z", "-z"]),
               help="the examples' up axis")
 def learn(examples: tuple[Path, ...], output: Path | None, name: str | None, bandwidth: float,
-          tolerance: float | None, no_docks: bool, neighbors: str = "multisets", no_sites: bool = False,
-          no_counts: bool = False, up: str = "+z") -> None:
+          tolerance: float | None, no_docks: bool, neighbors: str = "none", no_sites: bool = False,
+          no_counts: bool = False, count_mode: str = "few", count_slack: int = 0, no_holes: bool = False,
+          up: str = "+z") -> None:
     """Learn the tiling grammar that segmented EXAMPLES (GLB/glTF/OBJ files or folders) exhibit.
 
     Example: grammarkit learn examples/*.glb -o castle.grammar"""
@@ -129,8 +136,9 @@ def learn(examples: tuple[Path, ...], output: Path | None, name: str | None, ban
             grammar = learn_grammar(asms, name=name or (output.stem if output else "learned"),
                                     example_paths=[_relative(p, base) for p in examples],
                                     tolerance=tolerance, bandwidth=bandwidth, docks=not no_docks,
-                                    neighbors=neighbors, sites=not no_sites, counts=not no_counts,
-                                    up=up, notes=notes, progress=say)
+                                    neighbors=neighbors, sites=not no_sites,
+                                    counts=False if no_counts else (True if count_mode == "few" else "all"),
+                                    count_slack=count_slack, holes=not no_holes, up=up, notes=notes, progress=say)
     for w in caught:
         click.echo(f"warning: {w.message}", err=True)
     for line in notes:  # what was inferred (counts, symmetries, support): the user should know

@@ -15,7 +15,7 @@ BUILTIN_REFS = frozenset({
     "geometry.area", "geometry.volume", "geometry.nVertices", "geometry.isRectangular",
 })
 # Global constraints of tiling grammars that are always known, even before their plugin loads.
-BUILTIN_CONSTRAINTS = frozenset({"connected", "grounded", "path", "count"})
+BUILTIN_CONSTRAINTS = frozenset({"connected", "grounded", "path", "count", "filled", "deformable"})
 START = "Start"
 
 

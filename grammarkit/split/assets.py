@@ -21,6 +21,7 @@ import manifold3d
 import numpy as np
 
 from .. import confine
+from ..registry import BUILTIN_ASSET_NAMES
 
 __all__ = ["ASSET_CACHE_VERSION", "BUILTINS", "asset_cache_path", "builtin_asset", "load_asset",
            "load_asset_mesh", "load_asset_solid"]
@@ -131,7 +132,7 @@ def load_asset_solid(path: str) -> manifold3d.Manifold:
 # (grammarkit.geometry.surfaces.SurfaceMesh): moved, scaled and split like a solid, emitted in
 # the model's surface layer, never in a boolean, so the solid stays watertight.
 
-BUILTINS = ("cube", "cube:notex", "cylinder", "cylinder:y", "cone", "sphere", "quad", "disk")
+BUILTINS = BUILTIN_ASSET_NAMES  # one list: the registry floor has it, for the file functions
 BUILTIN_SEGMENTS = 16  # circular primitives: segments around (CGA's primitiveCylinder default)
 
 
