@@ -219,7 +219,13 @@ def make_parent(path: Path) -> None:
 
 
 def read_source(path: Path, *, max_bytes: int = DEFAULT_MAX_BYTES) -> str:
-    """Read a grammar file as text, with located errors for size and encoding problems.
+    """Read a grammar file as text, with located errors for size and encoding problems
+    (`read_bounded`, then UTF-8)."""
+    return decode_source(read_bounded(path, max_bytes=max_bytes), str(path))
+
+
+def read_bounded(path: Path, *, max_bytes: int = DEFAULT_MAX_BYTES) -> bytes:
+    """The bytes of a source file (a grammar, a CGA rule file), with located errors.
 
     Only regular files are read (a FIFO would block forever, a device such as /dev/zero has no
     end, and `stat` reports 0 bytes for both), and never more than `max_bytes` + 1 bytes, so
@@ -272,7 +278,7 @@ def read_source(path: Path, *, max_bytes: int = DEFAULT_MAX_BYTES) -> str:
         raise refuse(f"cannot read {fname}: {exc.strerror or exc}", "io-error") from None
     finally:
         os.close(fd)
-    return decode_source(data, fname)
+    return data
 
 
 def read_limited(stream, max_bytes: int, name: str) -> bytes:  # noqa: ANN001 - a binary stream

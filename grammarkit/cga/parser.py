@@ -20,10 +20,14 @@ from lark.exceptions import (
     UnexpectedToken,
 )
 
-from ..errors import Diagnostic
+from ..errors import Diagnostic, GrammarkitError
+from ..fileio import DEFAULT_MAX_BYTES as CHECK_MAX_BYTES
+from ..fileio import read_bounded
 from ..ir.base import Span
 
-DEFAULT_MAX_BYTES = 5 * 1024 * 1024
+# the same limit as `grammarkit check` (the largest corpus file is 31 KB; a 2.7 MB file of
+# 60,000 rules took 120 s and 1.2 GB to translate: issue 31); `--max-size` raises it
+DEFAULT_MAX_BYTES = CHECK_MAX_BYTES
 # Brackets deeper than this are refused before parsing: the translator walks the tree
 # recursively, and real rule files nest a handful of levels.
 MAX_NESTING = 48
@@ -56,15 +60,11 @@ def read_cga(path: Path, *, max_bytes: int = DEFAULT_MAX_BYTES) -> tuple[str | N
     accepted with a warning rather than refused."""
     fname = str(path)
     try:
-        size = path.stat().st_size
-        if size > max_bytes:
-            return None, [Diagnostic("error", f"file is too large ({size:,} bytes; the limit is "
-                                     f"{max_bytes:,} bytes)", Span(file=fname, line=1, column=1),
-                                     code="too-large")]
-        data = path.read_bytes()
-    except OSError as exc:
-        return None, [Diagnostic("error", f"cannot read {fname}: {exc.strerror or exc}",
-                                 Span(file=fname), code="io-error")]
+        # regular files only, never more than max_bytes + 1 bytes (a device such as /dev/zero
+        # has st_size 0 and no end: issue 31)
+        data = read_bounded(path, max_bytes=max_bytes)
+    except GrammarkitError as exc:
+        return None, list(exc.diagnostics)
     return decode_cga(data, fname)
 
 
