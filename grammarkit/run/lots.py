@@ -50,6 +50,7 @@ from typing import Any, Iterator, Mapping, Sequence
 
 from .. import confine
 from ..errors import GrammarkitError
+from ..geometry.footprints import MAX_VERTICES, first_crossing
 from ..geometry.footprints import area as polygon_area
 
 __all__ = ["Lot", "LotSet", "LotsError", "lot_seed", "read_lots"]
@@ -127,6 +128,8 @@ def lot_seed(run_seed: int, lot_id: str) -> int:
 def _read_geojson(path: Path, data: bytes) -> tuple[list[dict], str | None]:
     try:
         doc = json.loads(data.decode("utf-8-sig"))
+    except RecursionError:  # arrays nested 100,000 deep: Python's decoder recurses
+        raise LotsError(f"{path}: the JSON is nested too deeply to be GeoJSON lots") from None
     except UnicodeDecodeError as exc:
         raise LotsError(f"{path}: not a text file ({exc.reason}); expected GeoJSON") from None
     except json.JSONDecodeError as exc:
@@ -212,6 +215,8 @@ def _points(ring: list) -> tuple[list[Point] | None, str | None]:
         if not (math.isfinite(x) and math.isfinite(y)):
             return None, "has a non-finite coordinate"
         pts.append((x, y))
+    if len(pts) < 3:  # an empty ring ([[]]) or a line: nothing to build on
+        return None, f"has a ring of {len(pts)} point(s); a lot needs at least 3"
     return pts, None
 
 
@@ -417,8 +422,11 @@ def read_lots(path: str | Path, *, seed: int = 0, degrees: str = "project", hole
         if err is None:
             pts = [(x - origin[0], y - origin[1]) for x, y in r["points"]]
             far = max(max(abs(x), abs(y)) for x, y in pts)
-            crossing = _first_crossing(pts)
-            if crossing is not None:
+            crossing = None if len(pts) > MAX_VERTICES else _first_crossing(pts)
+            if len(pts) > MAX_VERTICES:  # bounded work per lot, whatever the machine's load
+                err = (f"has {len(pts):,} vertices; the limit per lot is {MAX_VERTICES:,} "
+                       "(simplify the outline)")
+            elif crossing is not None:
                 err = f"is self-intersecting: edges {crossing[0]} and {crossing[1]} cross"
             else:
                 try:
@@ -454,27 +462,13 @@ def read_lots(path: str | Path, *, seed: int = 0, degrees: str = "project", hole
 
 
 def _first_crossing(pts: Sequence[Point]) -> tuple[int, int] | None:
-    """The first pair of non-adjacent edges that cross properly, if any.
-
-    The footprint validator checks the area before the edges, so a symmetric bow-tie (zero
-    signed area) would be reported as "zero area"; the lot's message should say what is wrong."""
+    """The first pair of non-adjacent edges that cross properly, if any (geometry's one
+    near-linear test). Checked before the footprint validator, which looks at the area first,
+    so a symmetric bow-tie (zero signed area) is reported as crossing, not as "zero area"."""
     ring = list(pts)
     if len(ring) > 1 and ring[0] == ring[-1]:
         ring.pop()
-    n = len(ring)
-
-    def orient(p: Point, q: Point, r: Point) -> float:
-        return (q[0] - p[0]) * (r[1] - p[1]) - (q[1] - p[1]) * (r[0] - p[0])
-
-    for i in range(n):
-        a, b = ring[i], ring[(i + 1) % n]
-        for j in range(i + 2, n):
-            if i == 0 and j == n - 1:
-                continue
-            c, d = ring[j], ring[(j + 1) % n]
-            if orient(a, b, c) * orient(a, b, d) < 0 and orient(c, d, a) * orient(c, d, b) < 0:
-                return i, j
-    return None
+    return first_crossing(ring)
 
 
 def seed_int(seed: Any) -> int:
