@@ -249,7 +249,10 @@ def read_bounded(path: Path, *, max_bytes: int = DEFAULT_MAX_BYTES) -> bytes:
     except (OSError, ValueError) as exc:
         if isinstance(exc, OSError) and exc.errno == 21 or Path(fname).is_dir():
             raise refuse(f"cannot read {fname}: it is a folder, not a grammar file", "io-error") from None
-        reason = exc.strerror if isinstance(exc, OSError) and exc.strerror else str(exc)
+        reason = exc.strerror if isinstance(exc, OSError) and exc.strerror else (
+            "the path contains a NUL character" if "null byte" in str(exc) else str(exc))
+        if "\0" in fname:
+            fname = fname.replace("\0", "\\0")  # shown, not swallowed by the terminal
         raise refuse(f"cannot read {fname}: {reason}", "io-error") from None
     try:
         st = os.fstat(fd)

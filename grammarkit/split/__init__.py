@@ -122,8 +122,8 @@ def load_grammar(source: Any, registries: Any = None) -> Grammar:
         # the same unchanged file gives the same Grammar object, so its compilation is reused
         try:
             key = (str(source.resolve()), source.stat().st_mtime_ns)
-        except OSError:
-            return load(source, registries=registries)  # the loader reports the missing file
+        except (OSError, ValueError):  # ValueError: a NUL in the path
+            return load(source, registries=registries)  # the loader reports the file, located
         hit = _files.get((registries,), key)
         if hit is None:
             hit = load(source, registries=registries)
