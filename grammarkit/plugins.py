@@ -167,13 +167,14 @@ class GuardedConstraint:
         who = f"plugin {self.plugin!r}: constraint {self.name!r}"
         try:
             result = self.check(*args, **kwargs)
-            messages = list(result) if result is not None else []
+            # None is not "no violations": a check that forgot to return would pass every shape
+            messages = list(result) if result is not None and not isinstance(result, (str, bytes)) else None
         except GrammarkitError:
             raise
         except (Exception, SystemExit) as exc:  # noqa: BLE001 - the plugin's fault, named
             raise PluginError(f"{who} failed: {type(exc).__name__}: {exc}") from None
-        bad = [m for m in messages if not isinstance(m, str)]
-        if bad or isinstance(result, (str, bytes)):
+        bad = messages is None or [m for m in messages if not isinstance(m, str)]
+        if bad:
             raise PluginError(f"{who} returned {_describe(result)}, not a list of messages")
         return messages
 

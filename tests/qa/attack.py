@@ -471,6 +471,13 @@ def _check(graph, args, context):
 def grammarkit_constraints():
     return [ConstraintSpec("crashy", check=_check)]
 '''
+PLUGIN_CONSTRAINT_NONE = '''
+def _check(graph, args, context):
+    return None  # forgot to return its violations: must not pass every shape
+@hookimpl
+def grammarkit_constraints():
+    return [ConstraintSpec("lazy", check=_check)]
+'''
 PLUGIN_IMPORT_HANGS = '''
 time.sleep(600)
 '''
@@ -513,6 +520,15 @@ def _validate_crashy(folder: Path) -> Setup:
         'example castle_large = assembly("castle_large.glb")', "") + "constraint crashy\n"
     _write(folder, "t.grammar", text)
     return Setup(["validate", "t.grammar"], env=_plugin(PLUGIN_CONSTRAINT_RAISES)(folder))
+
+
+def _validate_none(folder: Path) -> Setup:
+    glb = ROOT / "grammars" / "tiling" / "castle" / "castle_small.glb"
+    text = (ROOT / "grammars/tiling/castle/castle.grammar").read_text().replace(
+        '"castle_small.glb"', f'"{glb}"').replace(
+        'example castle_large = assembly("castle_large.glb")', "") + "constraint lazy\n"
+    _write(folder, "t.grammar", text)
+    return Setup(["validate", "t.grammar"], env=_plugin(PLUGIN_CONSTRAINT_NONE)(folder))
 
 
 def _empty_exporter_over_good(folder: Path) -> Setup:
@@ -639,6 +655,8 @@ CASES: list[Case] = [
                       text="Lot --> extrude(3) slow() X.\n"), timeout=30, words="time"),
     Case("plugin constraint raises in validate", "plugins", _validate_crashy, timeout=90,
          words="crashy"),
+    Case("plugin constraint returns None in validate", "plugins", _validate_none, timeout=90,
+         words="lazy.*returned NoneType"),
     Case("plugin import hangs: --help", "plugins",
          _with_plugin(PLUGIN_IMPORT_HANGS, ["--help"]), status=0, timeout=20, words="Usage"),
     Case("plugin import hangs: --version", "plugins",
