@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import difflib
+import re
 import functools
 from typing import Any, Iterable
 
@@ -33,6 +34,23 @@ def known_hint(kind: str, name: str, known: Iterable[str], limit: int = 100) -> 
 
 
 NEAR_MISS_DISTANCE = 2  # issue 32: a rule name within 2 edits (or equal ignoring case) is a typo
+
+
+def near_miss_distance(name: str) -> int:
+    """How many edits still make `name` a typo of a rule: 2, but fewer for short names (every
+    one-letter name is one edit from every other: `A --> B` names a leaf B, not a misspelt A),
+    so one-letter and two-letter names only match ignoring case, three-letter names within one
+    edit."""
+    return min(NEAR_MISS_DISTANCE, max(0, len(name) - 2))
+
+
+def _renumbered(a: str, b: str) -> bool:
+    """`R7629` and `R1629`, `Floor2` and `Floor3`: names that differ only in their digits are
+    different numbered rules, not a typo of each other."""
+    return _DIGITS.sub("", a) == _DIGITS.sub("", b)
+
+
+_DIGITS = re.compile(r"[0-9]+")
 
 
 def edit_distance(a: str, b: str, limit: int = NEAR_MISS_DISTANCE) -> int:
@@ -76,8 +94,9 @@ class NearMisses:
             return []
         if name not in self._answers:
             same_case = [k for k in self._folded.get(name.casefold(), ()) if k != name]
+            allowed = near_miss_distance(name)
             scored = sorted((edit_distance(name, k), k) for k in self._candidates(name))
-            near = [k for d, k in scored if d <= NEAR_MISS_DISTANCE and k not in same_case]
+            near = [k for d, k in scored if d <= allowed and k not in same_case and not _renumbered(name, k)]
             self._answers[name] = same_case + near
         return list(self._answers[name])
 

@@ -130,3 +130,9 @@ class _nothing:
 def test_leading_zeros_are_not_too_large():
     text = "grammar t\npart A = box(1, 1, 1)\nneighbors A: A in " + "0" * 5000 + "3\n"
     assert not _errors(text)
+
+
+@pytest.mark.parametrize("text", ["Lot --> extrude(3) A B\nA --> X.\n",            # one letter: a leaf
+                                  "Lot --> extrude(3) R12\nR13 --> X.\nR1 --> R13\n"])  # numbered rules
+def test_short_and_renumbered_names_stay_cga_leaves(text):
+    assert not _errors(text)
