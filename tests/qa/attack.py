@@ -513,22 +513,20 @@ def grammarkit_exporters():
 '''
 
 
-def _validate_crashy(folder: Path) -> Setup:
-    glb = ROOT / "grammars" / "tiling" / "castle" / "castle_small.glb"
-    text = (ROOT / "grammars/tiling/castle/castle.grammar").read_text().replace(
-        '"castle_small.glb"', f'"{glb}"').replace(
-        'example castle_large = assembly("castle_large.glb")', "") + "constraint crashy\n"
-    _write(folder, "t.grammar", text)
-    return Setup(["validate", "t.grammar"], env=_plugin(PLUGIN_CONSTRAINT_RAISES)(folder))
+def _validate_with_constraint(plugin: str, name: str) -> Callable[[Path], Setup]:
+    """`validate` of the castle with a plugin's constraint `name` added to the grammar."""
+    def setup(folder: Path) -> Setup:
+        glb = ROOT / "grammars" / "tiling" / "castle" / "castle_small.glb"
+        text = (ROOT / "grammars/tiling/castle/castle.grammar").read_text().replace(
+            '"castle_small.glb"', f'"{glb}"').replace(
+            'example castle_large = assembly("castle_large.glb")', "") + f"constraint {name}\n"
+        _write(folder, "t.grammar", text)
+        return Setup(["validate", "t.grammar"], env=_plugin(plugin)(folder))
+    return setup
 
 
-def _validate_none(folder: Path) -> Setup:
-    glb = ROOT / "grammars" / "tiling" / "castle" / "castle_small.glb"
-    text = (ROOT / "grammars/tiling/castle/castle.grammar").read_text().replace(
-        '"castle_small.glb"', f'"{glb}"').replace(
-        'example castle_large = assembly("castle_large.glb")', "") + "constraint lazy\n"
-    _write(folder, "t.grammar", text)
-    return Setup(["validate", "t.grammar"], env=_plugin(PLUGIN_CONSTRAINT_NONE)(folder))
+_validate_crashy = _validate_with_constraint(PLUGIN_CONSTRAINT_RAISES, "crashy")
+_validate_none = _validate_with_constraint(PLUGIN_CONSTRAINT_NONE, "lazy")
 
 
 def _empty_exporter_over_good(folder: Path) -> Setup:
