@@ -216,7 +216,7 @@ def _points(ring: list) -> tuple[list[Point] | None, str | None]:
             return None, "has a non-finite coordinate"
         pts.append((x, y))
     if len(pts) < 3:  # an empty ring ([[]]) or a line: nothing to build on
-        return None, f"has a ring of {len(pts)} point(s); a lot needs at least 3"
+        return None, "is degenerate: a lot needs at least 3 distinct points"
     return pts, None
 
 

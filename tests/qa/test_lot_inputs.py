@@ -20,7 +20,7 @@ def _write(tmp_path, coords, name="lots.geojson"):
 
 def test_an_empty_ring_is_a_lot_error_not_a_traceback(tmp_path):
     (lot,) = read_lots(_write(tmp_path, [[]]))
-    assert lot.polygon is None and "a lot needs at least 3" in lot.error
+    assert lot.polygon is None and "a lot needs at least 3 distinct points" in lot.error
 
 
 def test_json_nested_too_deeply_is_a_clear_error(tmp_path):
