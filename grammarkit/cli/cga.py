@@ -49,7 +49,7 @@ def import_cga_command(file: Path, output: Path | None, rule: str | None, style:
     """
     from ..cga import translate_cga
     from ..cga.project import ProjectError, open_input
-    from ..fileio import atomic_output
+    from ..fileio import atomic_output, make_parent
     from ..run.writer import check_outputs
 
     packaged = file.is_dir() or file.suffix.lower() == ".rpk"
@@ -83,6 +83,7 @@ def import_cga_command(file: Path, output: Path | None, rule: str | None, style:
     summary = (f"{rep.total} constructs: {rep.translated} translated, {rep.warned} warned "
                f"({rep.count('approximated')} approximated, {rep.count('dropped')} dropped)")
     if report_path is not None:
+        make_parent(report_path)  # as derive does for -o: a new output folder is made
         with atomic_output(report_path) as tmp:
             tmp.write_text(json.dumps(rep.to_json(), indent=2) + "\n", encoding="utf-8")
     if strict and any(d.severity == "error" for d in result.diagnostics) and result.text is not None:
@@ -91,6 +92,7 @@ def import_cga_command(file: Path, output: Path | None, rule: str | None, style:
     if result.text is None or (not result.ok and not force):
         click.echo(f"{summary}; nothing written", err=True)
         sys.exit(1)
+    make_parent(out)
     with atomic_output(out) as tmp:
         tmp.write_text(result.text, encoding="utf-8", newline="\n")
     note = "" if result.ok else " (with --force: it does not pass `grammarkit check`)"
