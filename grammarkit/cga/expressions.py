@@ -44,7 +44,7 @@ _FUNCTIONS: dict[str, tuple[str, int, int | None]] = {
     "fileSearch": ("fileSearch", 1, 1), "fileRandom": ("fileRandom", 1, 1), "fileExists": ("fileExists", 1, 1),
 }
 # functions whose value is text: `+` with one of them concatenates (CGA converts the other side)
-_TEXT_FUNCTIONS = {"str", "substring", "listItem", "listFirst", "listLast", "listRange", "replace",
+_TEXT_FUNCTIONS = {"colorRGBToHex", "colorHSVToHex", "str", "substring", "listItem", "listFirst", "listLast", "listRange", "replace",
                    "getRange", "getPrefix", "getSuffix", "fileName", "fileBasename", "fileDirectory",
                    "fileExtension", "fileSearch", "fileRandom"}
 _BINARY = {"+": "+", "-": "-", "*": "*", "/": "/", "%": "%", "==": "==", "!=": "!=",
@@ -303,6 +303,17 @@ def _call(name: str, args: list[Any], span: Span | None, ctx: ExprContext) -> An
         idx = Call(func="floor", args=(Call(func="rand", args=(Num(value=0.0), Call(
             func="listSize", args=(lst,), span=span)), span=span),), span=span)
         return Call(func="listItem", args=(lst, idx), span=span)
+    if name in ("colorRGBToHex", "colorHSVToHex") and len(args) == 3:
+        from .colors import hsv_rgb_exprs, rgb_hex_expr
+        vals = tuple(translate_expr(a, ctx) for a in args)
+        if any(isinstance(x, Str) for x in vals):
+            raise Untranslatable(f"fn:{name}", f"{name}() of a string", span)
+        if not all(isinstance(x, Num) for x in vals) and any(_draws(x) for x in vals):
+            # the expression uses each argument several times; CGA draws it once
+            raise Untranslatable(f"fn:{name}", f"{name}() of a random value (an argument drawn "
+                                 "by rand() at derive time)", span)
+        rgb = hsv_rgb_exprs(*vals, span=span) if name == "colorHSVToHex" else vals
+        return rgb_hex_expr(rgb, span=span)
     if name == "pow" and len(args) == 2:
         return Binary(op="^", left=translate_expr(args[0], ctx), right=translate_expr(args[1], ctx),
                       span=span)
@@ -318,6 +329,17 @@ def _call(name: str, args: list[Any], span: Span | None, ctx: ExprContext) -> An
             raise Untranslatable(f"fn:{name}", f"{name}() of a string is not supported", span)
         return inner
     raise Untranslatable(f"fn:{name}", f"function {name}() is not supported", span)
+
+
+def _draws(node: Any) -> bool:
+    """Whether an IR expression draws random numbers (rand, fileRandom) when evaluated."""
+    if isinstance(node, Call) and node.func in ("rand", "fileRandom"):
+        return True
+    if isinstance(node, (list, tuple)):
+        return any(_draws(n) for n in node)
+    fields = getattr(node, "__dict__", None)
+    return bool(fields) and not isinstance(node, (Num, Str, Bool)) and any(
+        _draws(v) for k, v in fields.items() if k != "span")
 
 
 def _emitted_call(key: tuple[str, int], args: list[Any], span: Span | None, ctx: ExprContext) -> Any:

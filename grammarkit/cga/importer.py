@@ -31,6 +31,12 @@ class ImportResult:
     report: ImportReport = field(default_factory=lambda: ImportReport(None))
     source: str = ""
     filename: str | None = None
+    sources: dict = field(default_factory=dict)  # file -> text, of this file and those it imports
+
+    def format(self, d: Diagnostic) -> str:
+        """A diagnostic with the caret under its own file's line (an imported file's too)."""
+        own = self.sources.get(d.span.file) if d.span is not None and d.span.file else None
+        return d.format(own if own is not None else self.source)
 
     @property
     def ok(self) -> bool:
@@ -102,6 +108,7 @@ def translate_cga(source: "str | Path | bytes", *, filename: str | None = None,
                                              Span(file=fname, line=1, column=1), code="too-deep"))
         return result
     result.report = translator.report
+    result.sources = dict(translator.sources)
     result.diagnostics.extend(sorted(translator.diagnostics, key=_position))
     if any(d.severity == "error" for d in translator.diagnostics):
         return result

@@ -14,7 +14,8 @@ of three states:
 `op:setback`, `fn:geometry.area`, `expr:case`) so that a corpus can rank missing features by
 how many constructs they would unlock. Metadata without geometric meaning (`version`, UI
 annotations such as `@Order`, `@Group`, `@Description`) is listed under `ignored` and is not
-counted as a construct.
+counted as a construct. The warned constructs of imported files are located warnings too, and
+listed under `imported_warned` (each is counted in its own file's report, not in this one).
 """
 from __future__ import annotations
 
@@ -51,6 +52,8 @@ class ImportReport:
     assets: list[dict] = field(default_factory=list)
     checks: bool | None = None        # does the translated grammar pass `grammarkit check`?
     check_errors: list[str] = field(default_factory=list)
+    # warned constructs of the files this one imports (each counted in its own file's report)
+    imported: list[Construct] = field(default_factory=list)
 
     def add(self, construct: Construct) -> None:
         self.constructs.append(construct)
@@ -94,4 +97,6 @@ class ImportReport:
             "checks": self.checks,
             "check_errors": self.check_errors,
             "items": [c.to_json() for c in self.constructs],
+            "imported_warned": [{**c.to_json(), "file": c.span.file if c.span else None}
+                                for c in self.imported],
         }

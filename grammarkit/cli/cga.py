@@ -73,7 +73,7 @@ def import_cga_command(file: Path, output: Path | None, rule: str | None, style:
     for d in result.diagnostics:
         if quiet and d.severity != "error":
             continue
-        click.echo(d.format(result.source), err=True)
+        click.echo(result.format(d), err=True)
     for line in result.report.check_errors[:5]:
         click.echo(line, err=True)
     rep = result.report
@@ -81,7 +81,8 @@ def import_cga_command(file: Path, output: Path | None, rule: str | None, style:
     if missing:
         click.echo(f"assets not found ({len(missing)}): {', '.join(missing)}", err=True)
     summary = (f"{rep.total} constructs: {rep.translated} translated, {rep.warned} warned "
-               f"({rep.count('approximated')} approximated, {rep.count('dropped')} dropped)")
+               f"({rep.count('approximated')} approximated, {rep.count('dropped')} dropped)"
+               + (f", {len(rep.imported)} warned in imported files" if rep.imported else ""))
     if report_path is not None:
         make_parent(report_path)  # as derive does for -o: a new output folder is made
         with atomic_output(report_path) as tmp:

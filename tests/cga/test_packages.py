@@ -29,7 +29,11 @@ LOTS = {"rect": [(0.0, 0.0), (20.0, 0.0), (20.0, 12.0), (0.0, 12.0)],
 # only the footprint (x, y) and the floor are compared
 RANDOM_HEIGHT = {"extrusion_rule", "simple_rule2019"}
 # known differences, each a reason (the packages still import and derive as they come)
-KNOWN = {("parthenon", "lshape"): "the temple's column rows on an L-shaped lot differ by 0.54 m"}
+KNOWN = {("parthenon", "lshape"): (
+    "roofGable on the L-shaped roof face: geometry.roofs.gable runs one ridge across the whole "
+    "footprint (1.83 m high over the 13.6 m bounding box), CityEngine gables each wing (1.29 m "
+    "over the 9.6 m wing), so the pediments' simas stand 0.54 m higher; the fix is in "
+    "geometry/roofs.py (cgasolid's), proposed in the cgapkg report")}
 
 py7zr = pytest.importorskip("py7zr", reason="7z rule packages need the optional py7zr (grammarkit[cga])")
 
@@ -86,7 +90,7 @@ def test_package_imports_and_derives_as_it_comes(rpk, lot_name, tmp_path, monkey
     got = _bbox(model)
     cols = [0, 1] if rpk.stem in RANDOM_HEIGHT else [0, 1, 2]
     diff = float(np.abs(got[:, cols] - ref[:, cols]).max())
-    if (rpk.stem, lot_name) in KNOWN:
+    if (rpk.stem, lot_name) in KNOWN and diff > 0.1:  # passes as soon as the cause is fixed
         pytest.xfail(f"{KNOWN[(rpk.stem, lot_name)]} (bbox difference {diff:.2f} m)")
     assert diff <= 0.1, (got.tolist(), ref.tolist())
 

@@ -200,6 +200,11 @@ class DeclarationsMixin:
                            project=self.project)  # an import uses its own default style
         child._import_chain = (*chain, key)  # type: ignore[attr-defined]
         child.collect()
+        # what the child's declarations left out is this import's to say (never silent)
+        for c in child.report.constructs + child.report.imported:
+            if c.status != "translated" and c.span is not None:
+                self._imported_warning(c)
+        self.sources.update(child.sources)
         return child, ""
 
     def _merge_import(self, alias: str, child: Any, overrides: dict) -> None:

@@ -82,6 +82,8 @@ class Translator(DeclarationsMixin, ValuesMixin, FunctionsMixin, BodyMixin, Entr
         # recursive CGA functions, emitted as grammarkit functions (see _emit_functions)
         self.emitted: dict[tuple[str, int], dict[str, Any]] = {}
         self.text_functions: set[str] = set()
+        self._imported_seen: set[tuple] = set()
+        self.sources: dict[str, str] = {filename: source} if filename else {}  # for carets
 
     # -- reporting ------------------------------------------------------------------------------
     frame_change: str | None = None  # set by a handler that changes the frame of what follows
@@ -89,6 +91,8 @@ class Translator(DeclarationsMixin, ValuesMixin, FunctionsMixin, BodyMixin, Entr
     def _record(self, kind: str, name: str, status: str, span: Span | None, *,
                 feature: str | None = None, message: str | None = None, counting: bool = True) -> None:
         if not counting:
+            if status != "translated" and span is not None and span.file and span.file != self.filename:
+                self._imported_warning(Construct(kind, name, status, span, feature, message))
             return
         self.report.add(Construct(kind, name, status, span, feature, message))
         if status != "translated":
@@ -96,6 +100,22 @@ class Translator(DeclarationsMixin, ValuesMixin, FunctionsMixin, BodyMixin, Entr
             self.diagnostics.append(Diagnostic(
                 "warning", f"{verb}: {message}", span, code=f"cga-{status}",
                 hint=f"missing feature: {feature}" if feature else None))
+
+    def _imported_warning(self, construct: Construct) -> None:
+        """A warned construct of an imported file: counted in that file's own report (its
+        `import-cga` of its own), but never silent here: a located warning (in that file) and
+        the report's `imported` list, once per place and message (a rule translated for two
+        frames, or a file imported twice, says it once)."""
+        s = construct.span
+        key = (s.file, s.line, s.column, construct.message)
+        if key in self._imported_seen:
+            return
+        self._imported_seen.add(key)
+        self.report.imported.append(construct)
+        verb = "approximated" if construct.status == "approximated" else "not translated"
+        self.diagnostics.append(Diagnostic(
+            "warning", f"{verb}: {construct.message}", s, code=f"cga-{construct.status}",
+            hint=f"missing feature: {construct.feature}" if construct.feature else None))
 
     def _span(self, node: Any) -> Span | None:
         return span_of(node, self.filename)
