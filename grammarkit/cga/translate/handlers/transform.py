@@ -35,18 +35,51 @@ def _is_rel_one(tree: Any) -> bool:
 @register("s")
 def _h_s(h: HandlerContext):
     need(h.args, 3, 3, "s", h.span)
-    cx, cy, cz = (rel_or_abs(a, frames.scope_name(h.frame, "scope.s" + c), h.ctx)
-                  for a, c in zip(h.args, "xyz"))
-    if h.frame == "Z":
-        return [OpCall(name="s", args=(Arg(value=cx), Arg(value=cy), Arg(value=cz)), span=h.span)], None
+    sizes = [rel_or_abs(a, frames.scope_name(h.frame, "scope.s" + c), h.ctx) for a, c in zip(h.args, "xyz")]
+    flipped = [_positive(v) for v in sizes]
+    if not any(f is not None for f in flipped):
+        return _sizes(sizes, h.frame, _is_rel_one(h.args[2]), h.span), None
+    # CGA: "negative sizes result in mirroring along the corresponding axes". The geometry
+    # then lies on the other side of the scope origin: s(|size|), the geometry mirrored across
+    # the scope's mid-plane, and the scope moved back by |size| along that axis; the scope
+    # itself stays right-handed (its origin is the low corner, not CGA's)
+    pos = [f if f is not None else v for f, v in zip(flipped, sizes)]
+    items = _sizes(pos, h.frame, _is_rel_one(h.args[2]), h.span)
+    flags = [Bool(value=f is not None) for f in flipped]
+    back = [Unary(op="-", operand=f) if f is not None and not isinstance(f, Num) else
+            Num(value=-f.value) if f is not None else Num(value=0) for f in flipped]
+    if h.frame == "Y":
+        flags = [flags[0], flags[2], flags[1]]
+        tz = back[2]
+        back = [back[0], tz.operand if isinstance(tz, Unary) else Num(value=-tz.value), back[1]]
+    items.append(OpCall(name="mirrorGeometry", args=tuple(Arg(value=f) for f in flags), span=h.span))
+    items.append(OpCall(name="t", args=tuple(Arg(value=v) for v in back), span=h.span))
+    return items, ("s:negative", "s() with a negative size: the geometry is mirrored into place, "
+                   "the scope keeps its positive size (scope.s and the scope origin differ from CGA's)")
+
+
+def _positive(v: Any) -> Any:
+    """|v| when the size v is a negative number or a negative multiple of a scope size, else None."""
+    if isinstance(v, Num) and v.value < 0:
+        return Num(value=-v.value)
+    if (isinstance(v, Binary) and v.op == "*" and isinstance(v.left, Num) and v.left.value < 0
+            and isinstance(v.right, Ref)):
+        return v.model_copy(update={"left": Num(value=-v.left.value)})
+    return None
+
+
+def _sizes(sizes: list, frame: str, keeps_depth: bool, span: Span | None) -> list:
+    cx, cy, cz = sizes
+    if frame == "Z":
+        return [OpCall(name="s", args=(Arg(value=cx), Arg(value=cy), Arg(value=cz)), span=span)]
     # Frame Y: CGA keeps its scope origin, at the back (z = 0 is grammarkit's y = sy); shift
     # grammarkit's origin so the back stays where it is when the depth changes.
     items = []
-    if not _is_rel_one(h.args[2]):
+    if not keeps_depth:
         items.append(OpCall(name="t", args=(Arg(value=Num(value=0)), Arg(value=Binary(
-            op="-", left=Ref(name="scope.sy"), right=cz)), Arg(value=Num(value=0))), span=h.span))
-    items.append(OpCall(name="s", args=(Arg(value=cx), Arg(value=cz), Arg(value=cy)), span=h.span))
-    return items, None
+            op="-", left=Ref(name="scope.sy"), right=cz)), Arg(value=Num(value=0))), span=span))
+    items.append(OpCall(name="s", args=(Arg(value=cx), Arg(value=cz), Arg(value=cy)), span=span))
+    return items
 
 
 @register("t")
@@ -62,14 +95,50 @@ def _h_t(h: HandlerContext):
 
 @register("r")
 def _h_r(h: HandlerContext):
-    approx = None
     args = h.args
+    pivot = axis_name(args[0]) if len(args) == 4 else "scopeOrigin"
     if len(args) == 4:
-        approx = ("r:pivot", f"rotation about {axis_name(args[0]) or 'a pivot'} is made about the "
-                  "scope origin")
         args = args[1:]
     need(args, 3, 3, "r", h.span)
-    return _turns("r", [translate_expr(a, h.ctx) for a in args], h.frame, h.span), approx
+    steps = _turns("r", [translate_expr(a, h.ctx) for a in args], h.frame, h.span)
+    if pivot == "scopeOrigin":
+        return steps, None
+    if pivot == "scopeCenter":
+        back = _back_to_center(steps, h.span)
+        if back is not None:
+            return steps + [back], None
+        why = "with angles known only at derive time"
+    else:
+        why = f"about {pivot or 'a pivot'}"
+    return steps, ("r:pivot", f"rotation {why} is made about the scope origin")
+
+
+def _back_to_center(steps: list, span: Span | None) -> OpCall | None:
+    """CGA's r(scopeCenter, ...) turns the shape about its scope's centre P. grammarkit's r
+    turns about the origin (new axis j = sum_i R[i][j] old axis i, the geometry kept in scope
+    coordinates), which moves the centre from P to R P (old axes); t(d) with d = R^T P - P
+    (new axes) moves it back. P = scope size / 2, so d is linear in scope.sx, .sy, .sz with
+    coefficients (R[j][i] - [i == j]) / 2. None when an angle is not a number."""
+    from ....split.ops.helpers import rotation
+
+    R = ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))
+    for op in steps:
+        angles = [a.value for a in op.args]
+        if not all(isinstance(v, Num) for v in angles):
+            return None
+        S = rotation(*(float(v.value) for v in angles))
+        R = tuple(tuple(sum(R[i][k] * S[k][j] for k in range(3)) for j in range(3)) for i in range(3))
+    parts = []
+    for i in range(3):
+        expr = None
+        for j, c in enumerate("xyz"):
+            coeff = round((R[j][i] - (1.0 if i == j else 0.0)) / 2.0, 12)
+            if abs(coeff) < 1e-12:
+                continue
+            term = Binary(op="*", left=Num(value=coeff), right=Ref(name=f"scope.s{c}"))
+            expr = term if expr is None else Binary(op="+", left=expr, right=term)
+        parts.append(expr if expr is not None else Num(value=0))
+    return OpCall(name="t", args=tuple(Arg(value=v) for v in parts), span=span)
 
 
 def _turns(op: str, angles: list, frame: str, span: Span | None) -> list:
