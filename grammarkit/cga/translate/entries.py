@@ -2,10 +2,10 @@
 from __future__ import annotations
 
 import dataclasses
-
 from pathlib import Path
+from typing import Any
 
-from lark import Tree
+from lark import Token, Tree
 
 from ...ir import (
     Branch,
@@ -55,6 +55,23 @@ class EntriesMixin:
             out.append(Branch(mode=mode, key=key, body=Seq(items=tuple(body)), span=span))
         return out
 
+    def _static_index(self, key_tree: Any, frame: str, rctx: RuleCtx) -> tuple[Any, str | None]:
+        """A comp selector given as an expression -> (a `number` tree of its value, the
+        approximation said) where consts (exact) or attrs' defaults (approximated: a changed
+        attr does not move the selector) make it a whole number; (None, None) otherwise."""
+        try:
+            expr = translate_expr(key_tree, self._ctx(frame, rctx.params))
+        except Untranslatable:
+            return None, None
+        value = self.constant_value(expr)
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not float(value).is_integer():
+            return None, None
+        names = {r.name for r in _refs(expr)}
+        kinds = {v.kind for v in self.values if self.value_names.get(v.name) in names}
+        note = (f"the comp index is computed from attrs' default values ({int(value)}): a changed "
+                "attr does not move it") if "attr" in kinds else None
+        return Tree("number", [Token("NUMBER", str(int(value)))]), note
+
     def comp_entries(self, block: Tree, frame: str, rctx: RuleCtx, mode: str) -> list:
         out: list = []
         for entry in block.children:
@@ -68,7 +85,13 @@ class EntriesMixin:
             key_tree = entry.children[0].children[0]
             sel = key_tree.children[0].value if isinstance(key_tree, Tree) and key_tree.data in (
                 "ref", "number") else None
-            approx_sel = None
+            approx_sel, computed = None, False
+            if sel is None or (key_tree.data == "ref" and sel in self.value_names):
+                # a computed index (`inxe1 + 0 = A`, a parameter): its value where it is static
+                key_tree, approx_sel = self._static_index(key_tree, frame, rctx)
+                computed = approx_sel is not None
+                sel = key_tree.children[0].value if key_tree is not None else None
+                key_tree = key_tree if key_tree is not None else entry.children[0].children[0]
             if mode == "offset-parts":
                 mapped = (sel,) if sel in ("inside", "border") else None
                 body_frame = frame
@@ -108,12 +131,13 @@ class EntriesMixin:
                 self._record("selector", str(sel), "dropped", span, feature=f"comp-selector:{sel}",
                              message=f"comp selector {sel!r} is not supported", counting=rctx.counting)
                 continue
-            if entry.data == "merged_entry" and mode != "shape-parts":
+            one_face = len(mapped) == 1 and isinstance(mapped[0], int)  # `2 = A` is `2: A`
+            if entry.data == "merged_entry" and mode != "shape-parts" and not one_face:
                 self._record("selector", f"{sel}=", "approximated", span, feature="comp:merge",
                              message=f"'{sel} =' (the selected faces as one shape) sends each face "
                              "on its own", counting=rctx.counting)
             elif approx_sel is not None:
-                self._record("selector", sel, "approximated", span, feature=f"setback-selector:{sel}",
+                self._record("selector", sel, "approximated", span, feature="comp-selector:computed" if computed else f"setback-selector:{sel}",
                              message=approx_sel, counting=rctx.counting)
             else:
                 self._record("selector", sel, "translated", span, counting=rctx.counting)
@@ -169,3 +193,12 @@ class EntriesMixin:
         self.report.assets.append({"path": text, "found": None, "computed": True, "resolved": None,
                                    "line": span.line if span else None})
 
+
+def _refs(node: Any) -> list:
+    """The Ref nodes of an IR expression."""
+    if isinstance(node, Ref):
+        return [node]
+    if isinstance(node, (list, tuple)):
+        return [r for n in node for r in _refs(n)]
+    fields = getattr(node, "__dict__", None) or {}
+    return [r for k, v in fields.items() if k != "span" for r in _refs(v)]
