@@ -71,8 +71,76 @@ def hsv_rgb_exprs(h, s, v, span=None) -> tuple:
     v = Call(func="clamp", args=(v, zero, one), span=span)
     out = []
     for n in _HSV_N:
-        k = _bin("%", _bin("+", Num(value=n), _bin("/", h, Num(value=60.0), span), span), Num(value=6.0), span)
+        # grammarkit's % keeps the dividend's sign (fmod): ((x % 6) + 6) % 6 wraps a negative hue
+        k = _bin("+", Num(value=n), _bin("/", h, Num(value=60.0), span), span)
+        k = _bin("%", _bin("+", _bin("%", k, Num(value=6.0), span), Num(value=6.0), span), Num(value=6.0), span)
         w = Call(func="max", args=(zero, Call(func="min", args=(k, _bin("-", Num(value=4.0), k, span), one),
                                               span=span)), span=span)
         out.append(_bin("-", v, _bin("*", _bin("*", v, s, span), w, span), span))
     return tuple(out)
+
+
+# -- colorHexToH / S / V: the hue (degrees), saturation and value of a "#rrggbb" text ----------
+
+def hex_to_hsv(text: str) -> tuple[float, float, float] | None:
+    t = text.strip().lstrip("#")
+    if len(t) == 3:
+        t = "".join(c * 2 for c in t)
+    try:
+        r, g, b = (int(t[i:i + 2], 16) / 255.0 for i in (0, 2, 4)) if len(t) == 6 else (None,) * 3
+    except ValueError:
+        return None
+    if r is None:
+        return None
+    mx, mn = max(r, g, b), min(r, g, b)
+    d = mx - mn
+    if d == 0:
+        h = 0.0
+    elif mx == r:
+        h = 60.0 * (((g - b) / d) % 6.0)
+    elif mx == g:
+        h = 60.0 * ((b - r) / d + 2.0)
+    else:
+        h = 60.0 * ((r - g) / d + 4.0)
+    return h, (d / mx if mx > 0 else 0.0), mx
+
+
+_DIGITS = HEX + HEX.upper()
+
+
+def _hex_channel(c, i: int, span):
+    """Channel i (0 r, 1 g, 2 b) of a "#rrggbb" text expression, in [0, 1]."""
+    def digit(k):
+        ch = Call(func="substring", args=(c, Num(value=float(k)), Num(value=float(k + 1))), span=span)
+        return _bin("%", Call(func="findFirst", args=(Str(value=_DIGITS), ch), span=span), Num(value=16.0), span)
+    hi, lo = digit(1 + 2 * i), digit(2 + 2 * i)
+    return _bin("/", _bin("+", _bin("*", hi, Num(value=16.0), span), lo, span), Num(value=255.0), span)
+
+
+def hex_hsv_expr(which: str, c, span=None):
+    """colorHexToH/S/V of a text expression (IR): the channels parsed with substring and
+    findFirst, the hue by the max channel (select)."""
+    if isinstance(c, Str):
+        hsv = hex_to_hsv(c.value)
+        if hsv is not None:
+            return Num(value=round(hsv["HSV".index(which)], 12))
+    r, g, b = (_hex_channel(c, i, span) for i in range(3))
+    mx = Call(func="max", args=(r, g, b), span=span)
+    mn = Call(func="min", args=(r, g, b), span=span)
+    d = _bin("-", mx, mn, span)
+    if which == "V":
+        return mx
+    tiny = Num(value=1e-12)
+    if which == "S":
+        return _bin("/", d, Call(func="max", args=(mx, tiny), span=span), span)
+    dd = Call(func="max", args=(d, tiny), span=span)
+
+    def sel(cond, a, b_):
+        return Call(func="select", args=(cond, a, b_), span=span)
+
+    six = Num(value=6.0)
+    h_r = _bin("%", _bin("+", _bin("%", _bin("/", _bin("-", g, b, span), dd, span), six, span), six, span), six, span)
+    h_g = _bin("+", _bin("/", _bin("-", b, r, span), dd, span), Num(value=2.0), span)
+    h_b = _bin("+", _bin("/", _bin("-", r, g, span), dd, span), Num(value=4.0), span)
+    sector = sel(_bin("==", mx, r, span), h_r, sel(_bin("==", mx, g, span), h_g, h_b))
+    return sel(_bin("<=", d, tiny, span), Num(value=0.0), _bin("*", Num(value=60.0), sector, span))

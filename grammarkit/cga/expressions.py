@@ -314,6 +314,12 @@ def _call(name: str, args: list[Any], span: Span | None, ctx: ExprContext) -> An
                                  "by rand() at derive time)", span)
         rgb = hsv_rgb_exprs(*vals, span=span) if name == "colorHSVToHex" else vals
         return rgb_hex_expr(rgb, span=span)
+    if name in ("colorHexToH", "colorHexToS", "colorHexToV") and len(args) == 1:
+        from .colors import hex_hsv_expr
+        arg = translate_expr(args[0], ctx)
+        if _draws(arg):
+            raise Untranslatable(f"fn:{name}", f"{name}() of a random value (drawn at derive time)", span)
+        return hex_hsv_expr(name[-1], arg, span=span)
     if name == "pow" and len(args) == 2:
         return Binary(op="^", left=translate_expr(args[0], ctx), right=translate_expr(args[1], ctx),
                       span=span)

@@ -116,3 +116,27 @@ def test_a_random_colour_argument_is_a_located_warning():
     (d,) = [d for d in result.diagnostics if d.severity == "warning"]
     assert (d.span.line, "rand()") == (1, "rand()") and "random value" in d.message
     assert json.dumps(result.report.to_json())  # the report stays serialisable
+
+
+@pytest.mark.parametrize("hexcolor", ["#ac7f49", "#ff0000", "#00ff80", "#123456", "#777777", "#000000", "#fa0"])
+def test_hex_to_hsv_matches_colorsys(hexcolor):
+    from grammarkit.cga.colors import hex_to_hsv
+    t = hexcolor.lstrip("#")
+    t = "".join(c * 2 for c in t) if len(t) == 3 else t
+    want = colorsys.rgb_to_hsv(*(int(t[i:i + 2], 16) / 255 for i in (0, 2, 4)))
+    assert np.allclose(hex_to_hsv(hexcolor), (want[0] * 360, want[1], want[2]))
+
+
+def test_colour_of_a_rule_parameter_at_derive_time():
+    """The public rule set's shutters: a colour derived from a parameter's colour, the hue
+    shifted below 0 (wrapped, as CGA's hue)."""
+    from grammarkit.cga.colors import hex_to_hsv
+    text = ('Lot --> extrude(2) R("#3a7fc4")\n'
+            'R(c) --> color(colorHSVToHex(colorHexToH(c) - 190, colorHexToS(c) - 0.15, colorHexToV(c) - 0.25)) X.\n')
+    result = translate_cga(text, filename="h.cga")
+    assert result.ok and "colorHex" not in result.text
+    model = grammarkit.derive(result.grammar, seed=0, lot=RECT)
+    h, s, v = hex_to_hsv("#3a7fc4")
+    assert {p.color for p in model.parts} == {rgb_to_hex(*hsv_to_rgb(h - 190, s - 0.15, v - 0.25))} == {"#84533b"}
+    folded = translate_cga('attr c = colorHexToH("#00ff80")\nLot --> X.\n', filename="f.cga")
+    assert "attr c = 150" in folded.text

@@ -53,3 +53,15 @@ def test_negative_sizes_mirror_to_the_other_side(text, lo, hi):
     (w,) = [d for d in res.diagnostics if d.severity == "warning"]
     assert "negative size" in w.message and w.code == "cga-approximated"
     assert np.allclose(v.min(axis=0), lo, atol=0.01) and np.allclose(v.max(axis=0), hi, atol=0.01)
+
+
+def test_translate_rel_scope_is_t_and_cleanup_geometry_is_said():
+    res, v = _derive("Lot --> extrude(4) s(2, '1, 6) translate(rel, scope, 1, '0.5, 2) "
+                     "cleanupGeometry(all, 0.1) X.\n")
+    _, w = _derive("Lot --> extrude(4) s(2, '1, 6) t(1, '0.5, 2) X.\n")
+    assert np.allclose(v.min(axis=0), w.min(axis=0)) and np.allclose(v.max(axis=0), w.max(axis=0))
+    (d,) = [d for d in res.diagnostics if d.severity == "warning"]
+    assert d.message.startswith("approximated: cleanupGeometry(): nothing is done")
+    res = translate_cga("Lot --> translate(abs, world, 0, 0, 0) X.\n", filename="a.cga")
+    (d,) = [d for d in res.diagnostics if d.severity == "warning"]
+    assert "translate(abs, world" in d.message and d.span.column == 9

@@ -85,12 +85,37 @@ def _sizes(sizes: list, frame: str, keeps_depth: bool, span: Span | None) -> lis
 @register("t")
 def _h_t(h: HandlerContext):
     need(h.args, 3, 3, "t", h.span)
+    return _moved(h.args, h), None
+
+
+def _moved(args: list, h: HandlerContext) -> list:
     cx, cy, cz = (rel_or_abs(a, frames.scope_name(h.frame, "scope.s" + c), h.ctx)
-                  for a, c in zip(h.args, "xyz"))
+                  for a, c in zip(args, "xyz"))
     if h.frame == "Y":
         neg = cz.model_copy(update={"value": -cz.value}) if isinstance(cz, Num) else Unary(op="-", operand=cz)
         cx, cy, cz = cx, neg, cy
-    return [OpCall(name="t", args=(Arg(value=cx), Arg(value=cy), Arg(value=cz)), span=h.span)], None
+    return [OpCall(name="t", args=(Arg(value=cx), Arg(value=cy), Arg(value=cz)), span=h.span)]
+
+
+@register("translate")
+def _h_translate(h: HandlerContext):
+    """CGA's translate(mode, coordSystem, x, y, z): `rel, scope` is t(x, y, z); moving to an
+    absolute position or along the world's or the object's axes is reported."""
+    need(h.args, 5, 5, "translate", h.span)
+    mode, system = axis_name(h.args[0]), axis_name(h.args[1])
+    if (mode, system) != ("rel", "scope"):
+        raise Untranslatable(f"translate:{mode}.{system}", f"translate({mode}, {system}, ...): only "
+                             "rel, scope (which is t()) is translated", h.span)
+    return _moved(h.args[2:], h), None
+
+
+@register("cleanupGeometry")
+def _h_cleanup_geometry(h: HandlerContext):
+    """CGA's cleanupGeometry(components, tolerance) merges vertices, edges and coplanar faces
+    closer than the tolerance: the shape stays where it is, only its mesh is tidied."""
+    need(h.args, 2, 2, "cleanupGeometry", h.span)
+    return [], ("cleanupGeometry:mesh", "nothing is done (the shape is the same; "
+                "grammarkit welds and unites the mesh when the model is finished)")
 
 
 @register("r")
