@@ -144,3 +144,27 @@ def hex_hsv_expr(which: str, c, span=None):
     h_b = _bin("+", _bin("/", _bin("-", r, g, span), dd, span), Num(value=4.0), span)
     sector = sel(_bin("==", mx, r, span), h_r, sel(_bin("==", mx, g, span), h_g, h_b))
     return sel(_bin("<=", d, tiny, span), Num(value=0.0), _bin("*", Num(value=60.0), sector, span))
+
+
+# The expressions above use each argument several times (a channel four times in its two hex
+# digits, the hue six times): nested colour functions of computed values multiply. A result
+# whose printed tree would exceed this many nodes is refused (a located warning) instead of
+# being written out (one real rule nested colorHSVToHex(colorHexToH(c) - 190, ...): millions).
+MAX_COLOR_NODES = 2000
+
+
+def tree_size(node, memo=None) -> int:
+    """Nodes of the expression as printed (shared sub-expressions counted each time they
+    occur), computed on the shared graph in time linear in its distinct nodes."""
+    memo = {} if memo is None else memo
+    key = id(node)
+    if key in memo:
+        return memo[key]
+    if isinstance(node, (list, tuple)):
+        n = sum(tree_size(x, memo) for x in node)
+    else:
+        fields = getattr(node, "__dict__", None) or {}
+        n = 1 + sum(tree_size(v, memo) for k, v in fields.items() if k != "span"
+                    and not isinstance(v, (str, int, float, bool, type(None))))
+    memo[key] = n
+    return n

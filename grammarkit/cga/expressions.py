@@ -313,13 +313,13 @@ def _call(name: str, args: list[Any], span: Span | None, ctx: ExprContext) -> An
             raise Untranslatable(f"fn:{name}", f"{name}() of a random value (an argument drawn "
                                  "by rand() at derive time)", span)
         rgb = hsv_rgb_exprs(*vals, span=span) if name == "colorHSVToHex" else vals
-        return rgb_hex_expr(rgb, span=span)
+        return _bounded_colour(name, rgb_hex_expr(rgb, span=span), span)
     if name in ("colorHexToH", "colorHexToS", "colorHexToV") and len(args) == 1:
         from .colors import hex_hsv_expr
         arg = translate_expr(args[0], ctx)
         if _draws(arg):
             raise Untranslatable(f"fn:{name}", f"{name}() of a random value (drawn at derive time)", span)
-        return hex_hsv_expr(name[-1], arg, span=span)
+        return _bounded_colour(name, hex_hsv_expr(name[-1], arg, span=span), span)
     if name == "pow" and len(args) == 2:
         return Binary(op="^", left=translate_expr(args[0], ctx), right=translate_expr(args[1], ctx),
                       span=span)
@@ -335,6 +335,14 @@ def _call(name: str, args: list[Any], span: Span | None, ctx: ExprContext) -> An
             raise Untranslatable(f"fn:{name}", f"{name}() of a string is not supported", span)
         return inner
     raise Untranslatable(f"fn:{name}", f"function {name}() is not supported", span)
+
+
+def _bounded_colour(name: str, expr: Any, span: Span | None) -> Any:
+    from .colors import MAX_COLOR_NODES, tree_size
+    if tree_size(expr) > MAX_COLOR_NODES:
+        raise Untranslatable(f"fn:{name}", f"{name}() of a computed colour nested too deeply to "
+                             f"write as one expression (over {MAX_COLOR_NODES} terms)", span)
+    return expr
 
 
 def _draws(node: Any) -> bool:

@@ -128,15 +128,26 @@ def test_hex_to_hsv_matches_colorsys(hexcolor):
 
 
 def test_colour_of_a_rule_parameter_at_derive_time():
-    """The public rule set's shutters: a colour derived from a parameter's colour, the hue
-    shifted below 0 (wrapped, as CGA's hue)."""
+    """A colour computed from a rule parameter at derive time; a hue below 0 wraps."""
     from grammarkit.cga.colors import hex_to_hsv
-    text = ('Lot --> extrude(2) R("#3a7fc4")\n'
-            'R(c) --> color(colorHSVToHex(colorHexToH(c) - 190, colorHexToS(c) - 0.15, colorHexToV(c) - 0.25)) X.\n')
+    text = ('Lot --> extrude(2) R("#3a7fc4", -170)\n'
+            'R(c, h) --> color(colorHSVToHex(h, 0.5, 0.6)) X. color(colorRGBToHex(colorHexToV(c), 0, 0)) Y.\n')
     result = translate_cga(text, filename="h.cga")
     assert result.ok and "colorHex" not in result.text
     model = grammarkit.derive(result.grammar, seed=0, lot=RECT)
-    h, s, v = hex_to_hsv("#3a7fc4")
-    assert {p.color for p in model.parts} == {rgb_to_hex(*hsv_to_rgb(h - 190, s - 0.15, v - 0.25))} == {"#84533b"}
+    v = hex_to_hsv("#3a7fc4")[2]
+    assert {p.color for p in model.parts} == {rgb_to_hex(*hsv_to_rgb(190, 0.5, 0.6)), rgb_to_hex(v, 0, 0)}
+
+
+def test_nested_computed_colours_are_refused_not_blown_up():
+    """The public rule set's shutters nest colorHexToH(c) inside colorHSVToHex: written out as
+    one expression that is tens of thousands of terms (the import once ran out of memory);
+    refused with a located warning, quickly."""
+    text = ('Lot --> extrude(2) R("#3a7fc4")\n'
+            'R(c) --> color(colorHSVToHex(colorHexToH(c) - 190, colorHexToS(c) - 0.15, colorHexToV(c) - 0.25)) X.\n')
+    result = translate_cga(text, filename="h.cga")
+    assert result.ok and len(result.text) < 5000
+    (d,) = [d for d in result.diagnostics if "nested too deeply" in d.message]
+    assert (d.span.line, d.span.column) == (2, 10)
     folded = translate_cga('attr c = colorHexToH("#00ff80")\nLot --> X.\n', filename="f.cga")
     assert "attr c = 150" in folded.text
