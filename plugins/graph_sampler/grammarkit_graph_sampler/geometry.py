@@ -55,6 +55,15 @@ def check_example(rule_set, assembly: Assembly, tolerance: float, grammar=None) 
                               f"graph sampler: {lines}", getattr(grammar, "span", None))
 
 
+def final_problem(rule_set, assembly: Assembly) -> str:
+    """What `grammarkit validate` (these rules, its default tolerance) rejects in the variant
+    first, or "" when it accepts it."""
+    from grammarkit.tiling import validate
+
+    report = validate(rule_set, assembly, max_violations=1)
+    return "" if report.ok else report.violations[0].format()
+
+
 def load_examples(grammar) -> list[Assembly]:
     from grammarkit.tiling import load_examples as loader
 
