@@ -79,13 +79,23 @@ class PartCache:
         self.frames = FrameMemo()  # key -> the part's Kalojanov frame (4x4, world)
         self.memo_limit = memo_limit
         self._gaps: dict[float, dict] = {}  # tolerance -> relative pose -> surface gap
-        self._support: dict[float, PoseMemo] = {}  # tolerance -> support verdicts by pose
+        self._support: PoseMemo | None = None  # support verdicts by relative pose
+
+    @property
+    def support(self) -> "PoseMemo":
+        """Support verdicts by relative pose (support.carry_directions' `cache`). A verdict does
+        not depend on the contact tolerance (support.py), so one memo serves every tolerance;
+        its rounding step is set by the first `support_for` call (default: 1e-6 x 10)."""
+        if self._support is None:
+            self._support = PoseMemo(1e-5, with_up=True)
+        if len(self._support) > self.memo_limit:
+            self._support.clear()
+        return self._support
 
     def support_for(self, tolerance: float) -> "PoseMemo":
-        memo = self._support.get(float(tolerance))
-        if memo is None or len(memo) > self.memo_limit:
-            memo = self._support[float(tolerance)] = PoseMemo(tolerance, with_up=True)
-        return memo
+        if self._support is None:
+            self._support = PoseMemo(tolerance, with_up=True)
+        return self.support
 
     def gaps_for(self, tolerance: float) -> dict:
         memo = self._gaps.get(float(tolerance))

@@ -100,6 +100,11 @@ class Deduper:
         """True (and remembered) when the shape is new. `geo`: its `geometric_key`, if known."""
         return self._check(types, edges, geo, add=True)
 
+    def note_duplicate(self, geo: bytes | None) -> None:
+        """Remember the geometric key of a shape found to be a duplicate (`is_new` False)."""
+        if geo is not None and self.mode == "isomorphism":
+            self.geometric.add(geo)
+
     def _check(self, types, edges, geo, *, add: bool) -> bool:
         if self.mode == "histogram":
             key = histogram_key(types)

@@ -288,12 +288,6 @@ def run_attempt(ctx: _Context, iteration: int, index: int, known: frozenset) -> 
     }
     shape = Shape(key="", protos=protos, transforms=transforms, edges=edges_t, iteration=iteration,
                   parents=(donor.key, recip.key), operation=op, geo=geo)
-    if opt.final_check:
-        # `grammarkit validate`'s own check (shape graph from the geometry at the variant's
-        # default tolerance, every rule): a variant it rejects is never kept, nor written
-        problem = geometry.final_problem(ctx.rules, geometry.shape_to_assembly(shape.prepare(ctx.protos), ctx.protos))
-        if problem:
-            return AttemptResult(iteration, index, "final-check", detail=problem)
     return AttemptResult(iteration, index, "valid", shape=shape)
 
 
@@ -331,6 +325,17 @@ def _session_attempt(ctx: _Context, item: tuple[int, int]) -> "AttemptResult":
     if res.shape is not None:
         res.shape = _strip(res.shape)
     return res
+
+
+def _session_final_check(ctx: _Context, shape: "Shape") -> str:
+    """`grammarkit validate`'s own verdict on a candidate (shape graph from the geometry at the
+    variant's default tolerance, every rule): the first problem, or "" (accepted). Support
+    verdicts of congruent contacts come from the context's memo (they depend on the two
+    parts' relative placement and on up only, not on the tolerance)."""
+    shape.prepare(ctx.protos)
+    keys = [geometry.part_key(p, t) for p, t in zip(shape.protos, shape.transforms)]
+    return geometry.final_problem(ctx.rules, geometry.shape_to_assembly(shape, ctx.protos),
+                                  keys=keys, cache=ctx.part_cache)
 
 
 def default_workers() -> int:
@@ -476,21 +481,23 @@ class GraphSampler:
                     if added:
                         session.update(_session_known, added)
                         known_sent.update(added)
+                    candidates = []
                     for res in session.map(_session_attempt, [(it, i) for i in indices]):
                         st.attempts += 1
                         st.outcomes[res.outcome] += 1
-                        if res.outcome in ("invalid", "final-check"):
+                        if res.outcome == "invalid":
                             why = rejection_reason(res.detail)
-                            why = why if res.outcome == "invalid" else f"final-check {why}"
                             st.reasons[why] = st.reasons.get(why, 0) + 1
-                        if res.shape is None or emitted >= n:
+                        if res.shape is None:
                             continue
                         shape = res.shape.prepare(self.protos, self.quantum)
-                        if not dedupe.add(shape.types, shape.edges, shape.geo):
-                            continue
+                        if dedupe.is_new(shape.types, shape.edges, shape.geo):
+                            candidates.append((res, shape))
+                        else:
+                            dedupe.note_duplicate(shape.geo)
+                    for shape in self._keep(session, candidates, dedupe, st, n - emitted):
                         self.counter += 1
                         shape.key = f"variant_{self.counter:05d}"
-                        shape.operation["attempt"] = [it, res.index]
                         pool.append(shape)
                         self.by_key[shape.key] = shape
                         new_this.append(len(pool) - 1)
@@ -522,6 +529,31 @@ class GraphSampler:
                 self.stopped = "exhausted"
         finally:
             session.close()
+
+    def _keep(self, session, candidates: list, dedupe: Deduper, st: "IterationStats", wanted: int) -> Iterator["Shape"]:
+        """The candidates of a batch (valid, new at the time of the test) that are kept, in
+        attempt order: each passes the final check (run through the session, so in the
+        workers) and is still new once the earlier ones are kept. Checks are made for as many
+        as are still wanted at a time, so a run that reaches -n checks few extra."""
+        queue = list(candidates)
+        while queue and wanted > 0:
+            head, queue = queue[:wanted], queue[wanted:]
+            if self.options.final_check:
+                verdicts = list(session.map(_session_final_check, [_strip(sh) for _, sh in head]))
+            else:
+                verdicts = [""] * len(head)
+            for (res, shape), problem in zip(head, verdicts):
+                if problem:  # `grammarkit validate` would reject the file: never kept
+                    st.outcomes["valid"] -= 1
+                    st.outcomes["final-check"] += 1
+                    why = f"final-check {rejection_reason(problem)}"
+                    st.reasons[why] = st.reasons.get(why, 0) + 1
+                    continue
+                if not dedupe.add(shape.types, shape.edges, shape.geo):
+                    continue
+                shape.operation["attempt"] = [shape.iteration, res.index]
+                wanted -= 1
+                yield shape
 
     def growth_table(self) -> list[dict]:
         rows = [{"iteration": 0, "shapes": len(self.examples), "new": len(self.examples)}]
