@@ -25,12 +25,13 @@ from grammarkit.tiling import histogram_key
 MODES = ("histogram", "isomorphism")
 
 
-def source_geometry(meshes, transforms, types, quantum: float) -> tuple[np.ndarray, np.ndarray]:
+def source_geometry(meshes, transforms, types, quantum: float) -> tuple[np.ndarray, np.ndarray, list]:
     """Per source part: the id of its geometry class (equal ids: the same mesh in its own frame,
     rounded to `quantum`, and the same type) and the pose (4x4) that places that frame in the
-    world; a part whose transform is not rigid is a class of its own, placed by the identity."""
+    world; a part whose transform is not rigid is a class of its own, placed by the identity.
+    Third: per class, its vertices in its frame (for `Orientations`)."""
     classes: dict[bytes, int] = {}
-    ids, poses = [], []
+    ids, poses, local_of = [], [], []
     for mesh, T, t in zip(meshes, transforms, types):
         T = np.asarray(T, dtype=np.float64)
         R = T[:3, :3]
@@ -38,26 +39,58 @@ def source_geometry(meshes, transforms, types, quantum: float) -> tuple[np.ndarr
         if T.shape == (4, 4) and np.allclose(R @ R.T, np.eye(3), atol=1e-9) and np.linalg.det(R) > 0:
             local, pose = (V - T[:3, 3]) @ R, T
         else:
-            local, pose = None, np.eye(4)
+            local, pose = V, np.eye(4)
         key = (str(t).encode() + b"\0" + np.round(local / quantum).astype(np.int64).tobytes()
-               + np.asarray(mesh.faces, dtype=np.int64).tobytes()) if local is not None \
+               + np.asarray(mesh.faces, dtype=np.int64).tobytes()) if pose is T \
             else b"own:" + str(len(ids)).encode()
-        ids.append(classes.setdefault(key, len(classes)))
+        if key not in classes:
+            classes[key] = len(classes)
+            local_of.append(local)
+        ids.append(classes[key])
         poses.append(pose)
-    return np.array(ids, dtype=np.int64), np.array(poses, dtype=np.float64).reshape(-1, 4, 4)
+    return np.array(ids, dtype=np.int64), np.array(poses, dtype=np.float64).reshape(-1, 4, 4), local_of
 
 
-def geometric_key(geo: np.ndarray, poses: np.ndarray, quantum: float) -> bytes:
+class Orientations:
+    """Per (geometry class, rotation): a 64-bit hash of the set of the part's vertices about
+    its centre, rounded to `quantum`. A part turned by one of its own symmetries (an octagonal
+    tower by 45 degrees, a wall by 180) has the same vertex set, so the same hash: geometric
+    keys see through part symmetries. A hash, not a counter: equal in every worker process."""
+
+    def __init__(self, local_vertices: list, quantum: float):
+        local = [np.asarray(v, dtype=np.float64).reshape(-1, 3) for v in local_vertices]
+        self.means = np.array([v.mean(axis=0) if len(v) else np.zeros(3) for v in local]).reshape(-1, 3)
+        self.local = [v - m for v, m in zip(local, self.means)]
+        self.quantum = float(quantum)
+        self._memo: dict = {}
+
+    def __call__(self, geo: np.ndarray, rotations: np.ndarray) -> np.ndarray:
+        out = np.empty(len(geo), dtype=np.int64)
+        for k, (g, R) in enumerate(zip(geo.tolist(), rotations)):
+            key = (g, np.round(R, 9).tobytes())
+            h = self._memo.get(key)
+            if h is None:
+                rows = np.round(self.local[g] @ R.T / self.quantum).astype(np.int64)
+                rows = rows[np.lexsort(rows.T[::-1])]
+                h = int.from_bytes(hashlib.blake2b(rows.tobytes(), digest_size=8).digest(), "little", signed=True)
+                if len(self._memo) < 100_000:
+                    self._memo[key] = h
+            out[k] = h
+        return out
+
+
+def geometric_key(geo: np.ndarray, poses: np.ndarray, quantum: float, orient: Orientations) -> bytes:
     """A 16-byte key of a shape whose parts are geometry classes `geo` (n,) at world `poses`
-    (n, 4, 4): rows (class, rotation to 1e-6, translation to `quantum`, after moving the
-    lowest translation to the origin), sorted. Equal keys: the same parts at the same places
-    up to a translation of the whole (so the same shape graph, up to the order of the nodes).
-    Float noise can only split one geometry into two keys (a duplicate then goes on to the
-    graph test), never join two."""
-    t = poses[:, :3, 3]
-    t = t - t.min(axis=0)
-    rows = np.concatenate([geo[:, None].astype(np.float64), np.round(poses[:, :3, :3].reshape(-1, 9) * 1e6),
-                           np.round(t / quantum)], axis=1).astype(np.int64)
+    (n, 4, 4): rows (class, vertex set about the part's centre (`Orientations`), centre to
+    `quantum` after moving the lowest centre to the origin), sorted. Equal keys: the same
+    parts at the same places up to a translation of the whole (so the same shape graph, up to
+    the order of the nodes). Float noise can only split one geometry into two keys (a
+    duplicate then goes on to the graph test), never join two."""
+    R = poses[:, :3, :3]
+    centre = np.einsum("nij,nj->ni", R, orient.means[geo]) + poses[:, :3, 3]
+    centre = centre - centre.min(axis=0)
+    rows = np.concatenate([geo[:, None], orient(geo, R)[:, None],
+                           np.round(centre / quantum).astype(np.int64)], axis=1)
     rows = rows[np.lexsort(rows.T[::-1])]
     return hashlib.blake2b(rows.tobytes(), digest_size=16).digest()
 

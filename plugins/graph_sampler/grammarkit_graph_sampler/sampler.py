@@ -31,7 +31,7 @@ from typing import Any, Callable, Iterator, Sequence
 import numpy as np
 
 from . import geometry
-from .dedupe import Deduper, geometric_key, source_geometry
+from .dedupe import Deduper, Orientations, geometric_key, source_geometry
 from .options import SamplerOptions
 from grammarkit.tiling import (
     adjacency_from_edges, cut_layers, distance_matrix, histogram_key, induced_edges, kept_region,
@@ -81,9 +81,9 @@ class Shape:
     def __len__(self) -> int:
         return len(self.protos)
 
-    def prepare(self, protos: Sequence[Proto], quantum: float | None = None) -> "Shape":
-        """Fill the derived arrays; with `quantum` (the geometric key's translation step) also
-        the geometric key, when not known yet."""
+    def prepare(self, protos: Sequence[Proto], orient: Orientations | None = None) -> "Shape":
+        """Fill the derived arrays; with `orient` (dedupe.Orientations) also the geometric key,
+        when not known yet."""
         self.types = tuple(protos[p].type for p in self.protos)
         if not self.ids:
             counts: dict[str, int] = {}
@@ -106,8 +106,8 @@ class Shape:
         self.poses = np.einsum("nij,njk->nik", self.transforms,
                                np.array([protos[p].pose if protos[p].pose is not None else np.eye(4)
                                          for p in self.protos]).reshape(-1, 4, 4))
-        if self.geo is None and quantum is not None:
-            self.geo = geometric_key(self.geo_ids, self.poses, quantum)
+        if self.geo is None and orient is not None:
+            self.geo = geometric_key(self.geo_ids, self.poses, orient.quantum, orient)
         return self
 
     def histogram(self) -> dict[str, int]:
@@ -139,9 +139,17 @@ class _Context:
     bounds_cache: dict = field(default_factory=dict)
     part_cache: geometry.PartCache = field(default_factory=geometry.PartCache)
 
+    geo_vertices: list = field(default_factory=list)  # per geometry class (dedupe.source_geometry)
+
     @property
     def quantum(self) -> float:
         return self.contact_tolerance / 10.0
+
+    @property
+    def orient(self) -> Orientations:
+        if "_orient" not in self.__dict__:
+            self.__dict__["_orient"] = Orientations(self.geo_vertices, self.quantum)
+        return self.__dict__["_orient"]
 
     def bounds(self, shape_index: int) -> tuple[np.ndarray, np.ndarray]:
         b = self.bounds_cache.get(shape_index)
@@ -239,7 +247,7 @@ def run_attempt(ctx: _Context, iteration: int, index: int, known: frozenset) -> 
     if opt.dedupe == "isomorphism" and opt.geometric_keys:
         geo = geometric_key(np.concatenate([recip.geo_ids[kept], donor.geo_ids[inserted]]),
                             np.concatenate([recip.poses[kept], np.einsum("ij,njk->nik", matrix, donor.poses[inserted])]),
-                            ctx.quantum)
+                            ctx.quantum, ctx.orient)
         if geo in known:
             # the same parts at the same places as a shape seen before (most often the recipient:
             # a piece replaced by a congruent one): the merge would drop it as a duplicate
@@ -303,15 +311,15 @@ def _strip(shape: "Shape") -> "Shape":
                  shape.parents, shape.operation, shape.ids, geo=shape.geo)
 
 
-def _session_init(protos, options, seed, rules, tolerance, max_parts) -> _Context:
-    ctx = _Context(protos, [], [], options, seed, rules, tolerance, max_parts)
+def _session_init(protos, options, seed, rules, tolerance, max_parts, geo_vertices=()) -> _Context:
+    ctx = _Context(protos, [], [], options, seed, rules, tolerance, max_parts, geo_vertices=list(geo_vertices))
     ctx.known = set()  # type: ignore[attr-defined]
     return ctx
 
 
 def _session_pool(ctx: _Context, added: list, fresh: list) -> None:
     """The pool as of the start of an iteration (attempts see no later shapes)."""
-    ctx.pool.extend(sh if sh.adj is not None else sh.prepare(ctx.protos, ctx.quantum) for sh in added)
+    ctx.pool.extend(sh if sh.adj is not None else sh.prepare(ctx.protos, ctx.orient) for sh in added)
     ctx.fresh = list(fresh)
 
 
@@ -415,11 +423,13 @@ class GraphSampler:
                           ids=tuple(ids))
             self.examples.append(shape)
         # geometry classes of the source parts (the geometric keys of dedupe.py)
-        geo, poses = source_geometry([p.mesh for p in self.protos], [p.transform for p in self.protos],
-                                     [p.type for p in self.protos], self.quantum)
+        geo, poses, local = source_geometry([p.mesh for p in self.protos], [p.transform for p in self.protos],
+                                            [p.type for p in self.protos], self.quantum)
         for proto, g, pose in zip(self.protos, geo.tolist(), poses):
             proto.geo, proto.pose = g, pose
-        self.examples = [sh.prepare(self.protos, self.quantum) for sh in self.examples]
+        self.geo_vertices = local  # per geometry class: its vertices in its own frame
+        self.orient = Orientations(local, self.quantum)
+        self.examples = [sh.prepare(self.protos, self.orient) for sh in self.examples]
         largest = max(len(s) for s in self.examples)
         self.max_parts = self.options.max_parts or 4 * largest
         self.stats: list[IterationStats] = []
@@ -455,7 +465,7 @@ class GraphSampler:
         if n == 0 or iterations == 0:
             return
         session = self.executor.session(_session_init, self.protos, opt, self.seed, self.rules,
-                                        self.contact_tolerance, self.max_parts)
+                                        self.contact_tolerance, self.max_parts, self.geo_vertices)
         sent = 0  # pool shapes the session already has
         known_sent: set = set()
         try:
@@ -490,7 +500,7 @@ class GraphSampler:
                             st.reasons[why] = st.reasons.get(why, 0) + 1
                         if res.shape is None:
                             continue
-                        shape = res.shape.prepare(self.protos, self.quantum)
+                        shape = res.shape.prepare(self.protos, self.orient)
                         if dedupe.is_new(shape.types, shape.edges, shape.geo):
                             candidates.append((res, shape))
                         else:
