@@ -214,22 +214,27 @@ def candidate_pairs_bruteforce(geom: PartGeometry, tolerance: float) -> np.ndarr
 
 
 def contacts(assembly: Assembly | Sequence[Part], tolerance: float | None = None, *,
-             geom: PartGeometry | None = None, pairs: np.ndarray | None = None) -> list[Contact]:
-    """All touching part pairs, sorted by (a, b)."""
+             geom: PartGeometry | None = None, pairs: np.ndarray | None = None,
+             poses: "PoseKeys | None" = None, measured: dict | None = None) -> list[Contact]:
+    """All touching part pairs, sorted by (a, b). `poses`/`measured`: see `contact_arrays`."""
     parts = assembly.parts if isinstance(assembly, Assembly) else list(assembly)
     geom = geom or prepare(parts)
     if tolerance is None:
         tolerance = default_tolerance(geom)
-    a, b, gap, depth = contact_arrays(parts, tolerance, geom=geom, pairs=pairs)
+    a, b, gap, depth = contact_arrays(parts, tolerance, geom=geom, pairs=pairs, poses=poses,
+                                      measured=measured)
     return [Contact(x, y, g, None if d < 0 else d, "touch" if d < 0 or d <= tolerance else "overlap")
             for x, y, g, d in zip(a.tolist(), b.tolist(), gap.tolist(), depth.tolist())]
 
 
 def contact_arrays(parts: Sequence[Part], tolerance: float, *, geom: PartGeometry,
-                   pairs: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+                   pairs: np.ndarray | None = None, poses: "PoseKeys | None" = None,
+                   measured: dict | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """`contacts` as arrays sorted by (a, b): a, b (int), gap, depth (box pairs: how far the
     boxes interpenetrate; -1 for other pairs). No object per contact: 150,000 contacts of a
-    100k-part model cost a few numpy operations."""
+    100k-part model cost a few numpy operations. `poses` (default: from the meshes) keys the
+    congruent pairs; `measured` (pose key -> gap, at this tolerance) keeps their gaps across
+    calls (incremental.PartCache)."""
     if pairs is None:
         pairs = candidate_pairs(geom, tolerance)
     empty = (np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64), np.zeros(0), np.zeros(0))
@@ -246,8 +251,9 @@ def contact_arrays(parts: Sequence[Part], tolerance: float, *, geom: PartGeometr
     keep = both_boxy & (box_dist <= tolerance)
     gaps = np.where(both_boxy, box_dist, np.inf)
     depth = np.where(both_boxy, depth, -1.0)
-    poses = PoseKeys(parts, tolerance)
-    measured: dict = {}  # rigid copies in the same relative pose have the same gap: measure once
+    poses = poses if poses is not None else PoseKeys(parts, tolerance)
+    # rigid copies in the same relative pose have the same gap: measure once
+    measured = {} if measured is None else measured
     for k in np.flatnonzero(~both_boxy).tolist():
         a, b = int(i[k]), int(j[k])
         key = poses.pair(a, b)
@@ -275,6 +281,15 @@ class PoseKeys:
         self.parts = parts
         self.q = max(float(tolerance) / 10.0, 1e-12)
         self._geo: dict[int, tuple | None] = {}
+
+    @classmethod
+    def of_placements(cls, keys: Sequence[tuple], tolerance: float) -> "PoseKeys":
+        """Keys for parts known as (source, rigid placement bytes) (`incremental.part_key`):
+        a part's geometry is its source's, so no mesh is hashed."""
+        out = cls((), tolerance)
+        for i, (source, matrix) in enumerate(keys):
+            out._geo[i] = (("source", source), 0, 0, np.frombuffer(matrix, dtype=np.float64).reshape(4, 4))
+        return out
 
     def part(self, i: int) -> tuple | None:
         if i not in self._geo:

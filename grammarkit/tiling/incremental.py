@@ -27,7 +27,7 @@ import numpy as np
 import trimesh
 
 from .assembly import Assembly, Part
-from .contacts import PartGeometry, contacts, prepare
+from .contacts import PartGeometry, PoseKeys, contacts, prepare
 
 __all__ = [
     "ForbiddenContact", "PartCache", "bounds_of", "contacts_involving", "full_check", "graph_of",
@@ -63,14 +63,45 @@ class PartCache:
     every call. Values are those `prepare` and the lazy solid builder give for that mesh alone
     (per-part results do not depend on the other parts), so contacts are unchanged. Bounded:
     cleared when it would hold more than `limit` parts.
+
+    With `part_key` keys, what depends on two parts' relative placement only is also kept by
+    that placement (`PoseMemo`): the surface gap of a pair (`gaps`), the support verdict of a
+    contact (`support`, which also depends on how the first part stands relative to up) and
+    each source part's Kalojanov frame (`frames`: a rigid move moves the frame with it). So a
+    pair of sources docked the same way in another variant, at another place, is not measured
+    again.
     """
 
-    def __init__(self, limit: int = 4000):
+    def __init__(self, limit: int = 4000, memo_limit: int = 200_000):
         self.limit = limit
         self.rows: dict = {}  # key -> (lo, hi, centroid, boxy)
         self.solids: dict = {}  # key -> manifold3d.Manifold or None (not a closed manifold)
-        self.frames: dict = {}  # key -> the part's Kalojanov frame (4x4, world)
-        self.support: dict = {}  # (key, key) -> support verdict of a contact (support.py)
+        self.frames = FrameMemo()  # key -> the part's Kalojanov frame (4x4, world)
+        self.memo_limit = memo_limit
+        self._gaps: dict[float, dict] = {}  # tolerance -> relative pose -> surface gap
+        self._support: PoseMemo | None = None  # support verdicts by relative pose
+
+    @property
+    def support(self) -> "PoseMemo":
+        """Support verdicts by relative pose (support.carry_directions' `cache`). A verdict does
+        not depend on the contact tolerance (support.py), so one memo serves every tolerance;
+        its rounding step is set by the first `support_for` call (default: 1e-6 x 10)."""
+        if self._support is None:
+            self._support = PoseMemo(1e-5, with_up=True)
+        if len(self._support) > self.memo_limit:
+            self._support.clear()
+        return self._support
+
+    def support_for(self, tolerance: float) -> "PoseMemo":
+        if self._support is None:
+            self._support = PoseMemo(tolerance, with_up=True)
+        return self.support
+
+    def gaps_for(self, tolerance: float) -> dict:
+        memo = self._gaps.get(float(tolerance))
+        if memo is None or len(memo) > self.memo_limit:
+            memo = self._gaps[float(tolerance)] = {}
+        return memo
 
     def geometry(self, parts: Sequence[Part], keys: Sequence) -> PartGeometry:
         """A PartGeometry of `parts` (keys[k] identifies parts[k]), with known solids seeded."""
@@ -79,8 +110,6 @@ class PartCache:
             if len(self.rows) + len(missing) > self.limit:
                 self.rows.clear()
                 self.solids.clear()
-                self.frames.clear()
-                self.support.clear()
                 missing = [k for k, key in enumerate(keys) if key not in self.rows]
             g = prepare([parts[k] for k in missing])
             for j, k in enumerate(missing):
@@ -97,8 +126,80 @@ class PartCache:
             self.solids.setdefault(keys[k], solid)
 
 
+def _placement(key: tuple) -> tuple[int, np.ndarray]:
+    """(source, 4x4 placement) of a `part_key`."""
+    return key[0], np.frombuffer(key[1], dtype=np.float64).reshape(4, 4)
+
+
+class PoseMemo:
+    """A dict-like memo over pairs of `part_key`s that keys by the pair's *relative* placement:
+    (source a, source b, b's pose in a's frame), plus a's rotation with `with_up` (for verdicts
+    that depend on gravity). Rotations are rounded to 1e-6, translations to a tenth of the
+    tolerance (as `contacts.PoseKeys`): congruent pairs share one entry."""
+
+    def __init__(self, tolerance: float, *, with_up: bool = False):
+        self.q = max(float(tolerance) / 10.0, 1e-12)
+        self.with_up = with_up
+        self._data: dict = {}
+
+    def canonical(self, pair: tuple) -> tuple:
+        (sa, Ma), (sb, Mb) = _placement(pair[0]), _placement(pair[1])
+        Ra = Ma[:3, :3]
+        rel_R = Ra.T @ Mb[:3, :3]  # placements are rigid: inv(Ma) = [Ra^T, -Ra^T t]
+        rel_t = Ra.T @ (Mb[:3, 3] - Ma[:3, 3])
+        key = (sa, sb, (np.round(rel_R, 6) + 0.0).tobytes(), np.round(rel_t / self.q).astype(np.int64).tobytes())
+        if self.with_up:
+            key += ((np.round(Ra, 6) + 0.0).tobytes(),)
+        return key
+
+    def __contains__(self, pair: tuple) -> bool:
+        return self.canonical(pair) in self._data
+
+    def __getitem__(self, pair: tuple):  # noqa: ANN204
+        return self._data[self.canonical(pair)]
+
+    def __setitem__(self, pair: tuple, value) -> None:  # noqa: ANN001
+        self._data[self.canonical(pair)] = value
+
+    def __len__(self) -> int:
+        return len(self._data)
+
+    def clear(self) -> None:
+        self._data.clear()
+
+
+class FrameMemo:
+    """Kalojanov frames of placed parts by `part_key`, kept per source part: the frame of a
+    rigidly moved mesh is the moved frame (`frames.local_frames` is equivariant: it picks
+    vertices by distances), so one frame per source serves every placement of it."""
+
+    def __init__(self) -> None:
+        self._base: dict[int, np.ndarray] = {}  # source -> frame of the unmoved source mesh
+
+    def get(self, key, default=None):  # noqa: ANN001, ANN201
+        base = self._base.get(key[0]) if isinstance(key, tuple) else None
+        if base is None:
+            return default
+        return _placement(key)[1] @ base
+
+    def __setitem__(self, key, frame: np.ndarray) -> None:  # noqa: ANN001
+        source, M = _placement(key)
+        if source not in self._base:
+            R, t = M[:3, :3], M[:3, 3]
+            inv = np.eye(4)
+            inv[:3, :3], inv[:3, 3] = R.T, -R.T @ t
+            self._base[source] = inv @ frame
+
+    def __len__(self) -> int:
+        return len(self._base)
+
+    def clear(self) -> None:
+        self._base.clear()
+
+
 def part_key(source: int, matrix: np.ndarray) -> tuple:
-    """A `PartCache` key: a source part index and its exact placement matrix."""
+    """A `PartCache` key: a source part index and its exact placement matrix (rigid: a rotation
+    and a translation applied to the source part's mesh)."""
     return (int(source), np.ascontiguousarray(matrix, dtype=np.float64).tobytes())
 
 
@@ -146,7 +247,9 @@ def contacts_involving(meshes: Sequence[trimesh.Trimesh], types: Sequence[str], 
         if cache is not None and keys is not None:
             sub_keys = [keys[int(x)] for x in subset]
             geom = cache.geometry(parts, sub_keys)
-            found = contacts(parts, tolerance, geom=geom, pairs=lp)
+            found = contacts(parts, tolerance, geom=geom, pairs=lp,
+                             poses=PoseKeys.of_placements(sub_keys, tolerance),
+                             measured=cache.gaps_for(tolerance))
             cache.harvest(geom, sub_keys)
         else:
             found = contacts(parts, tolerance, pairs=lp)
@@ -190,7 +293,7 @@ def edit_violations(rule_set, types: Sequence[str], edges, meshes, centroids, to
                     new: Iterable[int], lo: np.ndarray | None = None,
                     hi: np.ndarray | None = None, max_violations: int = 1, *,
                     keys: Sequence | None = None, cache: PartCache | None = None,
-                    registries: Any = None) -> list[str]:
+                    registries: Any = None, sites_of: Iterable[int] | None = None) -> list[str]:
     """Rules an edited shape breaks, by `grammarkit.tiling.validate`'s checks on its graph `edges`.
 
     With `new` (the edited nodes), the checks that depend on one part or one contact only run
@@ -199,13 +302,15 @@ def edit_violations(rule_set, types: Sequence[str], edges, meshes, centroids, to
     other contacts are unchanged). Type pairs, neighbourhoods, required sites and global
     constraints (support, counts, paths, ...) are checked on the whole graph. With `keys` (a
     `part_key` per mesh) and `cache`, part frames and support verdicts of parts that recur are
-    reused. `registries` gives the global constraints (default: as `validate`). Returns the
-    problems as text (empty: valid)."""
+    reused. `registries` gives the global constraints (default: as `validate`). `sites_of`:
+    the parts whose required sites can have changed (default: all; an edit changes those of
+    the edited parts and of the kept parts that lost a neighbour). Returns the problems as
+    text (empty: valid)."""
     from dataclasses import replace
 
     from .validate import (
         _dock_violations, _Full, _Shape, _type_violations, orientation_violations,
-        required_site_violations, validate,
+        required_site_violations, rigid_violations, validate,
     )
 
     parts = _parts(meshes, types, range(len(meshes)))
@@ -233,19 +338,22 @@ def edit_violations(rule_set, types: Sequence[str], edges, meshes, centroids, to
         _type_violations(rule_set, shape, add)
         for v in orientation_violations(rule_set, shape, new_idx):
             add(v)
-        for v in required_site_violations(rule_set, shape):
+        for v in rigid_violations(rule_set, shape, new_idx):
+            add(v)
+        site_idx = None if sites_of is None else np.array(sorted({int(i) for i in sites_of}), dtype=np.int64)
+        for v in required_site_violations(rule_set, shape, idx=site_idx):
             add(v)
         if getattr(rule_set, "constraints", ()):
             extra = {}
             if cache is not None and keys is not None:
-                extra = {"support_cache": cache.support, "keys": list(keys)}
+                extra = {"support_cache": cache.support_for(tolerance), "keys": list(keys)}
             # the global constraints through `validate` (which owns the registries' default),
             # with every other rule switched off: they were checked above (the sites stay, not
             # required: `filled` needs them)
             sites = {t: tuple(replace(x, required=False) for x in sts) for t, sts in rule_set.sites.items()}
             only = replace(rule_set, types=frozenset(), neighbor_multisets={}, neighbor_counts={},
                            pairs=None, sites=sites, configs={}, docks={})
-            report = validate(only, assembly, graph=g, docks=False, orientation=False,
+            report = validate(only, assembly, graph=g, docks=False, orientation=False, rigid=False,
                               max_violations=max_violations, registries=registries,
                               constraint_context=extra)
             for v in report.violations:

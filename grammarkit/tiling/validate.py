@@ -556,12 +556,14 @@ def _dock_violations(rules: Rules, shape: _Shape, edge_idx: np.ndarray, poses: _
 # --------------------------------------------------------------------------------------------
 # required sites
 # --------------------------------------------------------------------------------------------
-def required_site_violations(rules: Rules, shape: _Shape, poses: _Poses | None = None) -> list[Violation]:
-    """Parts with a `required` site (any of its turned and mirrored images) that nothing touches
-    (no contact point within the position tolerance x the smaller part's diagonal)."""
+def required_site_violations(rules: Rules, shape: _Shape, poses: _Poses | None = None,
+                             idx: np.ndarray | None = None) -> list[Violation]:
+    """Parts (of `idx`, default all) with a `required` site (any of its turned and mirrored
+    images) that nothing touches (no contact point within the position tolerance x the smaller
+    part's diagonal)."""
     req = {t: [s.name for s in sts if s.required] for t, sts in rules.sites.items()}
     out: list[Violation] = []
-    for i, t, name, _, _, filled in site_occupancy(rules, shape, req, poses):
+    for i, t, name, _, _, filled in site_occupancy(rules, shape, req, poses, idx):
         if not filled.all():
             empty = int((~filled).sum())
             out.append(Violation("site", f"required site {t}.{name} has nothing docked "
@@ -571,8 +573,9 @@ def required_site_violations(rules: Rules, shape: _Shape, poses: _Poses | None =
     return out
 
 
-def site_occupancy(rules: Rules, shape: _Shape, wanted: dict[str, list[str]], poses: _Poses | None = None):  # noqa: ANN201
-    """For every part of a type in `wanted` (type -> site names) and each of those sites:
+def site_occupancy(rules: Rules, shape: _Shape, wanted: dict[str, list[str]], poses: _Poses | None = None,
+                   idx: np.ndarray | None = None):  # noqa: ANN201
+    """For every part (of `idx`, default all) of a type in `wanted` (type -> site names) and each of those sites:
     (part index, type, site, image positions (k, 3) and facing directions (k, 3) in world
     coordinates, filled mask (k,)): the site's turned and mirrored images, and whether a
     contact point lies within the position tolerance x the smaller part's diagonal of each."""
@@ -580,6 +583,8 @@ def site_occupancy(rules: Rules, shape: _Shape, wanted: dict[str, list[str]], po
     if not wanted:
         return
     members = np.array([i for i, t in enumerate(shape.types) if t in wanted], dtype=np.int64)
+    if idx is not None:
+        members = np.intersect1d(members, np.asarray(idx, dtype=np.int64))
     if len(members) == 0:
         return
     if poses is None:

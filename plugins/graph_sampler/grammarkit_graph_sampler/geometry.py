@@ -55,6 +55,18 @@ def check_example(rule_set, assembly: Assembly, tolerance: float, grammar=None) 
                               f"graph sampler: {lines}", getattr(grammar, "span", None))
 
 
+def final_problem(rule_set, assembly: Assembly, keys=None, cache: PartCache | None = None) -> str:
+    """What `grammarkit validate` (these rules, its default tolerance) rejects in the variant
+    first, or "" when it accepts it. `keys` (a `part_key` per part) and `cache`: support
+    verdicts of contacts congruent to ones judged before are reused (a pure function of the
+    two parts' relative placement and of up)."""
+    from grammarkit.tiling import validate
+
+    context = {"support_cache": cache.support, "keys": list(keys)} if cache is not None and keys else None
+    report = validate(rule_set, assembly, max_violations=1, constraint_context=context)
+    return "" if report.ok else report.violations[0].format()
+
+
 def load_examples(grammar) -> list[Assembly]:
     from grammarkit.tiling import load_examples as loader
 
@@ -99,7 +111,8 @@ def shape_to_assembly(shape, protos, name: str | None = None) -> Assembly:
     parts = []
     for node, (p, matrix) in enumerate(zip(shape.protos, shape.transforms)):
         proto = protos[p]
-        parts.append(Part(shape.ids[node], proto.type, moved_mesh(proto.mesh, matrix).copy(),
+        mesh = moved_mesh(proto.mesh, matrix)  # a new mesh, except for the identity
+        parts.append(Part(shape.ids[node], proto.type, mesh.copy() if mesh is proto.mesh else mesh,
                           np.asarray(matrix) @ proto.transform, {"source": proto.source, "node": node}))
     meta = {"graph_sampler": {"key": shape.key, "iteration": shape.iteration,
                               "parents": list(shape.parents), "operation": shape.operation}}

@@ -43,7 +43,10 @@ class SamplerOptions(BaseModel):
                                 "variants, this many iterations (or --iterations, if larger), an "
                                 "iteration that finds nothing new, or --time-limit")
     final_check: bool = Field(True, description="validate every variant with `grammarkit validate`'s "
-                              "rules and defaults before it is written (a variant it rejects is dropped "
-                              "and counted)")
+                              "rules and defaults before it is kept (a variant it rejects is dropped "
+                              "and counted as `final-check`)")
+    geometric_keys: bool = Field(True, description="isomorphism dedupe: drop an attempt whose "
+                                 "parts sit where a known shape's do before any contact is measured "
+                                 "(False: the graph test after validation only; a benchmark baseline)")
     incremental: bool = Field(True, description="recompute only contacts involving inserted parts "
                               "(False: the whole graph; a benchmark baseline)")

@@ -31,14 +31,14 @@ from typing import Any, Callable, Iterator, Sequence
 import numpy as np
 
 from . import geometry
-from .dedupe import Deduper
+from .dedupe import Deduper, Orientations, geometric_key, source_geometry
 from .options import SamplerOptions
 from grammarkit.tiling import (
     adjacency_from_edges, cut_layers, distance_matrix, histogram_key, induced_edges, kept_region,
     match_boundary, random_connected_subgraph,
 )
 
-OUTCOMES = ("no-cut", "no-match", "too-large", "known", "docking", "invalid", "valid")
+OUTCOMES = ("no-cut", "no-match", "too-large", "known", "docking", "invalid", "final-check", "valid")
 
 
 @dataclass
@@ -51,6 +51,8 @@ class Proto:
     source: str  # "example/part-id"
     center: np.ndarray  # area-weighted surface centroid of `mesh` (moves rigidly; as shape_graph)
     size: float  # a third of the bounding-box diagonal (the authors' part size)
+    geo: int = -1  # geometry class (dedupe.source_geometry): equal ids, congruent meshes
+    pose: np.ndarray | None = None  # places the class's mesh frame in the world (None: identity)
 
 
 @dataclass
@@ -65,6 +67,7 @@ class Shape:
     parents: tuple[str, ...] = ()
     operation: dict = field(default_factory=dict)
     ids: tuple[str, ...] = ()  # part ids (examples: as read; variants: `Type.k` in node order)
+    geo: bytes | None = None  # dedupe.geometric_key (set by the attempt that made it, or prepare)
     # derived (filled by `prepare`)
     types: tuple[str, ...] = ()
     centroids: np.ndarray | None = None
@@ -72,11 +75,15 @@ class Shape:
     adj: list | None = None
     dist: np.ndarray | None = None
     by_type: dict | None = None
+    poses: np.ndarray | None = None  # (n, 4, 4) world poses of the parts' geometry classes
+    geo_ids: np.ndarray | None = None
 
     def __len__(self) -> int:
         return len(self.protos)
 
-    def prepare(self, protos: Sequence[Proto]) -> "Shape":
+    def prepare(self, protos: Sequence[Proto], orient: Orientations | None = None) -> "Shape":
+        """Fill the derived arrays; with `orient` (dedupe.Orientations) also the geometric key,
+        when not known yet."""
         self.types = tuple(protos[p].type for p in self.protos)
         if not self.ids:
             counts: dict[str, int] = {}
@@ -95,6 +102,12 @@ class Shape:
         for i, t in enumerate(self.types):
             by_type.setdefault(t, []).append(i)
         self.by_type = {t: np.array(v, dtype=np.int64) for t, v in by_type.items()}
+        self.geo_ids = np.array([protos[p].geo for p in self.protos], dtype=np.int64)
+        self.poses = np.einsum("nij,njk->nik", self.transforms,
+                               np.array([protos[p].pose if protos[p].pose is not None else np.eye(4)
+                                         for p in self.protos]).reshape(-1, 4, 4))
+        if self.geo is None and orient is not None:
+            self.geo = geometric_key(self.geo_ids, self.poses, orient.quantum, orient)
         return self
 
     def histogram(self) -> dict[str, int]:
@@ -126,6 +139,18 @@ class _Context:
     bounds_cache: dict = field(default_factory=dict)
     part_cache: geometry.PartCache = field(default_factory=geometry.PartCache)
 
+    geo_vertices: list = field(default_factory=list)  # per geometry class (dedupe.source_geometry)
+
+    @property
+    def quantum(self) -> float:
+        return self.contact_tolerance / 10.0
+
+    @property
+    def orient(self) -> Orientations:
+        if "_orient" not in self.__dict__:
+            self.__dict__["_orient"] = Orientations(self.geo_vertices, self.quantum)
+        return self.__dict__["_orient"]
+
     def bounds(self, shape_index: int) -> tuple[np.ndarray, np.ndarray]:
         b = self.bounds_cache.get(shape_index)
         if b is None:
@@ -152,6 +177,17 @@ def rejection_reason(detail: str) -> str:
     if start >= 0 and end > start:
         return detail[start + 1:end]
     return "pair" if "no dock" in detail else "other"
+
+
+def kept_lost_neighbour(recip: Shape, kept: Sequence[int]) -> list[int]:
+    """New indices (positions in `kept`) of the kept parts that had a neighbour the edit removed."""
+    where = np.full(len(recip), -1, dtype=np.int64)
+    where[np.asarray(kept, dtype=np.int64)] = np.arange(len(kept))
+    if not recip.edges:
+        return []
+    E = np.asarray(recip.edges, dtype=np.int64)
+    a, b = where[E[:, 0]], where[E[:, 1]]
+    return sorted(set(a[(a >= 0) & (b < 0)].tolist()) | set(b[(b >= 0) & (a < 0)].tolist()))
 
 
 def attempt_seed(seed: int, iteration: int, index: int) -> np.random.Generator:
@@ -207,6 +243,15 @@ def run_attempt(ctx: _Context, iteration: int, index: int, known: frozenset) -> 
     protos = tuple([recip.protos[i] for i in kept] + [donor.protos[i] for i in inserted])
     transforms = np.concatenate([recip.transforms[kept],
                                  np.einsum("ij,njk->nik", matrix, donor.transforms[inserted])])
+    geo = None
+    if opt.dedupe == "isomorphism" and opt.geometric_keys:
+        geo = geometric_key(np.concatenate([recip.geo_ids[kept], donor.geo_ids[inserted]]),
+                            np.concatenate([recip.poses[kept], np.einsum("ij,njk->nik", matrix, donor.poses[inserted])]),
+                            ctx.quantum, ctx.orient)
+        if geo in known:
+            # the same parts at the same places as a shape seen before (most often the recipient:
+            # a piece replaced by a congruent one): the merge would drop it as a duplicate
+            return AttemptResult(iteration, index, "known")
     meshes = [ctx.world_mesh(recip_i, i) for i in kept]
     meshes += [geometry.moved_mesh(ctx.protos[p].mesh, t)
                for p, t in zip(protos[len(kept):], transforms[len(kept):])]
@@ -227,8 +272,12 @@ def run_attempt(ctx: _Context, iteration: int, index: int, known: frozenset) -> 
         edges_t = tuple(sorted((min(u, v), max(u, v)) for u, v in edges))
         centroids = np.concatenate([recip.centroids[kept],
                                     donor.centroids[inserted] @ matrix[:3, :3].T + matrix[:3, 3]])
+        # required sites can change on the inserted parts and on kept parts that lost a neighbour
+        lost = {int(x) for x in kept_lost_neighbour(recip, kept)}
         problems = geometry.violations(ctx.rules, types, edges_t, meshes, centroids,
-                                       ctx.contact_tolerance, range(k, n_new), lo, hi)
+                                       ctx.contact_tolerance, range(k, n_new), lo, hi,
+                                       keys=keys, cache=ctx.part_cache,
+                                       sites_of=[*range(k, n_new), *lost])
     else:
         edges, problems = geometry.full_check(ctx.rules, meshes, types, ctx.contact_tolerance)
         edges_t = tuple(sorted(edges))
@@ -246,7 +295,7 @@ def run_attempt(ctx: _Context, iteration: int, index: int, known: frozenset) -> 
         "max_misalignment": worst,
     }
     shape = Shape(key="", protos=protos, transforms=transforms, edges=edges_t, iteration=iteration,
-                  parents=(donor.key, recip.key), operation=op)
+                  parents=(donor.key, recip.key), operation=op, geo=geo)
     return AttemptResult(iteration, index, "valid", shape=shape)
 
 
@@ -259,18 +308,18 @@ def run_attempt(ctx: _Context, iteration: int, index: int, known: frozenset) -> 
 def _strip(shape: "Shape") -> "Shape":
     """A copy without the derived arrays (rebuilt on arrival; keeps pickles small)."""
     return Shape(shape.key, shape.protos, shape.transforms, shape.edges, shape.iteration,
-                 shape.parents, shape.operation, shape.ids)
+                 shape.parents, shape.operation, shape.ids, geo=shape.geo)
 
 
-def _session_init(protos, options, seed, rules, tolerance, max_parts) -> _Context:
-    ctx = _Context(protos, [], [], options, seed, rules, tolerance, max_parts)
+def _session_init(protos, options, seed, rules, tolerance, max_parts, geo_vertices=()) -> _Context:
+    ctx = _Context(protos, [], [], options, seed, rules, tolerance, max_parts, geo_vertices=list(geo_vertices))
     ctx.known = set()  # type: ignore[attr-defined]
     return ctx
 
 
 def _session_pool(ctx: _Context, added: list, fresh: list) -> None:
     """The pool as of the start of an iteration (attempts see no later shapes)."""
-    ctx.pool.extend(sh if sh.adj is not None else sh.prepare(ctx.protos) for sh in added)
+    ctx.pool.extend(sh if sh.adj is not None else sh.prepare(ctx.protos, ctx.orient) for sh in added)
     ctx.fresh = list(fresh)
 
 
@@ -284,6 +333,17 @@ def _session_attempt(ctx: _Context, item: tuple[int, int]) -> "AttemptResult":
     if res.shape is not None:
         res.shape = _strip(res.shape)
     return res
+
+
+def _session_final_check(ctx: _Context, shape: "Shape") -> str:
+    """`grammarkit validate`'s own verdict on a candidate (shape graph from the geometry at the
+    variant's default tolerance, every rule): the first problem, or "" (accepted). Support
+    verdicts of congruent contacts come from the context's memo (they depend on the two
+    parts' relative placement and on up only, not on the tolerance)."""
+    shape.prepare(ctx.protos)
+    keys = [geometry.part_key(p, t) for p, t in zip(shape.protos, shape.transforms)]
+    return geometry.final_problem(ctx.rules, geometry.shape_to_assembly(shape, ctx.protos),
+                                  keys=keys, cache=ctx.part_cache)
 
 
 def default_workers() -> int:
@@ -361,13 +421,26 @@ class GraphSampler:
             shape = Shape(key=f"example:{name}", protos=tuple(range(first, len(self.protos))),
                           transforms=np.repeat(np.eye(4)[None], len(ids), axis=0), edges=edge_t,
                           ids=tuple(ids))
-            self.examples.append(shape.prepare(self.protos))
+            self.examples.append(shape)
+        # geometry classes of the source parts (the geometric keys of dedupe.py)
+        geo, poses, local = source_geometry([p.mesh for p in self.protos], [p.transform for p in self.protos],
+                                            [p.type for p in self.protos], self.quantum)
+        for proto, g, pose in zip(self.protos, geo.tolist(), poses):
+            proto.geo, proto.pose = g, pose
+        self.geo_vertices = local  # per geometry class: its vertices in its own frame
+        self.orient = Orientations(local, self.quantum)
+        self.examples = [sh.prepare(self.protos, self.orient) for sh in self.examples]
         largest = max(len(s) for s in self.examples)
         self.max_parts = self.options.max_parts or 4 * largest
         self.stats: list[IterationStats] = []
         self.counter = 0
         self.stopped = ""  # what ended the last run (see `run`)
         self.by_key: dict[str, Shape] = {s.key: s for s in self.examples}
+
+    @property
+    def quantum(self) -> float:
+        """Translation step of the geometric keys: a tenth of the contact tolerance."""
+        return self.contact_tolerance / 10.0
 
     # The pool grows as variants are kept; examples are never emitted.
     def run(self, n: int, iterations: int, *, progress: Callable | None = None,
@@ -382,7 +455,7 @@ class GraphSampler:
         opt = self.options
         dedupe = Deduper(opt.dedupe)
         for s in self.examples:
-            dedupe.add(s.types, s.edges)
+            dedupe.add(s.types, s.edges, s.geo)
         pool: list[Shape] = list(self.examples)
         self.by_key = {s.key: s for s in self.examples}
         self.counter = 0
@@ -392,7 +465,7 @@ class GraphSampler:
         if n == 0 or iterations == 0:
             return
         session = self.executor.session(_session_init, self.protos, opt, self.seed, self.rules,
-                                        self.contact_tolerance, self.max_parts)
+                                        self.contact_tolerance, self.max_parts, self.geo_vertices)
         sent = 0  # pool shapes the session already has
         known_sent: set = set()
         try:
@@ -414,24 +487,27 @@ class GraphSampler:
                 new_this: list[int] = []
                 for start in range(0, budget, opt.batch_size):
                     indices = list(range(start, min(budget, start + opt.batch_size)))
-                    added = sorted(dedupe.histograms - known_sent)
+                    added = sorted(dedupe.known() - known_sent, key=repr)
                     if added:
                         session.update(_session_known, added)
                         known_sent.update(added)
+                    candidates = []
                     for res in session.map(_session_attempt, [(it, i) for i in indices]):
                         st.attempts += 1
                         st.outcomes[res.outcome] += 1
                         if res.outcome == "invalid":
                             why = rejection_reason(res.detail)
                             st.reasons[why] = st.reasons.get(why, 0) + 1
-                        if res.shape is None or emitted >= n:
+                        if res.shape is None:
                             continue
-                        shape = res.shape.prepare(self.protos)
-                        if not dedupe.add(shape.types, shape.edges):
-                            continue
+                        shape = res.shape.prepare(self.protos, self.orient)
+                        if dedupe.is_new(shape.types, shape.edges, shape.geo):
+                            candidates.append((res, shape))
+                        else:
+                            dedupe.note_duplicate(shape.geo)
+                    for shape in self._keep(session, candidates, dedupe, st, n - emitted):
                         self.counter += 1
                         shape.key = f"variant_{self.counter:05d}"
-                        shape.operation["attempt"] = [it, res.index]
                         pool.append(shape)
                         self.by_key[shape.key] = shape
                         new_this.append(len(pool) - 1)
@@ -463,6 +539,31 @@ class GraphSampler:
                 self.stopped = "exhausted"
         finally:
             session.close()
+
+    def _keep(self, session, candidates: list, dedupe: Deduper, st: "IterationStats", wanted: int) -> Iterator["Shape"]:
+        """The candidates of a batch (valid, new at the time of the test) that are kept, in
+        attempt order: each passes the final check (run through the session, so in the
+        workers) and is still new once the earlier ones are kept. Checks are made for as many
+        as are still wanted at a time, so a run that reaches -n checks few extra."""
+        queue = list(candidates)
+        while queue and wanted > 0:
+            head, queue = queue[:wanted], queue[wanted:]
+            if self.options.final_check:
+                verdicts = list(session.map(_session_final_check, [_strip(sh) for _, sh in head]))
+            else:
+                verdicts = [""] * len(head)
+            for (res, shape), problem in zip(head, verdicts):
+                if problem:  # `grammarkit validate` would reject the file: never kept
+                    st.outcomes["valid"] -= 1
+                    st.outcomes["final-check"] += 1
+                    why = f"final-check {rejection_reason(problem)}"
+                    st.reasons[why] = st.reasons.get(why, 0) + 1
+                    continue
+                if not dedupe.add(shape.types, shape.edges, shape.geo):
+                    continue
+                shape.operation["attempt"] = [shape.iteration, res.index]
+                wanted -= 1
+                yield shape
 
     def growth_table(self) -> list[dict]:
         rows = [{"iteration": 0, "shapes": len(self.examples), "new": len(self.examples)}]
