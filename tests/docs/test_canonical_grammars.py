@@ -12,7 +12,7 @@ from click.testing import CliRunner
 from grammarkit.cli import main
 
 ROOT = Path(__file__).resolve().parents[2]
-README_GRAMMARS = re.findall(r"```\n(grammar .*?)```", (ROOT / "README.md").read_text(), re.S)
+README_GRAMMARS = re.findall(r"```\n(grammar .*?)```", (ROOT / "README.md").read_text(), re.DOTALL)
 
 
 @pytest.mark.parametrize("path", sorted((ROOT / "grammars").glob("*.grammar")), ids=lambda p: p.name)

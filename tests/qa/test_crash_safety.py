@@ -4,7 +4,6 @@ the run with the same files as an uninterrupted run."""
 from __future__ import annotations
 
 import json
-import os
 import signal
 import subprocess
 import sys
@@ -82,7 +81,7 @@ def test_killed_run_is_consistent_and_resumes_to_the_same_files(uninterrupted, t
     assert again.wait(timeout=600) == 0, again.stderr.read()
     assert not (out / ".pending.json").exists()
     assert not [q for q in out.iterdir() if q.name.endswith(".tmp")]
-    strip = lambda es: [{k: v for k, v in e.items() if k != "metrics"} for e in es]  # noqa: E731
+    strip = lambda es: [{k: v for k, v in e.items() if k != "metrics"} for e in es]
     assert strip(listed(out)) == strip(listed(uninterrupted))
     assert models_on_disk(out) == models_on_disk(uninterrupted)
     for name in models_on_disk(uninterrupted):
@@ -120,8 +119,8 @@ def test_killed_sampler_run_resumes_cleanly(tmp_path):
     assert len(listed(whole)) == 6
     out = tmp_path / "out"
     killed = subprocess.run([sys.executable, "-c", KILL_AT_ITEM, "3", "derive", str(CASTLE),
-                             *SAMPLER_ARGS, "-o", str(out)], capture_output=True, text=True,
-                            timeout=600)
+                             *SAMPLER_ARGS, "-o", str(out)], check=False, capture_output=True,
+                            text=True, timeout=600)
     assert killed.returncode == -signal.SIGKILL, killed.stderr
     assert len(listed(out)) == 2 and len(models_on_disk(out)) == 3  # the third is unlisted
     assert (out / ".pending.json").exists()
