@@ -4,7 +4,6 @@ the run with the same files as an uninterrupted run."""
 from __future__ import annotations
 
 import json
-import os
 import signal
 import subprocess
 import sys
@@ -82,30 +81,57 @@ def test_killed_run_is_consistent_and_resumes_to_the_same_files(uninterrupted, t
     assert again.wait(timeout=600) == 0, again.stderr.read()
     assert not (out / ".pending.json").exists()
     assert not [q for q in out.iterdir() if q.name.endswith(".tmp")]
-    strip = lambda es: [{k: v for k, v in e.items() if k != "metrics"} for e in es]  # noqa: E731
+    strip = lambda es: [{k: v for k, v in e.items() if k != "metrics"} for e in es]
     assert strip(listed(out)) == strip(listed(uninterrupted))
     assert models_on_disk(out) == models_on_disk(uninterrupted)
     for name in models_on_disk(uninterrupted):
         assert (out / name).read_bytes() == (uninterrupted / name).read_bytes()
 
 
+# The child runs the real CLI with one change: it kills itself (SIGKILL, nothing unwinds) at a
+# known item, right after that result's files are renamed into place and before its manifest
+# line: the worst moment a kill can land, reached without timing (a loaded machine cannot move
+# it, and a small run suffices).
+KILL_AT_ITEM = """
+import os, signal, sys
+import grammarkit.run.writer as writer
+real, calls, at = writer.write_files, [0], int(sys.argv.pop(1))
+def write_files(files):
+    real(files)
+    calls[0] += any(str(path).endswith(".glb") for path in files)  # results, not run.json
+    if calls[0] == at:
+        os.kill(os.getpid(), signal.SIGKILL)
+writer.write_files = write_files
+from grammarkit.cli import main
+sys.argv[0] = "grammarkit"
+main()
+"""
+# small on purpose (issue 32: this test took 89 s quiet, 418 s loaded): a few results of one
+# iteration with few attempts still go through every step of a folder run
+SAMPLER_ARGS = ("-n", "6", "--iterations", "1", "--option", "min-attempts=64",
+                "--option", "max-attempts=128", "--seed", "7", "--workers", "1")
+
+
 def test_killed_sampler_run_resumes_cleanly(tmp_path):
-    args = (CASTLE, "-n", "30", "--iterations", "3", "--seed", "7", "--workers", "1")
     whole = tmp_path / "whole"
-    p = derive(whole, *args)
+    p = derive(whole, CASTLE, *SAMPLER_ARGS)
     assert p.wait(timeout=600) == 0, p.stderr.read()
+    assert len(listed(whole)) == 6
     out = tmp_path / "out"
-    p = derive(out, *args)
-    while p.poll() is None and len(listed(out)) < 5:
-        time.sleep(0.02)
-    p.send_signal(signal.SIGKILL)
-    p.wait(timeout=30)
+    killed = subprocess.run([sys.executable, "-c", KILL_AT_ITEM, "3", "derive", str(CASTLE),
+                             *SAMPLER_ARGS, "-o", str(out)], check=False, capture_output=True,
+                            text=True, timeout=600)
+    assert killed.returncode == -signal.SIGKILL, killed.stderr
+    assert len(listed(out)) == 2 and len(models_on_disk(out)) == 3  # the third is unlisted
+    assert (out / ".pending.json").exists()
     consistent(out)
-    again = derive(out, *args)
+    again = derive(out, CASTLE, *SAMPLER_ARGS)
     assert again.wait(timeout=600) == 0, again.stderr.read()
+    assert not (out / ".pending.json").exists()
     assert [e["id"] for e in listed(out)] == [e["id"] for e in listed(whole)]
+    assert models_on_disk(out) == models_on_disk(whole)
     for name in models_on_disk(whole):
         assert (out / name).read_bytes() == (whole / name).read_bytes()
-    other = derive(out, CASTLE, "-n", "30", "--iterations", "3", "--seed", "8")
-    assert other.wait(timeout=120) == 1
+    other = derive(out, CASTLE, *SAMPLER_ARGS[:-3], "8", "--workers", "1")
+    assert other.wait(timeout=600) == 1
     assert "another run" in other.stderr.read()

@@ -198,9 +198,12 @@ def catches_sigterm(pid: int) -> None:
 
 
 # -- signals in the first second -----------------------------------------------------------------
+CASTLE = ROOT / "grammars" / "tiling" / "castle" / "castle.grammar"
 COMMANDS = {
     "batch": ["batch", str(PARIS), "--variations", "300", "--workers", "1"],
     "derive": ["derive", str(PARIS), "--variations", "300", "--workers", "1"],
+    # the graph sampler (derive -n of a tiling grammar), with worker processes
+    "derive-n": ["derive", str(CASTLE), "-n", "300", "--workers", "2"],
 }
 
 
@@ -231,3 +234,39 @@ def test_a_signal_in_the_first_second_stops_the_run(tmp_path, command, sig, dela
             if (out / "manifest.jsonl").exists() else []
         assert {q.name for q in out.glob("*.glb")} == set(listed)
         assert not (out / ".grammarkit.lock").exists()
+
+
+def nothing_half_written(out: Path) -> None:
+    if not out.exists():
+        return
+    listed = [json.loads(x)["file"] for x in (out / "manifest.jsonl").read_text().splitlines()] \
+        if (out / "manifest.jsonl").exists() else []
+    assert {q.name for q in out.glob("*.glb")} == set(listed)
+    assert not (out / ".grammarkit.lock").exists() and not list(out.glob("*.tmp"))
+
+
+@pytest.mark.parametrize("command", sorted(COMMANDS))
+@pytest.mark.parametrize("sig,delay", [(signal.SIGTERM, 0.0), (signal.SIGINT, 0.05),
+                                       (signal.SIGTERM, 0.15), (signal.SIGINT, 0.3)])
+def test_a_signal_during_interpreter_start_up_stops_the_command(tmp_path, command, sig, delay):
+    """Before grammarkit's first line runs (Python's own start-up, `site` and its .pth files),
+    no handler of ours can exist: SIGTERM then ends the process the default way and SIGINT
+    with Python's KeyboardInterrupt. Either way the command must stop, non-zero, with nothing
+    written; from grammarkit's first line on it is the clean stop of the test above. (A SIGINT
+    that arrives while it is still inherited as ignored is discarded by the kernel: no program
+    can see it; from the first line on it is obeyed, see the test above.)"""
+    out = tmp_path / "out"
+    p = subprocess.Popen([*CLI, *COMMANDS[command], "-o", str(out)], stdout=subprocess.PIPE,
+                         stderr=subprocess.PIPE, text=True)
+    time.sleep(delay)
+    p.send_signal(sig)
+    try:
+        code = p.wait(timeout=60)
+    except subprocess.TimeoutExpired:
+        p.kill()
+        pytest.fail(f"{command} still running 60 s after {sig.name} at {delay} s")
+    err = p.stderr.read()
+    assert code != 0, err
+    if code == 130:  # grammarkit's handler had it: its message, no traceback
+        assert "interrupted" in err and "Traceback" not in err, err
+    nothing_half_written(out)

@@ -10,7 +10,8 @@
   terminal has none, after the colour. There are no vertex colours: a triangle's colour is its
   primitive's material, so nothing forces vertices apart.
 - **Structure.** Below the root, one node per solid (a split model's building, an assembly's
-  part `Type.N`); below a split model's node, one node per terminal name (`Window`, `Glass`,
+  part `Type.N`), no two of them and the root with the same name (`paris (2)`, a root
+  `paris (scene)` above a one-building `paris`); below a split model's node, one node per terminal name (`Window`, `Glass`,
   `Wall`...) whose `extras` hold the terminal, its rules, their source lines (`file:line`),
   object types, roles, materials and the label index.
 - **Closed solids are one primitive.** A closed solid's triangles are ONE primitive over its
@@ -200,7 +201,9 @@ class _GltfBuilder:
         root_extras = dict(scene.extras)
         root_extras["grammarkit"] = {"format": GLTF_FORMAT, "up": "+Z",
                                      "note": "this node rotates the model's Z-up frame to glTF's +Y up"}
-        root = self.node({"name": scene.name, "rotation": [float(x) for x in Z_UP_TO_Y_UP],
+        taken = _unique_node_names(self.nodes, root_children)
+        root_name = scene.name if scene.name not in taken else f"{scene.name} (scene)"
+        root = self.node({"name": root_name, "rotation": [float(x) for x in Z_UP_TO_Y_UP],
                           "children": root_children, "extras": root_extras})
         doc: dict[str, Any] = {
             "asset": {"version": "2.0", "generator": "grammarkit"},
@@ -212,6 +215,24 @@ class _GltfBuilder:
         if self.images:
             doc.update(images=self.images, textures=self.gl_textures, samplers=self.samplers)
         return doc
+
+
+def _unique_node_names(nodes: list[dict], solid_nodes: list[int]) -> set[str]:
+    """Give the solid nodes (the root's children) names no other solid node has, in file order
+    (`paris`, `paris (2)`, ...), and return them: a viewer's outline or an animation target
+    then names one node. Terminal nodes keep their terminal's name (unique within their solid,
+    the label grammarkit's readers take), as the glTF spec allows; the root node gets a name of
+    its own when a solid has the scene's (a one-building model is named after its grammar)."""
+    taken: set[str] = set()
+    for k in solid_nodes:
+        name = base = str(nodes[k].get("name", ""))
+        copy = 1
+        while name in taken:
+            copy += 1
+            name = f"{base} ({copy})"
+        nodes[k]["name"] = name
+        taken.add(name)
+    return taken
 
 
 def _build_gltf(scene: Scene, textures: str = "embed", base: Path | None = None) -> tuple[dict, bytes]:
