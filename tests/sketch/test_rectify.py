@@ -66,3 +66,23 @@ def test_recognition_reads_a_turned_storey_as_an_upright_one(library, stages):
     err = lambda r: max(abs(r.normalized[k] - upright.normalized[k]) for k in upright.estimated)
     assert err(fixed) < err(paper)
     assert fixed.network_score > paper.network_score  # the turned-back lines match the drawing
+
+
+def test_the_command_says_when_it_turned_the_page_back(library, stages, tmp_path):
+    import json
+
+    from click.testing import CliRunner
+    from PIL import Image
+
+    from grammarkit.cli import main
+
+    st = stages["Floor"]
+    ink = _ink(library, st, "floor_ribbon", {"spandrel_h": 1.1, "pane_w": 2.0}, -4.0)
+    p = tmp_path / "floor.png"
+    Image.fromarray((255 - ink * 255).astype(np.uint8), "L").save(p)
+    res = CliRunner().invoke(main, ["recognize", str(p), "--type", "Floor"])
+    assert res.exit_code == 0, res.output
+    assert "the page was turned +4" in res.stdout
+    res = CliRunner().invoke(main, ["recognize", str(p), "--type", "Floor", "--no-rectify", "--json"])
+    assert res.exit_code == 0, res.output
+    assert json.loads(res.stdout)["page_turn"] == 0.0
