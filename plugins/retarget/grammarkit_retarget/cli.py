@@ -65,21 +65,29 @@ def retarget_command(model: Path, output: Path, size, scale, allow_scale: bool, 
     check_outputs({"--output": output, "--preview": preview, "--explain": explain},
                   inputs=[model])
     spec = exporter_for(output)
-    # per part: a scene's parts are welded one by one, never to each other
-    mesh = prepare_mesh(load_mesh(model), str(model))
-    target = size if size is not None else target_from_scale(mesh, scale, str(model))
-    report = retarget_report(mesh, target, allow_scale=allow_scale, exact=exact,
-                             open_surface=open_surface, name=str(model), seed=seed, seam=seam)
-    files: dict[Path, bytes] = {output: encode_with(spec, report.mesh)}
-    if preview is not None:
-        from .pictures import before_after_png
+    steps = 3 + (preview is not None) + (explain is not None)
+    with progress_bar() as bar:
+        task = bar.add_task(f"reading {model}", total=steps)
+        # per part: a scene's parts are welded one by one, never to each other
+        mesh = prepare_mesh(load_mesh(model), str(model))
+        target = size if size is not None else target_from_scale(mesh, scale, str(model))
+        bar.update(task, advance=1, description="finding offsets, stitching copies")
+        report = retarget_report(mesh, target, allow_scale=allow_scale, exact=exact,
+                                 open_surface=open_surface, name=str(model), seed=seed, seam=seam)
+        bar.update(task, advance=1, description=f"encoding {output.name}")
+        files: dict[Path, bytes] = {output: encode_with(spec, report.mesh)}
+        if preview is not None:
+            from .pictures import before_after_png
 
-        files[preview] = before_after_png(mesh, report.mesh, caption=[_one_line(report)])
-    if explain is not None:
-        from .pictures import explain_png
+            bar.update(task, advance=1, description=f"drawing {preview.name}")
+            files[preview] = before_after_png(mesh, report.mesh, caption=[_one_line(report)])
+        if explain is not None:
+            from .pictures import explain_png
 
-        files[explain] = explain_png(report)
-    write_files(files)
+            bar.update(task, advance=1, description=f"drawing {explain.name}")
+            files[explain] = explain_png(report)
+        bar.update(task, advance=1, description="writing")
+        write_files(files)
     summary = report.summary()
     summary["output"] = str(output)
     if as_json:
@@ -89,6 +97,18 @@ def retarget_command(model: Path, output: Path, size, scale, allow_scale: bool, 
     for path in (preview, explain):
         if path is not None:
             click.echo(f"wrote {path}")
+
+
+def progress_bar():  # noqa: ANN201 - rich.progress.Progress
+    """Progress on stderr (rich, transient: silent when stderr is not a terminal); stdout keeps
+    the summary or the JSON."""
+    from rich.console import Console
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
+
+    console = Console(stderr=True)
+    return Progress(SpinnerColumn(), TextColumn("[bold]{task.description}"), BarColumn(),
+                    MofNCompleteColumn(), TimeElapsedColumn(), console=console,
+                    transient=True, disable=not console.is_terminal)
 
 
 def _one_line(report) -> str:

@@ -326,28 +326,61 @@ def measure(mesh: trimesh.Trimesh, probe: Probe, *, origin=None) -> dict:
 # ------------------------------------------------------------------------------------------
 # Writing
 # ------------------------------------------------------------------------------------------
-def write_models(folder: str | Path, names: list[str] | None = None) -> list[Path]:
-    """Write the test models as GLB files into `folder` (atomically, all or none)."""
+def write_models(folder: str | Path, names: list[str] | None = None,
+                 progress: Callable[[str, int, int], None] | None = None) -> list[Path]:
+    """Write the test models as GLB files into `folder` (atomically, all or none).
+    `progress(name, done, total)` is called before each model is built and once at the end."""
     from grammarkit.geometry.exporters import exporter_for
     from grammarkit.run import write_files
 
     folder = Path(folder)
     files = {}
-    for name in names or list(MODELS):
+    chosen = names or list(MODELS)
+    for k, name in enumerate(chosen):
+        if progress is not None:
+            progress(name, k, len(chosen))
         model = build(name)
         path = folder / f"{name}.glb"
         files[path] = exporter_for(path).encode(model.mesh)
+    if progress is not None:
+        progress("", len(chosen), len(chosen))
     write_files(files)
     return list(files)
 
 
+USAGE = "usage: python -m grammarkit_retarget.testmodels [--json] OUT_DIR"
+
+
 def main(argv: list[str] | None = None) -> int:
+    """Write the models with progress on stderr (rich) and one line per file on stdout (a JSON
+    list of {path, triangles, bytes} with --json)."""
+    import json
+
     args = list(sys.argv[1:] if argv is None else argv)
-    if len(args) != 1:
-        print("usage: python -m grammarkit_retarget.testmodels OUT_DIR", file=sys.stderr)
+    as_json = "--json" in args
+    args = [a for a in args if a != "--json"]
+    if len(args) != 1 or args[0].startswith("-"):
+        print(USAGE, file=sys.stderr)
         return 2
-    for path in write_models(args[0]):
-        print(f"wrote {path}")
+    from .cli import progress_bar
+
+    bar = progress_bar()
+    with bar:
+        task = bar.add_task("building", total=len(MODELS))
+
+        def step(name: str, done: int, total: int) -> None:
+            bar.update(task, completed=done, total=total,
+                       description=f"building {name}" if name else "writing")
+        paths = write_models(args[0], progress=step)
+    rows = []
+    for path in paths:
+        mesh = trimesh.load(path, force="mesh")
+        rows.append({"path": str(path), "triangles": len(mesh.faces), "bytes": path.stat().st_size})
+    if as_json:
+        print(json.dumps(rows, indent=1))
+        return 0
+    for r in rows:
+        print(f"wrote {r['path']} ({r['triangles']} triangles)")
     return 0
 
 

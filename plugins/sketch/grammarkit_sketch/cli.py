@@ -28,6 +28,18 @@ def _one_thread() -> None:
     require_torch().set_num_threads(1)
 
 
+def stderr_progress() -> Any:
+    """A rich progress display on stderr (stdout keeps the summary or the JSON); transient, so
+    a terminal is left with the summary only, and silent when stderr is not a terminal."""
+    from rich.console import Console
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
+
+    console = Console(stderr=True)
+    return Progress(SpinnerColumn(), TextColumn("[bold]{task.description}"), BarColumn(),
+                    MofNCompleteColumn(), TimeElapsedColumn(), console=console,
+                    transient=True, disable=not console.is_terminal)
+
+
 def _range(info: Any, name: str) -> str:
     p = next(p for p in info.params if p.name == name)
     return f"[{p.lo:g}, {p.hi:g}]"
@@ -42,6 +54,8 @@ def print_recognition(r: Any, library: Any, source: str) -> None:
         click.echo(f"  {c.snippet:<18} {c.probability:6.3f}{same}{mark}")
     if r.snippet not in [c.snippet for c in r.top]:
         click.echo(f"  {r.snippet:<18} {r.probability:6.3f}  <- chosen with --snippet")
+    if r.page_turn:
+        click.echo(f"the page was turned {r.page_turn:+.1f} deg: read turned back")
     if r.redraw:
         click.echo(f"not sure (probability {r.probability:.2f}, below {r.redraw_below:.2f}): redraw "
                    "the sketch, or choose the snippet with --snippet NAME")
@@ -86,6 +100,10 @@ def print_recognition(r: Any, library: Any, source: str) -> None:
               help="The default refinement (pattern) weighs the score with a Gaussian prior around "
                    "the network's estimate (as wide as the regressor's validation error); "
                    "--no-prior searches the score alone.")
+@click.option("--rectify/--no-rectify", default=True, show_default=True,
+              help="Undo a turn of the page (a few degrees) on stages seen straight on (facades, "
+                   "floors, windows) before recognising; --no-rectify reads the drawing as it is "
+                   "(the paper).")
 @click.option("--snippet", default=None, help="Skip the classifier: estimate this snippet's parameters.")
 @click.option("--preview", type=click.Path(dir_okay=False, path_type=Path), default=None,
               help="Write the sketch with the recognised model drawn over it (PNG).")
@@ -95,7 +113,7 @@ def print_recognition(r: Any, library: Any, source: str) -> None:
 @click.option("--json", "as_json", is_flag=True, help="Print the result as JSON.")
 def recognize_command(sketch: Path | None, object_type: str, library: Path | None, models: Path | None,
                       refine_steps: int, method: str, score: str, view_range: float, prior: bool,
-                      snippet: str | None, preview: Path | None,
+                      rectify: bool, snippet: str | None, preview: Path | None,
                       canvas: Path | None, seed: int, as_json: bool) -> None:
     """Recognise the snippet and its parameters in a sketch of one object type.
 
@@ -105,7 +123,9 @@ def recognize_command(sketch: Path | None, object_type: str, library: Path | Non
     from .recognizer import get_recognizer
 
     _one_thread()
-    rec = get_recognizer(models, library)
+    with stderr_progress() as bar:
+        bar.add_task("loading the models", total=None)
+        rec = get_recognizer(models, library)
     t = rec.library.check_type(object_type)
     if canvas is not None:
         rec.canvas(t, canvas)
@@ -115,10 +135,13 @@ def recognize_command(sketch: Path | None, object_type: str, library: Path | Non
             return
     if sketch is None:
         raise click.UsageError("give a SKETCH image (or --canvas OUT.png)")
-    r = rec.recognize(sketch, t, refine_steps=refine_steps, method=method, snippet=snippet, seed=seed,
-                      score=score, view_range=view_range, prior=prior)
-    if preview is not None:
-        rec.preview(sketch, r, preview)
+    with stderr_progress() as bar:
+        bar.add_task(f"recognising {sketch}" + (f" ({refine_steps} refinement steps)" if refine_steps else ""),
+                     total=None)
+        r = rec.recognize(sketch, t, refine_steps=refine_steps, method=method, snippet=snippet, seed=seed,
+                          score=score, view_range=view_range, prior=prior, rectify=rectify)
+        if preview is not None:
+            rec.preview(sketch, r, preview)
     if as_json:
         data = {"sketch": str(sketch), **r.to_dict()}
         if preview is not None:
@@ -158,9 +181,16 @@ def sketch_session_command(session: Path, output: Path, library: Path | None, mo
     from .session import Session
 
     _one_thread()
-    s = Session.from_file(session, models=models, library=library, refine=refine_steps, method=method,
-                          canvases=canvases)
-    text = s.grammar_text(output.resolve().parent, source=session.name)
+    with stderr_progress() as bar:
+        task = bar.add_task("loading the models", total=None)
+
+        def stage_done(t: str, done: int, total: int) -> None:
+            bar.update(task, description=f"recognising {t}" if t else "writing the grammar",
+                       completed=done, total=total)
+
+        s = Session.from_file(session, models=models, library=library, refine=refine_steps,
+                              method=method, canvases=canvases, progress=stage_done)
+        text = s.grammar_text(output.resolve().parent, source=session.name)
     problems = [d for d in grammarkit.check(text) if d.severity == "error"]
     if problems:  # a bug, not a user error: say so rather than write a broken file
         raise click.ClickException("the generated grammar does not check: " + problems[0].message)

@@ -29,6 +29,7 @@ from .library import SnippetLibrary, load_library
 from .models import ModelFileError, SketchModels, TypeModel, load_models
 from .calibration import softmax
 from .nets import require_torch
+from .rectify import rectify_input
 from .refine import EXACT_STYLE, METHODS, SCORE_SHORT, SCORES, VIEW_RANGE, Scorer, centre_on_plateaus, refine
 from .stages import StageDeriver, StageSpec
 
@@ -68,6 +69,7 @@ class Recognition:
     score_kind: str = "chamfer"  # which score `score` is: "chamfer" or "paper" (refine.SCORES)
     redraw: bool = False  # the classifier is not sure (probability below the type's threshold)
     redraw_below: float = 0.0  # that threshold (0: the models file has none)
+    page_turn: float = 0.0  # degrees the drawing was turned back before recognition (rectify.py)
 
     def use_line(self, anchor: str | None = None) -> str:
         return f"use {self.snippet} as {anchor or self.object_type}"
@@ -86,7 +88,7 @@ class Recognition:
             "estimated": list(self.estimated), "hidden": list(self.hidden),
             "score": round(self.score, 4), "network_score": round(self.network_score, 4),
             "score_kind": self.score_kind, "redraw": self.redraw,
-            "redraw_below": round(self.redraw_below, 4),
+            "redraw_below": round(self.redraw_below, 4), "page_turn": round(self.page_turn, 2),
             "refine_steps": self.refine_steps, "method": self.method, "evaluations": self.evaluations,
             "use": self.use_line(), "set": self.set_options(),
             "timings_ms": {k: round(v, 2) for k, v in self.timings.items()},
@@ -172,8 +174,11 @@ class Recognizer:
                         refine_steps: int = 0, method: str = "pattern", snippet: str | None = None,
                         seed: int = 0, t_load: float = 0.0, target: np.ndarray | None = None,
                         score: str = "chamfer", score_short: int = SCORE_SHORT,
-                        view_range: float = VIEW_RANGE, prior: bool = True) -> Recognition:
-        """Recognise a network input (RES x RES ink); see `recognize`. `target` is the sketch's
+                        view_range: float = VIEW_RANGE, prior: bool = True,
+                        rectify: bool = True) -> Recognition:
+        """Recognise a network input (RES x RES ink); see `recognize`. `rectify`: undo a turn
+        of the page first on stages seen straight on (rectify.py; False: the drawing as it is,
+        the paper's way). `target` is the sketch's
         line mask at the score canvas (dataset.line_mask with `score_short`); without it the
         input stands in (resized to the score canvas, which loses the long side's detail of an
         elongated canvas). `prior`: the default refinement (`pattern`) maximises the score times
@@ -195,6 +200,9 @@ class Recognizer:
         t = next(k for k, v in self.models.types.items() if v is tm)
         stage = stage or tm.stage
         t0 = time.perf_counter()
+        turn = 0.0
+        if rectify:
+            x, turn = rectify_input(x, stage)
         top = self.classify(tm, x)
         t1 = time.perf_counter()
         if snippet is not None:
@@ -213,6 +221,10 @@ class Recognizer:
         if target is None:
             target = (resize(x, (score_short, score_short)) if stage.framing == "fit"
                       else level(resize(x, quick_size(stage, score_short)))) > 0.5
+        elif turn:  # the drawing's own lines, turned back as the networks saw them
+            from .augment import rotate_ink
+
+            target = rotate_ink(np.asarray(target, dtype=np.float32), turn) > 0.5
         scorer = Scorer(self.deriver(stage), info, names, dict(values), target, score, score_short,
                         view_range=view_range if refine_steps > 0 else 0.0)
         net_score = scorer(scorer.start(u))
@@ -239,7 +251,7 @@ class Recognizer:
         return Recognition(t, chosen, prob, top[:TOP], values, normalized, names, hidden, match,
                            net_score, refine_steps if len(u) else 0, method, scorer.evaluations,
                            timings, stage, score, redraw=snippet is None and prob < threshold,
-                           redraw_below=threshold)
+                           redraw_below=threshold, page_turn=turn)
 
     def recognize(self, image: Any, object_type: str, *, stage: StageSpec | None = None, **kw: Any) -> Recognition:
         """Recognise a sketch image (path, PIL image or array) of one object type."""
@@ -396,7 +408,7 @@ def get_recognizer(models: Any = None, library: Any = None) -> Recognizer:
 def recognize(image: Any, object_type: str, *, models: Any = None, library: Any = None,
               refine: int = 0, method: str = "pattern", snippet: str | None = None,
               seed: int = 0, score: str = "chamfer", view_range: float = VIEW_RANGE,
-              prior: bool = True) -> Recognition:
+              prior: bool = True, rectify: bool = True) -> Recognition:
     """Recognise a sketch of one object type.
 
     image:   a path, a PIL image or an array (dark lines on light paper). An object type with
@@ -412,10 +424,12 @@ def recognize(image: Any, object_type: str, *, models: Any = None, library: Any 
     prior:   "pattern" maximises the score times a Gaussian prior around the network's estimate
              (as wide as the regressor's validation RMSE); False: the score alone.
     snippet: skip the classifier and estimate this snippet's parameters.
+    rectify: undo a turn of the page (a few degrees) on stages seen straight on before the
+             networks see the drawing (rectify.py); False feeds it as drawn (the paper).
     """
     rec = get_recognizer(models, library)
     return rec.recognize(image, object_type, refine_steps=refine, method=method, snippet=snippet, seed=seed,
-                         score=score, view_range=view_range, prior=prior)
+                         score=score, view_range=view_range, prior=prior, rectify=rectify)
 
 
 __all__ = ["Candidate", "ModelFileError", "Recognition", "Recognizer", "get_recognizer", "recognize",

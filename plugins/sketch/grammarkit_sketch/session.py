@@ -33,7 +33,7 @@ import json
 import os
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Sequence
+from typing import Any, Callable, Sequence
 
 import numpy as np
 
@@ -281,8 +281,10 @@ class Session:
     @classmethod
     def from_file(cls, path: str | Path, *, models: Any = None, library: Any = None,
                   refine: int | None = None, method: str | None = None,
-                  canvases: str | Path | None = None) -> "Session":
-        """Run a session.json: every stage in coarse-to-fine order."""
+                  canvases: str | Path | None = None,
+                  progress: Callable[[str, int, int], None] | None = None) -> "Session":
+        """Run a session.json: every stage in coarse-to-fine order. `progress(type, done,
+        total)` is called before each stage (done = stages finished) and once at the end."""
         p = Path(path)
         data = read_session_file(p)
         session = cls(models=models, library=library, lot=data.get("lot"),
@@ -304,7 +306,9 @@ class Session:
                                    code="sketch-bad-session")
             stages.append((order[t], t, st, where))
         stages.sort(key=lambda s: s[0])
-        for _, t, st, where in stages:
+        for k, (_, t, st, where) in enumerate(stages):
+            if progress is not None:
+                progress(t, k, len(stages))
             steps = st.get("refine", data.get("refine", 0)) if refine is None else refine
             how = st.get("method", data.get("method", "pattern")) if method is None else method
             try:
@@ -319,6 +323,8 @@ class Session:
                 folder = Path(canvases)
                 folder.mkdir(parents=True, exist_ok=True)
                 save_image(session.stage_picture(t), folder / f"{order[t] + 1:02d}_{t}.png")
+        if progress is not None:
+            progress("", len(stages), len(stages))
         return session
 
 
