@@ -7,7 +7,7 @@ calls the spec's `apply`. Likewise for global constraints and expression functio
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any, Callable, Iterator, Literal, Mapping
+from typing import TYPE_CHECKING, Any, Callable, Iterator, Literal, Mapping, Sequence
 
 if TYPE_CHECKING:  # pragma: no cover - types only
     from pydantic import BaseModel
@@ -170,6 +170,9 @@ class Request:
                 there (`grammarkit.run.encode_model`) and yield the bytes as `Result.model`.
     preview:    the caller wants a PNG preview per result (`attachments["png"]`); the writer
                 renders one for results that come without.
+    items:      the inputs results are made from, where the run has some: result `i` is made
+                from `items[i]` (the split back end: one `grammarkit.run.lots.Lot` per
+                building). None: results come from (seed, index) alone.
     """
 
     grammar: "Grammar"
@@ -186,6 +189,7 @@ class Request:
     soft_deadline: float | None = None
     format: str | None = None
     preview: bool = False
+    items: Sequence[Any] | None = None
 
     def check_deadline(self) -> None:
         """Raise `grammarkit.errors.LimitError` once the run's time budget is spent."""

@@ -15,11 +15,12 @@ from __future__ import annotations
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Callable, Iterator, Mapping
+from typing import Any, Callable, Iterator, Mapping, Sequence
 
 from ..errors import GrammarkitError, PluginError
 from .backend import BackendSpec, Request, Result
-from .writer import ModelFile
+from .executor_protocol import WorkerError
+from .writer import ModelFile, OutputFolder, WriteStopped
 
 __all__ = ["RunSummary", "iter_results", "resolve_backend", "run_backend", "FORMAT_VERSION"]
 
@@ -28,6 +29,8 @@ FORMAT_VERSION = 1  # of run.json / manifest.jsonl
 
 @dataclass
 class RunSummary:
+    """What a run did: the one summary of `run_backend`, `grammarkit derive` and `batch`."""
+
     backend: str
     requested: int
     written: int  # results written by this run
@@ -37,13 +40,32 @@ class RunSummary:
     shortfall: str | None  # why fewer results than requested exist (None: all of them)
     stats: dict = field(default_factory=dict)  # the back end's own summary
     seconds: float = 0.0
+    # the results in the output: ok, or recorded as failed (a dataset run lists a failing item
+    # with its error and goes on); `failures` holds the first few as {id, error}
+    ok: int = 0
+    failed: int = 0
+    failures: list[dict] = field(default_factory=list)
+    warnings: list[str] = field(default_factory=list)
+    executor: str = "local"
+    workers: int = 1
+    # a dataset run (`grammarkit batch`): what its items are ("lots" or "variations"), the
+    # index files made from its manifest and the merged model
+    kind: str | None = None
+    index: list[Path] = field(default_factory=list)
+    merged: Path | None = None
 
     @property
     def total(self) -> int:
         return self.written + self.resumed
 
+    @property
+    def items_per_second(self) -> float:
+        return self.written / self.seconds if self.seconds > 0 else 0.0
+
     def lines(self) -> list[str]:
         """The summary for people: what was written, what fell short and why."""
+        if self.kind is not None:
+            return self._dataset_lines()
         where = f" to {self.out}/" if self.out else ""
         out = [f"wrote {self.written} result{'s' if self.written != 1 else ''}{where} "
                f"({self.backend}, {self.seconds:.1f} s)"
@@ -52,13 +74,37 @@ class RunSummary:
             out.append(f"made {self.total} of {self.requested}: {self.shortfall}")
         return out
 
+    def _dataset_lines(self) -> list[str]:
+        out = [f"wrote {self.written} item{'s' if self.written != 1 else ''} to {self.out}/ "
+               f"({self.ok} ok, {self.failed} failed in the folder; {self.seconds:.1f} s, "
+               f"{self.items_per_second:.2f} items/s); manifest {self.manifest}"]
+        if self.index:
+            out.append("index: " + ", ".join(str(p) for p in self.index))
+        if self.merged:
+            out.append(f"merged model: {self.merged}")
+        if self.shortfall:
+            out.append(f"made {self.ok + self.failed} of {self.requested}: {self.shortfall}")
+        return out
+
     def to_dict(self) -> dict:
         from ..jsonable import to_jsonable
 
+        def text(path: Path | None) -> str | None:
+            return str(path) if path else None
+
+        if self.kind is not None:
+            return to_jsonable({
+                "kind": self.kind, "requested": self.requested, "written": self.written,
+                "resumed": self.resumed, "ok": self.ok, "failed": self.failed,
+                "out": text(self.out), "manifest": text(self.manifest),
+                "index": [str(p) for p in self.index], "merged": text(self.merged),
+                "failures": self.failures, "warnings": self.warnings, "shortfall": self.shortfall,
+                "executor": self.executor, "workers": self.workers,
+                "seconds": round(self.seconds, 3),
+                "items_per_second": round(self.items_per_second, 3)})
         return to_jsonable({"backend": self.backend, "requested": self.requested,
                             "written": self.written, "resumed": self.resumed,
-                            "out": str(self.out) if self.out else None,
-                            "manifest": str(self.manifest) if self.manifest else None,
+                            "out": text(self.out), "manifest": text(self.manifest),
                             "shortfall": self.shortfall, "seconds": round(self.seconds, 3),
                             **({"stats": self.stats} if self.stats else {})})
 
@@ -133,6 +179,10 @@ def _drive(spec: BackendSpec, request: Request) -> Iterator[Result]:
                 return stop.value if isinstance(stop.value, dict) else {}
             except (GrammarkitError, KeyboardInterrupt, MemoryError):
                 raise
+            except WorkerError as exc:  # a worker process died, the cluster went away
+                name = getattr(request.executor, "name", type(request.executor).__name__)
+                raise GrammarkitError(f"the {name} executor failed: {exc}",
+                                      code="executor") from None
             except OSError as exc:
                 from ..errors import ShapeError
 
@@ -151,9 +201,13 @@ def _drive(spec: BackendSpec, request: Request) -> Iterator[Result]:
 def _request(grammar: Any, spec: BackendSpec, registries: Any, *, n: int, seed: int, start: int,
              iterations: int, attrs: Mapping[str, Any] | None, options: Any, executor: Any,
              workers: int | None, progress: Callable | None, timeout: float | None,
-             format: str | None, preview: bool, time_limit: float | None = None) -> Request:
+             format: str | None, preview: bool, time_limit: float | None = None,
+             items: Sequence[Any] | None = None) -> Request:
     from .executor import make_executor
+    from .executor_protocol import refuse_in_worker_bootstrap
     from .options import parse_options
+
+    refuse_in_worker_bootstrap()  # a script without the __main__ guard, again in a worker
 
     for what, value, lo in (("n", n, 0), ("iterations", iterations, 0), ("start", start, 0)):
         if isinstance(value, bool) or not isinstance(value, int) or value < lo:
@@ -174,7 +228,7 @@ def _request(grammar: Any, spec: BackendSpec, registries: Any, *, n: int, seed: 
                    attrs=dict(attrs or {}), options=opts, executor=executor, registries=registries,
                    deadline=None if timeout is None else time.monotonic() + float(timeout),
                    soft_deadline=None if time_limit is None else time.monotonic() + float(time_limit),
-                   format=format, preview=preview, **kwargs)
+                   format=format, preview=preview, items=items, **kwargs)
 
 
 def iter_results(grammar: Any, *, backend: str | None = None, n: int = 1, seed: int = 0,
@@ -236,7 +290,9 @@ def run_backend(grammar: Any, *, out: "str | Path | ModelFile", backend: str | N
                 format: str | None = None, preview: bool = False, progress: Callable | None = None,
                 timeout: float | None = None, time_limit: float | None = None,
                 overwrite: bool = False, inputs: tuple[Path, ...] = (), registries: Any = None,
-                on_result: Callable[[dict], None] | None = None) -> RunSummary:
+                on_result: Callable[[dict], None] | None = None,
+                items: Sequence[Any] | None = None, run_info: Mapping[str, Any] | None = None,
+                finish: Callable[[Any, RunSummary], None] | None = None) -> RunSummary:
     """Run a back end into the folder `out` (see grammarkit.run.writer for its layout), or
     write its one result as named files: `out=ModelFile("paris.glb", {"png": "paris.png"})`.
 
@@ -244,11 +300,16 @@ def run_backend(grammar: Any, *, out: "str | Path | ModelFile", backend: str | N
     a different call is refused unless `overwrite=True`. `inputs` are files no output may
     replace. `time_limit` (seconds) is the graceful budget: past it no new result is made, the
     ones written stay, and the summary says so; `timeout` is the hard stop, a LimitError.
+    `items` are the inputs results are made from (`Request.items`: the lots of a batch);
+    `run_info` adds fields to run.json (what the items are, so that other items are another
+    run); `finish(folder, summary)` is called with the folder still locked once the results
+    are in (a batch writes its index and merged model there). `on_result(entry)` is called
+    after each result is written.
     Returns a RunSummary; `shortfall` says why fewer than `n` results exist (the time limit,
     the back end's own cap such as its iterations, or the back end running out of results).
     """
     from ..jsonable import to_jsonable
-    from .writer import ModelFile, OutputFolder, grammar_hash
+    from .writer import grammar_hash
 
     t0 = time.perf_counter()
     registries = _registries(registries)
@@ -261,24 +322,28 @@ def run_backend(grammar: Any, *, out: "str | Path | ModelFile", backend: str | N
     request = _request(g, spec, registries, n=n, seed=seed, start=0, iterations=iterations,
                        attrs=attrs, options=options, executor=executor, workers=workers,
                        progress=progress, timeout=timeout, format=fmt, preview=preview,
-                       time_limit=time_limit)
+                       time_limit=time_limit, items=items)
     run = {"version": FORMAT_VERSION, "backend": spec.name, "grammar": g.name,
            "grammar_hash": grammar_hash(g), "seed": seed, "iterations": iterations,
            "attrs": to_jsonable(dict(attrs or {})), "format": fmt, "preview": bool(preview),
            "options": request.options.model_dump(mode="json") if request.options is not None else {},
-           "n": n}
+           "n": n, **dict(run_info or {})}
     extra_inputs = [Path(g.source_path)] if getattr(g, "source_path", None) else []
     protected = tuple(Path(p) for p in (*inputs, *extra_inputs))
-    if isinstance(out, ModelFile):  # one result as named files: no folder, no manifest
-        out.protected = (*out.protected, *protected)
-        ModelFile.__post_init__(out)  # check the outputs against every input, before any work
-        sink: Any = out
-    else:
-        sink = OutputFolder(Path(out), run, protected=protected, overwrite=overwrite)
     try:
+        if isinstance(out, ModelFile):  # one result as named files: no folder, no manifest
+            out.protected = (*out.protected, *protected)
+            ModelFile.__post_init__(out)  # check the outputs against every input, before any work
+            sink: Any = out
+        else:
+            sink = OutputFolder(Path(out), run, protected=protected, overwrite=overwrite)
         with sink as folder:  # a folder stays locked until the run ends
-            return _write_results(spec, request, folder, registries, n, fmt, preview, on_result,
-                                  t0, time_limit)
+            summary = _write_results(spec, request, folder, registries, n, fmt, preview,
+                                     on_result, t0, time_limit)
+            if finish is not None:
+                finish(folder, summary)
+            summary.seconds = time.perf_counter() - t0
+            return summary
     finally:
         if executor is None:  # made for this call: its worker processes end with it
             request.executor.close()
@@ -297,13 +362,12 @@ def _write_results(spec: BackendSpec, request: Request, folder: Any, registries:
                    fmt: str, preview: bool, on_result: Callable[[dict], None] | None,
                    t0: float, time_limit: float | None) -> RunSummary:
     """Drive the back end and hand each new result to the writer, until `n` are in the folder."""
-    from ..jsonable import to_jsonable
-
-    summary = RunSummary(spec.name, n, 0, folder.resumed, folder.path, folder.manifest, None)
+    summary = RunSummary(spec.name, n, 0, folder.resumed, folder.path, folder.manifest, None,
+                         executor=getattr(request.executor, "name", type(request.executor).__name__),
+                         workers=int(getattr(request.executor, "workers", 1) or 1))
     if folder.done >= n:
-        summary.shortfall = None
-        summary.seconds = time.perf_counter() - t0
         summary.stats = {"note": f"the folder already holds {folder.done} results of this run"}
+        _count(summary, folder.entries)
         return summary
     request = Request(**{**request.__dict__, "start": folder.done})
     gen = _drive(spec, request)
@@ -315,7 +379,6 @@ def _write_results(spec: BackendSpec, request: Request, folder: Any, registries:
             except StopIteration as stop:
                 stats = stop.value or {}
                 break
-            request.check_deadline()
             if result.index < folder.done:
                 # recomputed by a back end that cannot start in the middle: already on disk
                 listed = folder.entries[result.index].get("id")
@@ -324,27 +387,12 @@ def _write_results(spec: BackendSpec, request: Request, folder: Any, registries:
                                           f"manifest lists {listed!r}; the run is not reproducible "
                                           "(use another folder or --overwrite)")
                 continue
-            # a data-only result (model None, e.g. a shape string) has no model file
-            files: dict[str, bytes | str] = {} if result.model is None else \
-                {f"{result.id}.{fmt}": encode_result(result, fmt, registries)}
-            attachments = dict(result.attachments)
-            if preview and "png" not in attachments and result.model is not None \
-                    and not isinstance(result.model, (bytes, bytearray)):
-                attachments["png"] = preview_png(result.model)
-            for suffix, data in attachments.items():
-                files[f"{result.id}.{suffix}"] = data
-            entry = {"id": result.id, "index": result.index, "seed": result.seed,
-                     "parents": list(result.parents), "metrics": to_jsonable(result.metrics),
-                     "file": None if result.model is None else f"{result.id}.{fmt}",
-                     "attachments": {s: f"{result.id}.{s}" for s in attachments}}
-            for key, value in result.extra.items():
-                if key in entry:
-                    raise PluginError(f"back end {spec.name!r}: manifest field {key!r} is reserved")
-                entry[key] = to_jsonable(value)
-            folder.add(entry, files)
+            entry = _write(spec, folder, result, registries, fmt, preview)
             summary.written += 1
             if on_result is not None:
                 on_result(entry)
+            # after the write: the result in hand is kept when the time budget is spent
+            request.check_deadline()
             if folder.done < n and request.time_is_up():
                 break  # the graceful budget: keep what was written, say so below
         else:
@@ -358,5 +406,43 @@ def _write_results(spec: BackendSpec, request: Request, folder: Any, registries:
     summary.stats = stats
     if folder.done < n:
         summary.shortfall = shortfall_reason(request, stats, time_limit)
-    summary.seconds = time.perf_counter() - t0
+    _count(summary, folder.entries)
     return summary
+
+
+def _write(spec: BackendSpec, folder: Any, result: Result, registries: Any, fmt: str,
+           preview: bool) -> dict:
+    """One result's files and manifest line, handed to the writer; returns the line."""
+    from ..jsonable import to_jsonable
+
+    # a data-only result (model None, e.g. a shape string) has no model file
+    files: dict[str, bytes | str] = {} if result.model is None else \
+        {f"{result.id}.{fmt}": encode_result(result, fmt, registries)}
+    attachments = dict(result.attachments)
+    if preview and "png" not in attachments and result.model is not None \
+            and not isinstance(result.model, (bytes, bytearray)):
+        attachments["png"] = preview_png(result.model)
+    for suffix, data in attachments.items():
+        files[f"{result.id}.{suffix}"] = data
+    entry = {"id": result.id, "index": result.index, "seed": result.seed,
+             "parents": list(result.parents), "metrics": to_jsonable(result.metrics),
+             "file": None if result.model is None else f"{result.id}.{fmt}",
+             "attachments": {s: f"{result.id}.{s}" for s in attachments}}
+    for key, value in result.extra.items():
+        if key in entry:
+            raise PluginError(f"back end {spec.name!r}: manifest field {key!r} is reserved")
+        entry[key] = to_jsonable(value)
+    if not isinstance(folder, OutputFolder):
+        return folder.add(entry, files)
+    try:
+        return folder.add(entry, files)
+    except OSError as exc:  # a full disk, a folder gone read-only: the manifest stays a prefix
+        raise WriteStopped(str(exc), folder.done) from None
+
+
+def _count(summary: RunSummary, entries: Sequence[Mapping[str, Any]]) -> None:
+    """The ok and failed results among the folder's entries (a dataset run records failures)."""
+    failed = [e for e in entries if e.get("status") == "failed"]
+    summary.failed = len(failed)
+    summary.ok = len(entries) - len(failed)
+    summary.failures = [{"id": e["id"], "error": e.get("error")} for e in failed[:20]]

@@ -47,7 +47,10 @@ from dataclasses import dataclass
 from typing import Any, Callable, Iterable, Iterator
 
 from ..errors import GrammarkitError
-from .executor_protocol import WorkerError, default_workers, main_without_phantom_file, portable_error
+from .executor_protocol import (
+    GUARD_HINT, WorkerError, default_workers, main_without_phantom_file, portable_error,
+    refuse_in_worker_bootstrap,
+)
 
 __all__ = ["DaskExecutor", "DaskSession", "DaskUnavailable", "SchedulerUnreachable", "parse_address"]
 
@@ -298,6 +301,7 @@ class DaskExecutor:
     def __init__(self, address: str | None = None, workers: int | None = None, *,
                  connect_timeout: float = DEFAULT_CONNECT_TIMEOUT, max_in_flight: int | None = None,
                  silence_logs: int = logging.ERROR):
+        refuse_in_worker_bootstrap()  # a script without the __main__ guard, again in a worker
         distributed = _import_distributed()
         if not (isinstance(connect_timeout, (int, float)) and connect_timeout > 0):
             raise GrammarkitError(f"connect_timeout must be a positive number of seconds, "
@@ -319,7 +323,8 @@ class DaskExecutor:
             except Exception as exc:  # noqa: BLE001 - ports, spawn failures: say what happened
                 self._shutdown()
                 raise GrammarkitError(f"cannot start a Dask LocalCluster of {n} processes: "
-                                      f"{type(exc).__name__}: {exc}") from None
+                                      f"{type(exc).__name__}: {exc} ({GUARD_HINT})"
+                                      ) from None
         else:
             self.client = _connect(distributed, self.address, float(connect_timeout))
         threads = sum(self.client.nthreads().values()) or 1

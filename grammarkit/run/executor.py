@@ -41,7 +41,8 @@ from collections import deque
 from typing import Any, Callable, Iterable, Iterator, Sequence
 
 from .executor_protocol import (  # noqa: F401 - the protocol, re-exported where it always was
-    Executor, Session, WorkerError, default_workers, main_without_phantom_file, portable_error,
+    GUARD_HINT, Executor, Session, WorkerError, default_workers, main_without_phantom_file,
+    portable_error, refuse_in_worker_bootstrap,
 )
 
 __all__ = ["Executor", "LocalExecutor", "Session", "WorkerError", "default_workers", "make_executor"]
@@ -378,8 +379,7 @@ class _LocalSession:
         if not self.workers:
             self.local_only = True
             warnings.warn("grammarkit: worker processes could not start; continuing in this "
-                          "process (a script that starts parallel work needs an "
-                          "`if __name__ == \"__main__\":` guard)", RuntimeWarning, stacklevel=4)
+                          f"process; {GUARD_HINT}", RuntimeWarning, stacklevel=4)
 
     def _handle(self, w: _Worker, msg: tuple, out: dict, results: dict) -> None:
         if msg[0] == "ready":
@@ -432,6 +432,7 @@ class LocalExecutor:
 
     def __init__(self, workers: int | None = None, *, parallel: str = "auto",
                  min_parallel_seconds: float = 0.5):
+        refuse_in_worker_bootstrap()  # a script without the __main__ guard, again in a worker
         if parallel not in ("auto", "always", "never"):
             raise ValueError(f"parallel must be 'auto', 'always' or 'never', not {parallel!r}")
         self.workers = default_workers() if workers is None else max(1, int(workers))

@@ -17,8 +17,12 @@ import traceback
 from contextlib import contextmanager
 from typing import Any, Callable, Iterable, Iterator, Protocol
 
-__all__ = ["Executor", "Session", "WorkerError", "default_workers", "main_without_phantom_file",
-           "portable_error"]
+__all__ = ["GUARD_HINT", "Executor", "Session", "WorkerError", "default_workers",
+           "main_without_phantom_file", "portable_error", "refuse_in_worker_bootstrap"]
+
+# What to do when worker processes cannot start because the main script runs again in them.
+GUARD_HINT = ('a script that starts worker processes needs its top level under '
+              '`if __name__ == "__main__":` (each spawned worker imports the main script again)')
 
 
 class WorkerError(RuntimeError):
@@ -45,6 +49,19 @@ class Executor(Protocol):
 
     def session(self, init: Callable[..., Any], *args: Any) -> Session: ...
     def close(self) -> None: ...
+
+
+def refuse_in_worker_bootstrap() -> None:
+    """Stop a main script that is running again inside a worker process being started (a script
+    without the `if __name__ == "__main__":` guard): one line, no traceback, exit status 1, in
+    the worker; the executor that started it then says what happened."""
+    import multiprocessing
+
+    # the flag multiprocessing's own check reads ("An attempt has been made to start a new
+    # process before the current process has finished its bootstrapping phase")
+    if getattr(multiprocessing.current_process(), "_inheriting", False):
+        raise SystemExit("grammarkit: this script is running again in a starting worker process; "
+                         + GUARD_HINT)
 
 
 def portable_error(exc: BaseException) -> BaseException:

@@ -39,7 +39,8 @@ from ..fileio import (  # noqa: F401 - re-exported
 )
 from ..jsonable import to_jsonable
 
-__all__ = ["ModelFile", "OutputFolder", "RunMismatch", "check_outputs", "grammar_hash", "write_files"]
+__all__ = ["ModelFile", "OutputFolder", "RunMismatch", "WriteStopped", "check_outputs", "grammar_hash",
+           "write_files"]
 
 MANIFEST = "manifest.jsonl"
 RUN_FILE = "run.json"
@@ -50,6 +51,18 @@ MODEL_SUFFIXES = frozenset({".glb", ".gltf", ".obj", ".stl", ".ply"})
 
 class RunMismatch(GrammarkitError):
     """The output folder holds a different run."""
+
+
+class WriteStopped(OutputError):
+    """A result could not be written (a full disk, a folder gone read-only): the run stopped
+    with the manifest listing exactly the `done` complete results; the same run continues."""
+
+    def __init__(self, what: str, done: int, noun: str = "run", items: str = "results"):
+        self.what, self.done = what, done
+        listed = "nothing was written" if done == 0 else \
+            f"manifest.jsonl lists the {done} complete {items}"
+        super().__init__(f"{what}; the {noun} stopped ({listed}); fix the cause and run the "
+                         "same command again to continue")
 
 
 def grammar_hash(grammar: Any) -> str:

@@ -201,4 +201,7 @@ def test_a_script_without_main_guard_still_finishes(tmp_path):
     r = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, timeout=180)
     assert r.returncode == 0, r.stderr
     assert r.stdout.strip().splitlines()[-1] == "[0, 2, 4, 6, 8, 10]"
-    assert "could not start" in r.stderr
+    assert "could not start" in r.stderr and 'if __name__ == "__main__":' in r.stderr
+    # the copies of the script in the workers stop at once, with one line and no traceback
+    assert "this script is running again in a starting worker process" in r.stderr
+    assert "Traceback" not in r.stderr, r.stderr

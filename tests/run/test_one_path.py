@@ -1,6 +1,7 @@
-"""One run path (issue 25): the command line's one-model derive, `--variations`, `-n` and the
-Python API all go through `grammarkit.run.run_backend` and return its `RunSummary`; a `--set`
-value travels from the click command to the written file in at most 8 calls."""
+"""One run path (issue 25): the command line's one-model derive, `--variations`, `-n`, `batch`
+(lots and variations) and the Python API all go through `grammarkit.run.run_backend` and return
+its `RunSummary`; a `--set` value travels from the click command to the written file in at most
+8 calls."""
 from __future__ import annotations
 
 import inspect
@@ -47,6 +48,29 @@ def test_cli_one_model_variations_n_and_the_api_share_one_function_and_summary(t
     assert len(calls) == 4 and set(kinds) == {RunSummary}, kinds
     assert isinstance(calls[0][0]["out"], writer.ModelFile)  # one model: the same writer
     assert summary.written == 2 and run_backend is not api.run_backend  # the package's name, spied
+
+
+def test_batch_lots_and_variations_take_the_same_function_and_summary(tmp_path, calls):
+    import json
+
+    from grammarkit.run.batch import run_batch
+
+    grammar = tmp_path / "g.grammar"
+    grammar.write_text(GRAMMAR)
+    lots = tmp_path / "lots.geojson"
+    ring = [[0, 0], [9, 0], [9, 7], [0, 7], [0, 0]]
+    lots.write_text(json.dumps({"type": "FeatureCollection", "features": [
+        {"type": "Feature", "properties": {"id": "a"},
+         "geometry": {"type": "Polygon", "coordinates": [ring]}}]}))
+    for args in (["--lots", str(lots)], ["--variations", "2"]):
+        r = CliRunner().invoke(main, ["batch", str(grammar), "-o", str(tmp_path / args[0][2:]),
+                                      "--workers", "1", *args])
+        assert r.exit_code == 0, r.output
+    summary = run_batch(grammar, 2, tmp_path / "api", workers=1)
+    assert [type(s) for _, s in calls] == [RunSummary] * 3
+    assert [kw["backend"] for kw, _ in calls] == ["split"] * 3  # the split back end's one driver
+    assert [s.kind for _, s in calls] == ["lots", "variations", "variations"]
+    assert summary.ok == 2 and (tmp_path / "api" / "index.jsonl").exists()
 
 
 def test_a_set_value_reaches_the_written_file_in_at_most_8_calls(tmp_path, monkeypatch):
