@@ -11,6 +11,7 @@ Public API (signatures are stable; the graph sampler builds on them):
     validate(grammar_or_rules, assembly, *, tolerance=None, graph=None, docks=True) -> Report
     learn(assemblies, name="learned", *, example_paths=None, bandwidth=0.1, docks=True) -> Grammar
     mean_shift(points, bandwidth) -> (modes, labels)                 # learn's flat-kernel Mean Shift
+    example_count_ranges(examples) -> {type: (fewest, most)}         # the examples' part counts
     ANGLE_SCALE_DEG                          # learn: a rotation this large weighs like one bandwidth
     dock(a_points, b_points) -> (4x4 rigid transform, rms residual)  # Kabsch, det +1
     local_frame(part) -> 4x4                                        # Kalojanov's diagonal frame
@@ -58,6 +59,7 @@ _EXPORTS = {
     "ShapeWarning": "io", "load_examples": "io", "part_prototype": "io", "read_assembly": "io",
     "type_from_name": "io", "write_assembly": "io",
     "learn": "learn", "mean_shift": "learn", "ANGLE_SCALE_DEG": "learn",
+    "example_count_ranges": "learn_stats",
     "DockPlacement": "rules", "Rules": "rules", "rules_from_grammar": "rules",
     "Report": "validate", "Violation": "validate", "validate": "validate",
 }
@@ -111,6 +113,7 @@ if TYPE_CHECKING:  # pragma: no cover - for type checkers and IDEs
     )
     from .io import ShapeWarning, load_examples, part_prototype, read_assembly, type_from_name, write_assembly
     from .learn import ANGLE_SCALE_DEG, learn, mean_shift
+    from .learn_stats import example_count_ranges
     from .orientation import up_vector
     from .rules import DockPlacement, Rules, rules_from_grammar
     from .validate import Report, Violation, validate
@@ -119,7 +122,7 @@ __all__ = [
     "Contact", "PartGeometry", "contacts", "prepare", "surface_centroid",
     "ANGLE_SCALE_DEG", "DEFAULT_RELATIVE_TOLERANCE", "Assembly", "DockPlacement", "Part", "Report", "Rules", "ShapeWarning",
     "Violation", "default_tolerance", "dock", "learn", "load_examples", "local_frame", "mean_shift", "part_prototype",
-    "read_assembly", "relative_placement", "rules_from_grammar", "shape_graph", "symmetry_offsets", "type_from_name",
+    "example_count_ranges", "read_assembly", "relative_placement", "rules_from_grammar", "shape_graph", "symmetry_offsets", "type_from_name",
     "up_vector", "validate", "write_assembly",
     # shape-graph machinery for back ends (graphops, incremental)
     "Cut", "adjacency_from_edges", "cut_layers", "distance_matrix", "histogram_key", "induced_edges",

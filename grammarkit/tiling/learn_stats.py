@@ -23,7 +23,7 @@ from ..ir.expr import Bool, Num, Ref
 from ..ir.split import Arg
 from ..ir.tiling import ConstraintDef
 
-__all__ = ["COUNT_MODES", "FEW", "count_statements", "SupportStats", "support_stats"]
+__all__ = ["COUNT_MODES", "FEW", "count_statements", "example_count_ranges", "SupportStats", "support_stats"]
 
 
 # a type no example has more than this many of is a *designed* count (gates, entries, exits, a
@@ -42,17 +42,39 @@ def count_statements(types: Sequence[str], type_counts: list[dict[str, int]], sl
     if len(type_counts) < 2 or mode == "none":
         return []
     out = []
+    seen_range = example_count_ranges(type_counts, types)
     for t in sorted(types):
         ns = [h.get(t, 0) for h in type_counts]
         if mode == "few" and max(ns) > FEW:
             continue
-        lo, hi = max(0, min(ns) - slack), max(ns) + slack
+        lo, hi = max(0, seen_range[t][0] - slack), seen_range[t][1] + slack
         seen = f"{min(ns)}..{max(ns)}" if min(ns) != max(ns) else f"{min(ns)}"
         widened = f", widened by {slack}" if slack else ""
         notes.append(f"count({t}, {lo}, {hi}): the {len(ns)} examples have {seen} {t} part(s){widened}")
         out.append(ConstraintDef(name="count", args=(Arg(value=Ref(name=t)), Arg(name="lo", value=Num(value=float(lo))),
                                                     Arg(name="hi", value=Num(value=float(hi))))))
     return out
+
+
+def example_count_ranges(examples: Sequence, types: Sequence[str] | None = None) -> dict[str, tuple[int, int]]:
+    """{type: (fewest, most)} parts of each type one example has: `examples` are assemblies,
+    sequences of part types, or {type: count} dicts; `types` adds types (count 0 where absent).
+
+    The range a person expects a variant's counts in (docs/tiling.md, *Counts*): the
+    substructure back end keeps its variants in it (`counts="examples"`), and
+    benchmarks/bench_tiling_quality.py measures every back end against it."""
+    hists: list[dict[str, int]] = []
+    for e in examples:
+        if isinstance(e, dict):
+            hists.append(dict(e))
+            continue
+        seq = [p.type for p in e.parts] if hasattr(e, "parts") else list(e)
+        h: dict[str, int] = {}
+        for t in seq:
+            h[t] = h.get(t, 0) + 1
+        hists.append(h)
+    names = sorted(set(types or ()) | {t for h in hists for t in h})
+    return {t: (min(h.get(t, 0) for h in hists), max(h.get(t, 0) for h in hists)) for t in names} if hists else {}
 
 
 class SupportStats:

@@ -8,7 +8,7 @@ from grammarkit.errors import ShapeError
 from grammarkit.tiling import Assembly
 
 from .search import Operation, find_operations
-from .shape import Shape, embed
+from .shape import ORIGINS, Shape, embed
 
 
 def _rules(rules: Any):
@@ -59,7 +59,8 @@ def enumerate(assembly: Any, rules: Any = None, *, donor: Any = None, q: int = 0
 
 
 def apply(assembly: Any, op: Operation, *, donor: Any = None, rules: Any = None,
-          embedding: str = "rigid", repair: bool = True, tolerance: float | None = None) -> Assembly:
+          embedding: str = "rigid", repair: bool = True, tolerance: float | None = None,
+          frame_origin: str = "foot") -> Assembly:
     """The assembly after `op` (from `enumerate` on the same assembly and donor), embedded in 3D.
 
     With `rules`, the result is checked against the grammar (and repaired, if `repair`); a
@@ -72,7 +73,9 @@ def apply(assembly: Any, op: Operation, *, donor: Any = None, rules: Any = None,
     for v in op.copied:
         if v >= len(d):
             raise ShapeError(f"operation copies part {v}, but the donor has {len(d)} parts")
-    out = embed(d, host, op, _rules(rules), embedding=embedding, repair=repair)
+    if frame_origin not in ORIGINS:
+        raise ValueError(f"frame_origin must be one of {', '.join(ORIGINS)}, got {frame_origin!r}")
+    out = embed(d, host, op, _rules(rules), embedding=embedding, repair=repair, origin_at=frame_origin)
     if out.shape is None:
         raise ShapeError(f"{host.name}: the operation gives an invalid shape: " + "; ".join(out.problems))
     return out.shape.to_assembly(meta={"substructure": {"operation": op.to_json(host.ids, d.ids),

@@ -45,6 +45,25 @@ def _init(examples, rules, options, seed, steps, max_parts) -> _State:  # noqa: 
     return _State(examples, rules, options, seed, steps, max_parts, {})
 
 
+def count_target(examples: list[Shape], mode: str) -> dict[str, tuple[int, int]] | None:
+    """The part counts variants are kept in: each type's fewest..most over the examples
+    (`counts="examples"`, two or more examples; a type no example has may not appear), or
+    None (only the grammar's own count constraints, which the embedding check applies)."""
+    from grammarkit.tiling import example_count_ranges
+
+    if mode != "examples" or len(examples) < 2:
+        return None
+    return example_count_ranges([s.types for s in examples])
+
+
+def _counts_fit(target: dict | None, shape: Shape) -> bool:
+    """Are the shape's type counts within `target` (None: no target)?"""
+    if target is None:
+        return True
+    have = shape.type_counts()
+    return all(t in target for t in have) and all(lo <= have.get(t, 0) <= hi for t, (lo, hi) in target.items())
+
+
 def _operations(state: _State, donor_i: int, host: Shape, host_key: Any) -> list:
     key = (donor_i, host_key)
     ops = state.cache.get(key) if host_key is not None else None
@@ -56,10 +75,13 @@ def _operations(state: _State, donor_i: int, host: Shape, host_key: Any) -> list
     return ops
 
 
-def _typed_graph(types, edges, rounds: int = 4):
-    """(None, key): a Weisfeiler-Lehman key of the typed graph: colours start from the types and
-    are refined `rounds` times by the sorted colours of the neighbours; the key is the sorted
-    colour multiset of every round. Hand-written instead of networkx's
+def _typed_graph(types, edges):
+    """(histogram, key): the sorted (type, count) pairs, and a Weisfeiler-Lehman key of the typed graph: colours start from the types and
+    the degrees and are refined by the sorted colours of the neighbours until the colour classes
+    stop splitting (at most one round per part); the key is the sorted colour multiset of
+    every round. Refined to the end, not for a fixed number of rounds: a castle is a ring, and
+    rings that differ only in where the gate sits look alike within four steps of every part
+    (a fixed 4 rounds took most of them for duplicates). Hand-written instead of networkx's
     weisfeiler_lehman_graph_hash because it runs for every candidate operation and this one is
     about 20x faster (tuples of ints, no hashlib); int and tuple hashes do not depend on
     PYTHONHASHSEED, so workers agree."""
@@ -73,17 +95,38 @@ def _typed_graph(types, edges, rounds: int = 4):
     colour = [hash((code[t], len(nbrs[i]))) for i, t in enumerate(types)]
     # type names enter as CRC-32 ints: str hashes change with PYTHONHASHSEED between processes
     key = [tuple(zlib.crc32(t.encode("utf-8")) for t in names), tuple(sorted(colour))]
-    for _ in range(rounds):
+    classes = len(set(colour))
+    for _ in range(n):
         colour = [hash((colour[i], tuple(sorted(colour[w] for w in nbrs[i])))) for i in range(n)]
         key.append(tuple(sorted(colour)))
-    return None, hash(tuple(key))
+        now = len(set(colour))
+        if now == classes:
+            break  # stable: further rounds split nothing (same for every isomorphic graph)
+        classes = now
+    return _histogram(types), hash(tuple(key))
+
+
+def _histogram(types) -> tuple:
+    counts: dict[str, int] = {}
+    for t in types:
+        counts[t] = counts.get(t, 0) + 1
+    return tuple(sorted(counts.items()))
 
 
 def _trivial(donor: Shape, host: Shape, op, known: list) -> bool:
     """True when the operation's result graph equals the host's or an example's (the paper
-    keeps only results with a topological change), by Weisfeiler-Lehman hash; graph only."""
+    keeps only results with a topological change), by Weisfeiler-Lehman hash; graph only.
+    A result whose type counts no known shape has is not trivial, without building it."""
     from grammarkit.tiling import replace_subgraph
 
+    counts = dict(host.type_counts())
+    for v in op.removed:
+        counts[host.types[v]] -= 1
+    for v in op.copied:
+        counts[donor.types[v]] = counts.get(donor.types[v], 0) + 1
+    hist = tuple(sorted((t, c) for t, c in counts.items() if c))
+    if not any(hist == kh for kh, _ in known):
+        return False
     kept, edges = replace_subgraph(len(host), host.edges, op.removed, donor.edges, op.copied,
                                    [(b, w) for _, w, b, _ in op.pairs])
     types = [host.types[v] for v in kept] + [donor.types[v] for v in op.copied]
@@ -99,18 +142,21 @@ def candidate(state: _State, index: int) -> dict:
     if "known" not in state.cache:
         state.cache["known"] = [_typed_graph(e.types, e.edges) for e in state.examples]
     examples_known = state.cache["known"]
+    if "target" not in state.cache:
+        state.cache["target"] = count_target(state.examples, getattr(opt, "counts", "grammar"))
+    target = state.cache["target"]
     start = int(rng.integers(len(state.examples)))
     host, host_key = state.examples[start], ("example", start)
     history: list = []
     shapes: list = []
-    tried = 0
+    tried = outside = 0
     for _ in range(state.steps):
         options = []
         for d in range(len(state.examples)):
             donor = state.examples[d]
             same = host_key == ("example", d)
             ops = _operations(state, d, donor if same else host, ("example", d) if same else host_key)
-            options.extend((d, op) for op in ops)
+            options.extend((d, j, op) for j, op in enumerate(ops))
         if not options:
             break
         known = examples_known + ([_typed_graph(host.types, host.edges)] if host_key is None else [])
@@ -119,33 +165,47 @@ def candidate(state: _State, index: int) -> dict:
         # Local edits first: an operation whose pieces are "the rest of the shape" (stored as
         # complements) mostly swaps one whole example for another, a trivial result; those are
         # drawn only after every local one (random order within each group).
-        local = [k for k, (_, op) in enumerate(options)
+        local = [k for k, (_, _, op) in enumerate(options)
                  if not op.copied_side.complement and not op.removed_side.complement]
-        far = [k for k, (_, op) in enumerate(options)
+        far = [k for k, (_, _, op) in enumerate(options)
                if op.copied_side.complement or op.removed_side.complement]
+        # an example host's verdicts are the same in every candidate (its known shapes are the
+        # examples): kept per (donor, example, operation)
+        verdicts = state.cache.setdefault(("trivial", host_key), {}) if host_key is not None else {}
         order = [local[i] for i in rng.permutation(len(local))] + [far[i] for i in rng.permutation(len(far))]
         for k in order:
             if embedded >= opt.tries:
                 break
-            d, op = options[k]
+            d, j, op = options[k]
             donor = state.examples[d]
-            if _trivial(donor, host, op, known):
+            trivial = verdicts.get((d, j))
+            if trivial is None:
+                trivial = verdicts[(d, j)] = _trivial(donor, host, op, known)
+            if trivial:
                 continue
             embedded += 1
             tried += 1
             out = embed(donor, host, op, state.rules, embedding=opt.embedding, repair=opt.repair,
-                        orientation_degrees=opt.orientation_degrees, max_parts=state.max_parts)
+                        orientation_degrees=opt.orientation_degrees, max_parts=state.max_parts,
+                        origin_at=opt.frame_origin)
             if out.shape is None:
                 continue
             history.append({"donor": donor.name, "operation": op.to_json(host.ids, donor.ids),
                             "repaired": out.repaired})
             host, host_key = out.shape, None
-            shapes.append((host, list(history)))
+            # a shape outside the examples' counts is a step on the way, not a result: the
+            # next operation may bring it back (a gate moved is a wall turned gate, then a
+            # gate turned wall)
+            if _counts_fit(target, host):
+                shapes.append((host, list(history)))
+            else:
+                outside += 1
             done = True
             break
         if not done:
             break
-    return {"index": index, "shapes": shapes, "start": state.examples[start].name, "tried": tried}
+    return {"index": index, "shapes": shapes, "start": state.examples[start].name, "tried": tried,
+            "outside_counts": outside}
 
 
 class _Deduper:
@@ -215,7 +275,8 @@ def run(request) -> Iterator:  # noqa: ANN001
     dedupe = _Deduper(opt.dedupe)
     for s in examples:
         dedupe.add(s)
-    stats = {"candidates": 0, "valid": 0, "new": 0, "embeddings_tried": 0, "repaired": 0}
+    stats = {"candidates": 0, "valid": 0, "new": 0, "embeddings_tried": 0, "repaired": 0,
+             "outside_counts": 0}
     made = 0
     session = request.executor.session(_init, examples, rules, opt, request.seed, steps, max_parts) \
         if request.executor is not None else None
@@ -237,6 +298,7 @@ def run(request) -> Iterator:  # noqa: ANN001
             for out in outs:
                 stats["candidates"] += 1
                 stats["embeddings_tried"] += out["tried"]
+                stats["outside_counts"] += out["outside_counts"]
                 for shape, history in out["shapes"]:
                     if made >= request.n:
                         break
@@ -283,8 +345,16 @@ def run(request) -> Iterator:  # noqa: ANN001
         why = (f"the last {opt.patience} candidates gave nothing new" if stats["candidates"] - last_new >= opt.patience
                else f"max_candidates ({opt.max_candidates}) reached" if stats["candidates"] >= opt.max_candidates
                else "stopped")
+        target = count_target(examples, opt.counts)
+        outside = ""
+        if stats["outside_counts"] and target:
+            seen = ", ".join(f"{t} {lo}..{hi}" for t, (lo, hi) in sorted(target.items()))
+            outside = (f"{stats['outside_counts']} more valid shapes had part counts outside the "
+                       f"examples' ({seen}) and were not written (--option counts=grammar writes "
+                       "every shape the grammar accepts); ")
         summary["shortfall"] = (f"{why}: {stats['candidates']} candidates gave {stats['valid']} valid shapes, "
                                 f"{made} of them new (the rest repeat an example or an earlier result); "
+                                + outside
                                 + ("longer chains (--option operations=8), " if opt.operations < 8 else "")
                                 + "--option q=1 or more examples may find more")
     return summary

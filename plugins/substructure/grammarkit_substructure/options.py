@@ -19,6 +19,11 @@ class SubstructureOptions(BaseModel):
     embedding: Literal["rigid", "non-rigid"] = Field("rigid", description="interpolate the "
                                                      "boundary transforms per part (rigid) or per "
                                                      "vertex (non-rigid, blend skinning)")
+    frame_origin: Literal["foot", "centre"] = Field("foot", description="where a boundary frame "
+                                                     "sits: the centre of the two parts' bounding-box "
+                                                     "intersection seen from above, at its foot along "
+                                                     "the up axis (so rigid copies keep their floor), "
+                                                     "or at its centre (`centre`, the paper's)")
     repair: bool = Field(False, description="greedy part rescaling (along z) when the embedded "
                          "shape breaks a constraint, as the paper suggests: it deforms parts (no "
                          "longer rigid copies of their prototypes), so it is off by default and every "
@@ -39,6 +44,11 @@ class SubstructureOptions(BaseModel):
     dedupe: Literal["isomorphism", "none"] = Field("isomorphism", description="skip variants "
                                                    "whose typed graph equals an earlier one's "
                                                    "or an example's")
+    counts: Literal["examples", "grammar"] = Field("examples", description="keep every variant's "
+                                                   "number of parts of each type within the examples' "
+                                                   "range (fewest..most; with two or more examples), "
+                                                   "or only within what the grammar's count "
+                                                   "constraints allow (`grammar`)")
     final_check: bool = Field(True, description="validate every variant with `grammarkit validate`'s "
                               "rules and defaults before it is written (one it rejects is dropped and "
                               "counted)")

@@ -6,7 +6,8 @@ shape graph's edges and the cyclic edge order of every node (`ordering.cyclic_or
 Embedding an operation (copy S' of the donor into the hole where S was in the host):
 - every cut-edge pair gets two *boundary frames*, one on the donor's edge (a, w) and one on
   the host's edge (b, w2): origin at the centre of the intersection of the two parts'
-  bounding boxes, x towards the neighbour (horizontal), z up. Each pair gives the rigid
+  bounding boxes (at its foot along the up axis by default, see `_frame`), x towards the
+  neighbour (horizontal), z up. Each pair gives the rigid
   transform T = F_host F_donor^-1;
 - each copied part is moved by the inverse-distance-weighted interpolation of those transforms
   (weights 1 / distance from the part's centre, or from the vertex, to the donor frame's
@@ -51,9 +52,19 @@ class Shape:
     hi: np.ndarray = field(default=None)  # type: ignore[assignment]
     centroids: np.ndarray = field(default=None)  # type: ignore[assignment]
     graph: OrderedGraph = field(default=None)  # type: ignore[assignment]
+    _counts: dict | None = field(default=None, repr=False)
 
     def __len__(self) -> int:
         return len(self.types)
+
+    def type_counts(self) -> dict[str, int]:
+        """{type: number of parts} (cached: a shape's parts never change)."""
+        if self._counts is None:
+            counts: dict[str, int] = {}
+            for t in self.types:
+                counts[t] = counts.get(t, 0) + 1
+            self._counts = counts
+        return self._counts
 
     def finish(self, centroids: np.ndarray | None = None) -> "Shape":
         self.lo, self.hi = bounds_of(self.meshes)
@@ -85,10 +96,25 @@ class Shape:
         return Assembly(parts, name=name or self.name, meta=dict(meta or {}))
 
 
-def _frame(shape: Shape, v: int, x: int) -> np.ndarray:
+ORIGINS = ("foot", "centre")
+
+
+def _frame(shape: Shape, v: int, x: int, origin_at: str = "foot") -> np.ndarray:
     """Boundary frame of the edge (v, x): origin at the centre of the intersection of the two
-    bounding boxes, x axis towards x's centre (horizontal), z up."""
-    origin = (np.maximum(shape.lo[v], shape.lo[x]) + np.minimum(shape.hi[v], shape.hi[x])) / 2
+    bounding boxes (`origin_at="centre"`, the paper's), or at that centre seen from above but at
+    the intersection's foot along the up axis (`"foot"`, the default); x axis towards x's
+    centre (horizontal), z up.
+
+    Why the foot: at the centre, a copy whose contact is taller or shorter than the one it
+    replaces is lifted or sunk by half the difference (a 5 m gate put where a 4 m wall met a
+    tower sinks by 0.5 m), which breaks support unless parts are rescaled (the paper's greedy
+    repair); at the foot, parts that stood on one floor in the donor stand on the same floor in
+    the host, and stay rigid. Between parts of one type both give the same transform."""
+    lo = np.maximum(shape.lo[v], shape.lo[x])
+    hi = np.minimum(shape.hi[v], shape.hi[x])
+    origin = (lo + hi) / 2
+    if origin_at == "foot":
+        origin = origin + (min(float(lo @ UP), float(hi @ UP)) - float(origin @ UP)) * UP
     d = shape.centroids[x] - shape.centroids[v]
     d = d - (d @ UP) * UP
     n = float(np.linalg.norm(d))
@@ -99,11 +125,12 @@ def _frame(shape: Shape, v: int, x: int) -> np.ndarray:
     return F
 
 
-def boundary_transforms(donor: Shape, host: Shape, op: Operation) -> tuple[list[np.ndarray], np.ndarray]:
+def boundary_transforms(donor: Shape, host: Shape, op: Operation,
+                        origin_at: str = "foot") -> tuple[list[np.ndarray], np.ndarray]:
     """Per cut-edge pair, the rigid transform F_host F_donor^-1; and the donor frames' origins."""
     mats, origins = [], []
     for a, w, b, w2 in op.pairs:
-        Fd, Fh = _frame(donor, a, w), _frame(host, b, w2)
+        Fd, Fh = _frame(donor, a, w, origin_at), _frame(host, b, w2, origin_at)
         mats.append(Fh @ np.linalg.inv(Fd))
         origins.append(Fd[:3, 3])
     return mats, np.array(origins)
@@ -174,7 +201,7 @@ def _renumber(types: Sequence[str]) -> list[str]:
 
 def embed(donor: Shape, host: Shape, op: Operation, rules=None, *, embedding: str = "rigid",
           repair: bool = True, orientation_degrees: float = 20.0,
-          max_parts: int | None = None) -> Embedded:
+          max_parts: int | None = None, origin_at: str = "foot") -> Embedded:
     """Apply `op` with geometry: the host without S, plus S' of the donor mapped into the hole."""
     removed = set(op.removed)
     kept = [v for v in range(len(host)) if v not in removed]
@@ -185,7 +212,7 @@ def embed(donor: Shape, host: Shape, op: Operation, rules=None, *, embedding: st
     problem = _orientation_problem(donor, host, op, orientation_degrees)
     if problem:
         return Embedded(None, [problem])
-    mats, origins = boundary_transforms(donor, host, op)
+    mats, origins = boundary_transforms(donor, host, op, origin_at)
     cw = _weights(donor.centroids[copied], origins)
     meshes = [host.meshes[v] for v in kept]
     transforms = [host.transforms[v] for v in kept]
