@@ -4,6 +4,8 @@
     python benchmarks/bench_prt.py                      # grammars/cga/packages/*.rpk
     python benchmarks/bench_prt.py --extra a.rpk b.rpk  # also packages kept out of the repository
     python benchmarks/bench_prt.py --record tests/cga/data/prt_reference.json
+    python benchmarks/bench_prt.py --baseline           # also time the open-face single union
+    python benchmarks/bench_prt.py --surfaces cga       # CityEngine's open faces as the default
 
 PyPRT (`pip install pyprt`) is Esri's, under Esri's terms: never a dependency of grammarkit,
 only this optional reference. Without it the PRT columns are empty.
@@ -18,6 +20,13 @@ triangles of each, whether each is watertight (trimesh, vertices welded by posit
 many connected bodies it has, and the time ratio grammarkit / PRT: medians of alternating runs
 in one process (grammarkit: `derive` of the already parsed grammar up to the finished mesh;
 PRT: `generate_model` with the PyEncoder, geometry only).
+
+grammarkit's model is checked as the user gets it too: `glb` says whether the GLB written by
+`Model.save` reads back watertight with `trimesh.load(p, force="mesh")` and nothing else
+(textured solids are written with UV seams, see docs/derive.md "Files"), and `open` counts
+the triangles of the open surface layer (0 in the default `surfaces="solid"` mode).
+`--baseline` also times, alternating with the others, the derivation as it was before issue
+27: `surfaces="cga"` (open faces) and one batched union of every solid (`base ms`).
 
 `--record` writes PRT's bounding boxes as reference numbers for tests/cga (which cannot need
 PyPRT).
@@ -73,10 +82,43 @@ def _mesh_stats(vertices: np.ndarray, faces: np.ndarray) -> tuple[bool, int]:
     return bool(m.is_watertight), bodies
 
 
-def gk_run(grammar, lot) -> dict:
+class single_union:
+    """The baseline's composition: one batched union of every solid (the grouping of solids
+    whose bounding boxes fall apart, grammarkit.split.model.MIN_GROUPED, switched off)."""
+
+    def __enter__(self):
+        from grammarkit.split import model
+        self.saved = model.MIN_GROUPED, model.ALWAYS_GROUPED
+        model.MIN_GROUPED = model.ALWAYS_GROUPED = 1 << 62
+
+    def __exit__(self, *exc):
+        from grammarkit.split import model
+        model.MIN_GROUPED, model.ALWAYS_GROUPED = self.saved
+
+
+def gk_time(grammar, lot, surfaces: str, single: bool) -> float:
+    import contextlib
+
+    import grammarkit
+    with single_union() if single else contextlib.nullcontext():
+        t = time.perf_counter()
+        grammarkit.derive(grammar, seed=0, lot=lot, surfaces=surfaces)
+        return time.perf_counter() - t
+
+
+def glb_watertight(model) -> bool:
+    import trimesh
+    with tempfile.TemporaryDirectory() as tmp:
+        path = Path(tmp) / "m.glb"
+        model.save(path)
+        mesh = trimesh.load(path, force="mesh")
+        return bool(len(mesh.faces) and mesh.is_watertight and mesh.is_winding_consistent)
+
+
+def gk_run(grammar, lot, surfaces: str = "solid", check_glb: bool = False) -> dict:
     import grammarkit
     t = time.perf_counter()
-    model = grammarkit.derive(grammar, seed=0, lot=lot)
+    model = grammarkit.derive(grammar, seed=0, lot=lot, surfaces=surfaces)
     dt = time.perf_counter() - t
     solid_v, solid_f = np.asarray(model.mesh.vertices), np.asarray(model.mesh.faces)
     sv = np.asarray(model.surface_vertices) if model.surface_vertices is not None else np.zeros((0, 3))
@@ -87,7 +129,8 @@ def gk_run(grammar, lot) -> dict:
     tight, bodies = _mesh_stats(verts, faces)
     terminals = sum(1 for _ in model.parts) if hasattr(model, "parts") else None
     return {"time": dt, "bbox": bbox, "triangles": int(len(faces)), "terminals": terminals,
-            "watertight": tight, "bodies": bodies}
+            "watertight": tight, "bodies": bodies, "open": int(len(sf)),
+            "glb": glb_watertight(model) if check_glb else None}
 
 
 def prt_run(pyprt, rpk: Path, lot) -> dict:
@@ -133,6 +176,12 @@ def main(argv=None) -> int:
     ap.add_argument("--runs", type=int, default=5, help="alternating timed runs per lot (median)")
     ap.add_argument("--record", type=Path, default=None, help="write PRT's bboxes here (JSON)")
     ap.add_argument("--json", type=Path, default=None, help="also write the table as JSON")
+    ap.add_argument("--surfaces", choices=("solid", "cga"), default="solid",
+                    help="grammarkit's output: one watertight solid (default) or CGA's open faces")
+    ap.add_argument("--single-union", action="store_true",
+                    help="compose with one batched union of every solid (the baseline's way)")
+    ap.add_argument("--baseline", action="store_true",
+                    help="also time surfaces=cga with a single union (before issue 27)")
     args = ap.parse_args(argv)
     try:
         import pyprt  # noqa: F401 - optional reference (Esri's terms), never a dependency
@@ -145,14 +194,17 @@ def main(argv=None) -> int:
             grammar, err = import_package(rpk, Path(tmp))
             for lot_name, lot in _lots().items():
                 row = {"package": rpk.stem, "lot": lot_name, "derives": False, "error": err}
-                gk, prt, gk_t, prt_t = None, None, [], []
+                gk, prt, gk_t, prt_t, base_t = None, None, [], [], []
+                if grammar is not None:
+                    try:  # once untimed: the GLB check, and warm caches for every timed run
+                        gk = gk_run(grammar, lot, args.surfaces, check_glb=True)
+                    except Exception as exc:  # noqa: BLE001 - a failing package is a row, not a crash
+                        row["error"] = f"derive: {str(exc).splitlines()[0][:120]}"
                 for _ in range(max(1, args.runs)):  # alternate: the same machine state for both
                     if grammar is not None and row["error"] is None:
-                        try:
-                            gk = gk_run(grammar, lot)
-                            gk_t.append(gk["time"])
-                        except Exception as exc:  # noqa: BLE001 - a failing package is a row, not a crash
-                            row["error"] = f"derive: {str(exc).splitlines()[0][:120]}"
+                        gk_t.append(gk_time(grammar, lot, args.surfaces, args.single_union))
+                        if args.baseline:
+                            base_t.append(gk_time(grammar, lot, "cga", True))
                     if pyprt is not None:
                         prt = prt_run(pyprt, rpk, lot)
                         prt_t.append(prt["time"])
@@ -161,13 +213,14 @@ def main(argv=None) -> int:
                 row["bbox_diff"] = bbox_diff(gk and gk["bbox"], prt and prt["bbox"])
                 row["gk_ms"] = statistics.median(gk_t) * 1e3 if gk_t else None
                 row["prt_ms"] = statistics.median(prt_t) * 1e3 if prt_t else None
+                row["base_ms"] = statistics.median(base_t) * 1e3 if base_t else None
                 row["ratio"] = row["gk_ms"] / row["prt_ms"] if gk_t and prt_t and row["prt_ms"] else None
                 rows.append(row)
                 if prt is not None:
                     reference.setdefault(rpk.stem, {})[lot_name] = {
                         "bbox": [[round(c, 4) for c in prt["bbox"][0]], [round(c, 4) for c in prt["bbox"][1]]]
                         if prt["bbox"] else None, "triangles": prt["triangles"]}
-    _print(rows, pyprt is not None)
+    _print(rows, pyprt is not None, args.baseline)
     if args.record is not None and reference:
         args.record.parent.mkdir(parents=True, exist_ok=True)
         args.record.write_text(json.dumps({"source": "PyPRT generate_model, default attributes, lots of "
@@ -183,20 +236,31 @@ def _fmt(v, spec=".2f") -> str:
     return "-" if v is None else format(v, spec)
 
 
-def _print(rows: list, have_prt: bool) -> None:
-    print(f"{'package':22} {'lot':7} {'derives':7} {'bbox d(m)':>9} {'terms':>6} {'prt faces':>9} "
-          f"{'tris gk':>8} {'tris prt':>8} {'tight gk/prt':>12} {'bodies gk/prt':>13} "
-          f"{'gk ms':>8} {'prt ms':>8} {'ratio':>6}")
+def _print(rows: list, have_prt: bool, baseline: bool = False) -> None:
+    print(f"{'package':18} {'lot':6} {'der':3} {'bbox d(m)':>9} {'terms':>6} {'prt faces':>9} "
+          f"{'tris gk':>8} {'tris prt':>8} {'tris x':>6} {'open':>6} {'tight gk/prt':>12} {'glb':>3} "
+          f"{'bodies gk/prt':>13} {'gk ms':>8} {'prt ms':>8} {'ratio':>6}" + (f" {'base ms':>8}" if baseline else ""))
     for r in rows:
         gk, prt = r["gk"] or {}, r["prt"] or {}
         tight = f"{_yn(gk.get('watertight'))}/{_yn(prt.get('watertight'))}"
         bodies = f"{gk.get('bodies', '-')}/{prt.get('bodies', '-')}"
-        print(f"{r['package'][:22]:22} {r['lot']:7} {'yes' if r['derives'] else 'no':7} "
+        tris_x = gk["triangles"] / prt["triangles"] if gk.get("triangles") and prt.get("triangles") else None
+        print(f"{r['package'][:18]:18} {r['lot'][:6]:6} {'yes' if r['derives'] else 'no':3} "
               f"{_fmt(r['bbox_diff'], '.3f'):>9} {gk.get('terminals', '-')!s:>6} {prt.get('faces', '-')!s:>9} "
-              f"{gk.get('triangles', '-')!s:>8} {prt.get('triangles', '-')!s:>8} {tight:>12} {bodies:>13} "
-              f"{_fmt(r['gk_ms'], '.1f'):>8} {_fmt(r['prt_ms'], '.1f'):>8} {_fmt(r['ratio']):>6}")
+              f"{gk.get('triangles', '-')!s:>8} {prt.get('triangles', '-')!s:>8} {_fmt(tris_x):>6} "
+              f"{gk.get('open', '-')!s:>6} {tight:>12} {_yn(gk.get('glb')):>3} {bodies:>13} "
+              f"{_fmt(r['gk_ms'], '.1f'):>8} {_fmt(r['prt_ms'], '.1f'):>8} {_fmt(r['ratio']):>6}"
+              + (f" {_fmt(r.get('base_ms'), '.1f'):>8}" if baseline else ""))
         if r["error"]:
             print(f"    {r['error']}")
+    timed = [r for r in rows if r["gk_ms"] is not None and r["prt_ms"] is not None]
+    if timed:
+        gk_sum, prt_sum = sum(r["gk_ms"] for r in timed), sum(r["prt_ms"] for r in timed)
+        line = (f"summed over {len(timed)} package x lot rows: grammarkit {gk_sum:.1f} ms, PyPRT "
+                f"{prt_sum:.1f} ms, ratio {gk_sum / prt_sum:.2f}")
+        if baseline and all(r.get("base_ms") is not None for r in timed):
+            line += f"; baseline {sum(r['base_ms'] for r in timed):.1f} ms"
+        print(line)
     if not have_prt:
         print("(PyPRT is not installed: no reference columns; `pip install pyprt`, Esri's terms)")
 

@@ -221,7 +221,8 @@ def check_attrs(grammar: Any, attrs: Mapping[str, Any] | None, *, registries: An
 
 def derive(grammar: Any, *, seed: int = 0, attrs: Mapping[str, Any] | None = None,
            limits: Limits | None = None, start: str | None = None,
-           lot: Any = None, choices: Mapping[str, str] | None = None, registries: Any = None) -> Model:
+           lot: Any = None, choices: Mapping[str, str] | None = None, registries: Any = None,
+           surfaces: str = "solid") -> Model:
     """Derive one model.
 
     grammar: a Grammar, a path to a .grammar file, or grammar text.
@@ -234,6 +235,10 @@ def derive(grammar: Any, *, seed: int = 0, attrs: Mapping[str, Any] | None = Non
     choices: `{anchor: snippet}` bindings overriding the grammar's `use` statements.
     registries: the operations/functions/fits to use (a grammarkit.registry.Registries);
              default: the installed plugins'.
+    surfaces: "solid" (default): one watertight solid per connected mass; the faces comp(f)
+             hands out are views of the volume they bound, open meshes and faces off every
+             solid are closed with a 1 cm thickness. "cga": CityEngine's open faces (a
+             surface layer beside the solid). docs/operations.md, "Watertight output".
 
     Re-entrant: any number of derivations (of one grammar or several) may run at once in
     threads; each keeps its values, seed and limits to itself.
@@ -253,7 +258,7 @@ def derive(grammar: Any, *, seed: int = 0, attrs: Mapping[str, Any] | None = Non
     compiled = compile(grammar, choices, start, registries=registries)
     norm, (x0, y0, x1, y1) = _lot(lot)
     values = compiled.evaluate_values(attrs, seed)
-    ctx = Derivation(compiled, seed, limits, values, registries, compiled.base_dir)
+    ctx = Derivation(compiled, seed, limits, values, registries, compiled.base_dir, surfaces)
     shape = Shape((x0, y0, 0.0), ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0)),
                   (x1 - x0, y1 - y0, 0.0), FACE, None if lot is None else (norm,))
     ctx.start(compiled.axiom, shape)

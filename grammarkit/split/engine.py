@@ -42,6 +42,9 @@ WELD = 1e-3
 CUT_WELD = 0.5 * WELD
 
 
+# how a derivation treats faces and open meshes (Derivation(surfaces=...), derive(surfaces=...))
+SURFACE_MODES = ("solid", "cga")
+
 # print() messages kept per derivation (more are counted in Model.messages' last line)
 MAX_MESSAGES = 10_000
 
@@ -98,8 +101,16 @@ class Derivation:
     Operations never see this object: they get its `context` (an OperationContext)."""
 
     def __init__(self, compiled: Any, seed: int, limits: Limits, values: dict | None = None,
-                 registries: Any = None, base_dir: str | None = None):
+                 registries: Any = None, base_dir: str | None = None, surfaces: str = "solid"):
         self.compiled = compiled
+        # "solid" (the default): every part is closed, one watertight solid per connected mass
+        # (comp(f) keeps the volume it decomposes as the solid its faces are views of; faces
+        # off every solid, open inserted meshes and flat volumes get THICKNESS); "cga":
+        # CityEngine's open faces, the surface layer (docs/operations.md, "Watertight output")
+        if surfaces not in SURFACE_MODES:
+            raise DerivationError(f"surfaces= must be one of {', '.join(map(repr, SURFACE_MODES))}, "
+                                  f"got {surfaces!r}", None, code="bad-argument")
+        self.surfaces_mode = surfaces
         self.seed = int(seed) & M64
         self.limits = limits
         self.values = values if values is not None else {}
@@ -114,6 +125,11 @@ class Derivation:
         # depth); subtracted when the face lies on an emitted solid, else shown as a reveal
         self.cuts: list[tuple] = []
         self.post_adds: list[Any] = []  # solids to add after the cuts (built inside a recess)
+        # the default mode's openings: index in `adds` of a closing solid -> the solids cut out
+        # of it alone (before the union), and the index of each closing solid by geometry id
+        self.openings: dict[int, list] = {}
+        self.add_of: dict[int, int] = {}
+        self.holes: set[int] = set()  # tags of face terminals covering an opening
         self.add_boxes: list[tuple] = []  # world bounding box of each of `adds`
         self.id_tag: dict[int, int] = {}  # manifold original ID -> tag index
         self.faces: list[tuple] = []  # face terminals: (tag, origin, axes, size, poly, on)
@@ -180,6 +196,8 @@ class Derivation:
         if depth > self.limits.max_depth:
             raise LimitError(f"depth limit exceeded in rule {s.rule.name!r}", s.rule.span,
                              code="limit-depth")
+        if via == "comp" and self.surfaces_mode == "solid" and s.kind != FACE:
+            self._keep_comp_volume(s, children)
         parent = s.node
         seed = s.seed
         pending = []
@@ -200,6 +218,56 @@ class Derivation:
             pending.append((c, slot.body))
         pending.reverse()  # the stack pops the first child first
         self.stack.extend(pending)
+
+    def _keep_comp_volume(self, s: Shape, children: list) -> None:
+        """The default mode, one watertight solid: a volume that comp(f) consumes (CGA) stays
+        as the solid its faces are views of, unless `volume:` keeps it (then it is emitted as
+        written). Told by the children: faces of this volume, and no copy of it."""
+        gid = s.gid
+        if s.on is not None and self._open_into(s):
+            top = s.sz[2]  # the cap in the plane of the face it was extruded from: the hole
+            for item in children:
+                c = item[0]
+                if c.kind == FACE and c.on is not None and c.on[0] == gid and c.ax[2] == s.ax[2] \
+                        and abs(sum((c.o[k] - s.o[k]) * s.ax[2][k] for k in range(3)) - top) < 1e-9:
+                    c.hole = True
+            return
+        faces = False
+        for item in children:
+            c = item[0]
+            if c.gid == gid:
+                return  # `volume:` hands the volume on
+            if c.kind == FACE and c.on is not None and c.on[0] == gid:
+                faces = True
+        if faces:
+            self.add_closing(s)
+
+    def _open_into(self, s: Shape) -> bool:
+        """A volume extruded inwards from a face of a closing solid (CGA's window opening,
+        `extrude(-d) comp(f) { side: Reveal | ... }`): CityEngine shows a hole there, so it is
+        cut out of that solid (only: a window inserted in the opening stays), its walls tagged
+        with the opening's rule. Whether `s` was one (Shape.on of such a volume is its face's)."""
+        hit = self.solid_of.get(s.on[0])
+        if hit is None or hit[0] != s.on[1] or self.tags[hit[1]][6] != "closing":
+            return False
+        index = self.add_of.get(s.on[0])
+        if index is None:
+            return False
+        w = CUT_WELD
+        h = s.sz[2] + CUT_OUTSET  # out through the face, so the opening is never coplanar
+        if s.poly is None:
+            solid = Manifold.cube((s.sz[0] + 2 * w, s.sz[1] + 2 * w, h))
+            d = (-w, -w, 0.0)
+        else:
+            solid = Manifold.extrude(cross_section(s.poly).offset(w, manifold3d.JoinType.Miter, 2.0), h)
+            d = (0.0, 0.0, 0.0)
+        tag = self._tag(s, s.rule.name, "cut")
+        self.id_tag[solid.original_id()] = tag
+        x, y, z = s.ax
+        o = tuple(s.o[k] + x[k] * d[0] + y[k] * d[1] + z[k] * d[2] for k in range(3))
+        self.openings.setdefault(index, []).append(solid.transform(frame(o, s.ax)))
+        self.est_tris += 12
+        return True
 
     def push(self, s: Shape, steps: tuple) -> None:
         self.stack.append((s, steps))
@@ -275,9 +343,17 @@ class Derivation:
 
     def _add(self, s: Shape, tag: int) -> None:
         self.check_extent(s)
-        if type(s.solid) is SurfaceMesh:  # an open mesh (an inserted asset): a surface
-            self.add_surface(tag, s.solid.world(s.o, s.ax), s.solid.F, s)
-            return
+        if type(s.solid) is SurfaceMesh:  # an open mesh (an inserted asset)
+            if self.surfaces_mode == "cga":  # a surface, as CGA inserts it
+                self.add_surface(tag, s.solid.world(s.o, s.ax), s.solid.F, s)
+                return
+            from ..geometry.closing import close_mesh
+
+            closed = close_mesh(s.solid.V, s.solid.F)  # cached: one per asset and size
+            if closed is None:
+                return
+            s = s.copy()
+            s.solid = closed.as_original()  # a new original ID: its own tag, though cached
         self.check_solids(s)
         solid, oid, tris = local_solid(s)
         if solid is not None and s.solid is not None:
@@ -287,6 +363,9 @@ class Derivation:
             # shows is its footprint; it cannot be a solid, so it is that face in the surface
             # layer (only when the thin axis is z; a box thin along x or y is left out)
             flat = s.solid is None and s.sz[2] <= 1e-9 and s.sz[0] > 1e-9 and s.sz[1] > 1e-9
+            if flat and self.surfaces_mode == "solid":  # its footprint, THICKNESS thick
+                self.add_slab(tag, s.o, s.ax, s.sz, s.poly, s.rule.span)
+                return
             message = (f"rule {s.rule.name!r}: a volume of size {tuple(round(v, 4) for v in s.sz)} "
                        "has no thickness: " + ("its footprint is emitted as a surface" if flat
                                                else "it was left out of the mesh"))
@@ -336,6 +415,8 @@ class Derivation:
         """`s` becomes a terminal named `name`."""
         if s.kind == FACE:
             tag = self._tag(s, name, "face")
+            if s.hole and self.surfaces_mode == "solid":
+                self.holes.add(tag)  # it covers an opening: no slab (compose)
             self.faces.append((tag, s.o, s.ax, s.sz, s.poly, s.on))
             if s.cut >= 0:  # the recess this face came from takes the terminal's tags
                 t = self.tags[s.cut]
@@ -351,6 +432,43 @@ class Derivation:
     def add_body(self, s: Shape) -> None:
         """A volume decomposed by comp(f) stays as the solid body its faces decorate."""
         self._add(s, self._tag(s, s.rule.name, "body"))
+
+    def add_closing(self, s: Shape) -> None:
+        """The default (`surfaces="solid"`) for a volume comp(f) consumes: it stays as the
+        solid its faces are views of. What no face terminal covers (faces CGA drops: not
+        selected, NIL) keeps the tag role "closing", so viewers can hide it."""
+        if s.solid is None and min(s.sz) <= 1e-9:
+            return  # no volume (a flat "volume"): its face terminals are made slabs instead
+        n = len(self.adds)
+        self._add(s, self._tag(s, s.rule.name, "closing"))
+        if len(self.adds) == n + 1:
+            self.add_of[s.gid] = n  # openings are cut out of it (`_open_into`)
+
+    def add_slab(self, tag: int, o: tuple, ax: tuple, sz: tuple, poly: Any, where: Any) -> None:
+        """A face terminal off every solid, as a closed part (`surfaces="solid"`): the face
+        extruded THICKNESS behind its front (against its normal), so its visible side stays."""
+        from ..geometry.closing import THICKNESS
+
+        if sz[0] <= 1e-9 or sz[1] <= 1e-9:
+            return
+        if len(self.adds) + len(self.post_adds) + len(self.cuts) >= self.limits.max_solids:
+            raise LimitError(f"solid limit exceeded: more than {self.limits.max_solids} solids to unite",
+                             where, code="limit-solids")
+        if poly is None:
+            solid, tris = Manifold.cube((sz[0], sz[1], THICKNESS)), 12
+        else:
+            solid, tris = Manifold.extrude(cross_section(poly), THICKNESS), 4 * sum(len(c) for c in poly)
+        if solid.is_empty():
+            return
+        self.id_tag[solid.original_id()] = tag
+        z = ax[2]
+        back = (o[0] - z[0] * THICKNESS, o[1] - z[1] * THICKNESS, o[2] - z[2] * THICKNESS)
+        size = (sz[0], sz[1], THICKNESS)
+        frame_m = welded_frame(back, ax, size, weld_of(len(self.adds) + len(self.post_adds)))
+        self.adds.append(solid.transform(frame_m))
+        self.add_boxes.append(_box_of(frame_m, (0.0, 0.0, 0.0, *size)))
+        self.est_tris += tris
+        self.check_triangles(self.est_tris, where)
 
     def recess(self, s: Shape, depth: float) -> Shape:
         """Cut face `s` `depth` into the solid below it; the face moved to the recess bottom."""

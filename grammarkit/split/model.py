@@ -76,18 +76,25 @@ def compose(ctx: Derivation, where: Any) -> tuple[Any, Any]:
     """Unite the added solids, subtract the cuts (one batched boolean each); check the result.
     Also sorts the face terminals and recesses into views of the solid and the surface layer
     (`ctx.surface`, see `surface_layer`)."""
-    adds, post = ctx.adds, ctx.post_adds
     on_solid = ctx.is_on_solid
+    tags = ctx.tags
     cuts = []
     for cut in ctx.cuts:
         if on_solid(cut[1]):
             cuts.append(cut[0])
-            ctx.tags[ctx.solid_of[cut[1][0]][1]][6] = "body"
+            _mark_body(tags[ctx.solid_of[cut[1][0]][1]])
     ctx.painting = []
     for f in ctx.faces:
         if on_solid(f[5]):
             ctx.painting.append(f)
-            ctx.tags[ctx.solid_of[f[5][0]][1]][6] = "body"
+            _mark_body(tags[ctx.solid_of[f[5][0]][1]])
+        elif ctx.surfaces_mode == "solid" and f[0] not in ctx.holes:  # off every solid: a closed part
+            ctx.add_slab(f[0], f[1], f[2], f[3], f[4], where)
+    if ctx.surfaces_mode == "solid":
+        _close_reveals(ctx, where)
+    for index, holes in ctx.openings.items():  # openings cut out of their own solid only
+        ctx.adds[index] = Manifold.batch_boolean([ctx.adds[index], *holes], manifold3d.OpType.Subtract)
+    adds, post = ctx.adds, ctx.post_adds
     ctx.surface = surface_layer(ctx)
     if not adds and not post:
         if len(ctx.surface[1]):
@@ -134,6 +141,37 @@ def compose(ctx: Derivation, where: Any) -> tuple[Any, Any]:
     return body, mesh
 
 
+def _mark_body(tag: list) -> None:
+    """A solid with face terminals painted on it (or cut into) is a body; a closing solid
+    (comp(f)'s volume kept by the default mode) keeps its role."""
+    if tag[6] != "closing":
+        tag[6] = "body"
+
+
+def _close_reveals(ctx: Derivation, where: Any) -> None:
+    """`surfaces="solid"`: the reveal of a recess with no solid behind it (its face was off
+    every solid, so it is a slab) becomes a closed part, its walls THICKNESS thick."""
+    from ..geometry.closing import close_mesh
+    from ..geometry.surfaces import reveal_triangles
+
+    keep = []
+    for cut in ctx.cuts:
+        _solid, on, tag, o, ax, sz, poly, depth = cut
+        if ctx.is_on_solid(on):
+            keep.append(cut)
+            continue
+        V, F = reveal_triangles(o, ax, sz, poly, depth)
+        solid = close_mesh(V, F) if len(F) else None
+        if solid is not None:
+            solid = solid.as_original()  # a new original ID (close_mesh caches)
+            ctx.id_tag[solid.original_id()] = tag
+            ctx.adds.append(solid)
+            ctx.add_boxes.append(tuple(solid.bounding_box()))
+            ctx.est_tris += solid.num_tri()
+    ctx.cuts = keep
+    ctx.check_triangles(ctx.est_tris, where)
+
+
 def surface_layer(ctx: Derivation) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The surface layer: world vertices, triangles and the tag of each triangle, from the
     face terminals that are not views of an emitted solid, the reveals of recesses without a
@@ -142,8 +180,9 @@ def surface_layer(ctx: Derivation) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
     on_solid = ctx.is_on_solid
     pieces: list[tuple[int, np.ndarray, np.ndarray]] = []
+    solid_mode = ctx.surfaces_mode == "solid"  # faces off every solid are slabs (compose)
     for tag, o, ax, sz, poly, on in ctx.faces:
-        if not on_solid(on):
+        if not solid_mode and not on_solid(on):
             V, F = face_triangles(o, ax, sz, poly)
             if len(F):
                 pieces.append((tag, V, F))
@@ -387,10 +426,14 @@ class Model:
     def _paint_faces(self, out: np.ndarray) -> None:
         """Face terminals have no volume: they colour the body triangles lying in their region."""
         raw = self._ctx.tags  # plain lists [name, rule, otype, color, material, node, role]
-        faces = [f for f in self._ctx.painting if raw[f[0]][3] or raw[f[0]][4] or raw[f[0]][7] is not None]
+        solid_of = self._ctx.solid_of
+        # a face with a colour, material or texture paints its solid; on a closing solid (the
+        # default mode's comp(f) volume) every face does: its region is what CGA shows
+        faces = [f for f in self._ctx.painting if raw[f[0]][3] or raw[f[0]][4] or raw[f[0]][7] is not None
+                 or raw[solid_of[f[5][0]][1]][6] == "closing"]
         if not faces:
             return
-        is_body = np.array([t[6] == "body" for t in raw] + [False], dtype=bool)
+        is_body = np.array([t[6] in ("body", "closing") for t in raw] + [False], dtype=bool)
         idx = np.nonzero(is_body[out])[0]
         if len(idx) == 0:
             return

@@ -40,7 +40,7 @@ class Shape:
     __slots__ = (
         "o", "ax", "sz", "kind", "poly", "solid", "color", "material", "rule", "params",
         "seed", "node", "depth", "si", "st", "entry", "cut", "values", "_rng", "gid", "on",
-        "trims", "trim_on", "tex", "csel",
+        "trims", "trim_on", "tex", "csel", "hole",
     )
 
     def __init__(self, o: Vec, ax: tuple[Vec, Vec, Vec], sz: Vec, kind: str = FACE,
@@ -74,6 +74,9 @@ class Shape:
         # material attributes; None until a texturing operation runs
         self.tex: Any = None
         self.csel = ""  # comp.sel: the selector of the block branch that made the shape
+        # a face (or a piece of one) covering an opening cut into a solid, in the plane of the
+        # face the opening was extruded from: in the default mode it is the hole, no geometry
+        self.hole = False
 
     def copy(self) -> "Shape":
         c = Shape.__new__(Shape)
@@ -82,7 +85,7 @@ class Shape:
         c.seed, c.node, c.depth, c.si, c.st = self.seed, self.node, self.depth, self.si, self.st
         c.entry, c.cut, c.values, c._rng = self.entry, self.cut, self.values, None
         c.gid, c.on, c.trims, c.trim_on = self.gid, self.on, self.trims, self.trim_on
-        c.tex, c.csel = self.tex, self.csel
+        c.tex, c.csel, c.hole = self.tex, self.csel, self.hole
         return c
 
     def derived(self, o: Vec, sz: Vec, poly: Any = None, kind: str | None = None,
@@ -98,7 +101,7 @@ class Shape:
         c.gid = next(_GIDS)
         c.on = self.on if c.kind == FACE else None
         c.trims, c.trim_on = self.trims, self.trim_on
-        c.tex, c.csel = self.tex, self.csel
+        c.tex, c.csel, c.hole = self.tex, self.csel, self.hole and c.kind == FACE
         return c
 
     def rng(self) -> random.Random:

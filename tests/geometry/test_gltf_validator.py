@@ -45,7 +45,7 @@ def written(tmp_path_factory):
         files += [m.save(out / f"{path.stem}.glb"), m.save(out / f"{path.stem}.gltf")]
     # the surface layer: a model of faces only, and a solid with surfaces beside it
     for name, text in SURFACE_MODELS.items():
-        m = grammarkit.derive(text, seed=0)
+        m = grammarkit.derive(text, seed=0, surfaces="cga")  # CGA's open faces: a surface layer
         files += [m.save(out / f"{name}.glb"), m.save(out / f"{name}.gltf")]
     from grammarkit.tiling import load_examples, write_assembly
 

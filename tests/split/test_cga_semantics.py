@@ -54,8 +54,11 @@ def test_a_file_beside_the_grammar_wins_over_the_asset_dirs(tmp_path):
     (rules / "parts" / "box.obj").write_text("v 0 0 0\nv 1 0 0\nv 1 1 0\nf 1 2 3\n")  # an open triangle
     g = rules / "house.grammar"
     g.write_text('Lot --> footprint(rect(4, 2)) extrude(3) i("parts/box.obj") Part.\n')
-    m = derive(_with_asset_dirs(load(g), ["../assets"]))
+    m = derive(_with_asset_dirs(load(g), ["../assets"]), surfaces="cga")
     assert m.solid_triangle_count == 0 and m.surface_triangle_count == 1  # the grammar's own file
+    closed = derive(_with_asset_dirs(load(g), ["../assets"]))  # the default: the triangle, 1 cm thick
+    assert closed.surface_triangle_count == 0 and closed.mesh.is_watertight
+    assert closed.mesh.extents == pytest.approx([4, 2, 0.01], abs=0.003)
 
 
 # -- taper: CGA's pyramid over the face ------------------------------------------------------
@@ -70,7 +73,7 @@ def test_taper_is_an_engine_operation_with_cgas_pyramid():
 
 # -- a model without a solid -----------------------------------------------------------------
 def test_a_surface_only_model_has_an_empty_copyable_mesh_and_counts_its_layers():
-    m = derive("Lot --> footprint(rect(2, 2)) Ground.\n")
+    m = derive("Lot --> footprint(rect(2, 2)) Ground.\n", surfaces="cga")  # CGA's open faces
     assert m.mesh.copy().faces.shape == (0, 3)
     assert m.solid_triangle_count == 0 and m.surface_triangle_count == len(m.surface_mesh.faces) == 2
     assert m.triangle_count == 2
@@ -135,15 +138,15 @@ def test_extrude_of_a_volume_inwards_leaves_the_hollow_inside():
 
 
 def test_offset_on_a_volume_offsets_every_face_in_its_plane():
-    inside = derive(BOX + "offset(-0.5) Inside.\n")
+    inside = derive(BOX + "offset(-0.5) Inside.\n", surfaces="cga")  # CGA's open faces
     assert inside.solid_triangle_count == 0
     assert inside.surface_mesh.area == pytest.approx(2 * (3 * 1 + 3 * 2 + 1 * 2))
-    both = derive(BOX + "offset(-0.5) { inside: I. | border: B. }\n")
+    both = derive(BOX + "offset(-0.5) { inside: I. | border: B. }\n", surfaces="cga")
     assert [p.name for p in both.parts] == ["I", "B"]
     assert both.surface_mesh.area == pytest.approx(2 * (4 * 2 + 4 * 3 + 2 * 3))  # inside + border: every face
 
 
 def test_offset_faces_of_a_volume_can_be_extruded_into_panels():
-    m = derive(BOX + "offset(-0.5) { inside: extrude(0.2) Panel. | border: Frame. }\n")
+    m = derive(BOX + "offset(-0.5) { inside: extrude(0.2) Panel. | border: Frame. }\n", surfaces="cga")
     assert m.mesh.is_watertight
     assert m.mesh.volume == pytest.approx(0.2 * 2 * (3 * 1 + 3 * 2 + 1 * 2), rel=2e-2)

@@ -15,7 +15,7 @@ LOT = [(0.0, 0.0), (10.0, 0.0), (10.0, 6.0), (0.0, 6.0)]
 
 
 def derive(text: str, lot=LOT):
-    return grammarkit.derive(text, lot=lot)
+    return grammarkit.derive(text, lot=lot, surfaces="cga")  # CGA's open faces
 
 
 def test_face_edges_of_a_lot_follow_its_outline():

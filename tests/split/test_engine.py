@@ -36,7 +36,11 @@ def test_box_volume_and_leaf_name(G):
 
 def test_comp_face_frames(G):
     g = G(BOX.replace("Mass", "Mass\nMass --> comp(f) { front: F. | back: B. | left: L. | right: R. | top: T. | bottom: D. }"))
-    m = derive(g)
+    # the default: the consumed volume stays as the solid its six faces are views of
+    solid = derive(g)
+    assert ok(solid).volume == near(240.0) and len(solid.surface_faces) == 0
+    assert set(solid.face_labels()) == {"F", "B", "L", "R", "T", "D"}
+    m = derive(g, surfaces="cga")  # CityEngine's open faces
     by = {p.name: p for p in m.parts}
     assert set(by) == {"F", "B", "L", "R", "T", "D", "Mass"} - {"Mass"} or set(by) == {"F", "B", "L", "R", "T", "D"}
     # x along the face's first edge, z along the outward normal
@@ -46,7 +50,7 @@ def test_comp_face_frames(G):
     assert by["T"].axes[2] == pytest.approx((0, 0, 1)) and by["T"].origin == pytest.approx((0, 0, 4))
     assert by["D"].axes[2] == pytest.approx((0, 0, -1))
     assert by["F"].size[:2] == pytest.approx((10, 4)) and by["R"].size[:2] == pytest.approx((6, 4))
-    # comp(f) consumes the volume (CGA): no solid, the six faces are the surface layer
+    # comp(f) consumes the volume (CGA, surfaces="cga"): no solid, the six faces are the surface layer
     assert len(m.faces) == 0 and len(m.surface_faces) == 12
     surf = m.surface_mesh
     assert surf.area == pytest.approx(2 * (10 * 6 + 10 * 4 + 6 * 4))
@@ -100,12 +104,15 @@ def test_extrude_negative_goes_against_the_normal(G):
     # a window reveal the CGA way: a negative extrusion into the wall, its sides as surfaces
     g = G("Lot --> footprint(rect(4, 4)) extrude(3) comp(f) { front: Win | volume: Mass. }\n"
           "Win --> split(x) { 1: NIL | 2: extrude(-0.5) comp(f) { side: Reveal. } | ~1: NIL }")
-    m = derive(g)
+    m = derive(g, surfaces="cga")  # CGA's open faces
     reveal = [t for t in m.surface_tags.tolist() if m.tags[t].name == "Reveal"]
     assert len(reveal) == 8  # four sides, two triangles each
     assert m.surface_vertices[:, 1].max() == pytest.approx(0.5)  # 0.5 into the wall (+y)
     # extrude(0): a volume without thickness, left out of the solid with a warning
-    m = derive(G("Lot --> footprint(rect(4, 4)) [ extrude(0) Flat. ] extrude(1) Box."))
+    slab = derive(G("Lot --> footprint(rect(4, 4)) [ extrude(0) Flat. ] extrude(1) Box."))
+    # the default: the flat volume's footprint is a 1 cm slab (below the lot: behind its front)
+    assert ok(slab).volume == pytest.approx(16.0 * 1.01, rel=5e-3)
+    m = derive(G("Lot --> footprint(rect(4, 4)) [ extrude(0) Flat. ] extrude(1) Box."), surfaces="cga")
     assert any("no thickness" in w for w in m.warnings) and ok(m).volume == pytest.approx(16.0, rel=5e-3)
     # ... and its footprint is in the surface layer (what CityEngine shows of a flat volume)
     assert [m.tags[t].name for t in m.surface_tags.tolist()] == ["Flat", "Flat"]
@@ -467,7 +474,7 @@ def test_geometry_in_attr_values_reads_zero(G):
 
 
 def test_reverse_normals_turns_a_face_around(G):
-    m = derive(G("Lot --> footprint(rect(4, 2)) reverseNormals() X."))
+    m = derive(G("Lot --> footprint(rect(4, 2)) reverseNormals() X."), surfaces="cga")
     assert m.parts[0].axes[2] == pytest.approx((0, 0, -1))
     assert (m.surface_mesh.face_normals[:, 2] < -0.99).all()  # the surface looks down now
     # the outline stays in place: an L extruded after turning grows downwards

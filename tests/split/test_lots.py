@@ -14,7 +14,7 @@ ELL = [(0.0, 0.0), (20.0, 0.0), (20.0, 8.0), (8.0, 8.0), (8.0, 16.0), (0.0, 16.0
 
 
 def derive(text: str, lot=RECT):
-    return grammarkit.derive(text, lot=lot)
+    return grammarkit.derive(text, lot=lot, surfaces="cga")  # CGA's open faces
 
 
 def sizes(model, name: str) -> list[tuple]:

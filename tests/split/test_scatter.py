@@ -8,12 +8,19 @@ import pytest
 import grammarkit
 from grammarkit.errors import DerivationError, GrammarError
 
+# These tests pin CGA's open-face semantics (`surfaces="cga"`); the default, one watertight
+# solid, is tested in test_cga_solid.py.
+
+def derive_cga(*args, **kw):
+    return grammarkit.derive(*args, surfaces="cga", **kw)
+
+
 RECT = [(0.0, 0.0), (20.0, 0.0), (20.0, 16.0), (0.0, 16.0)]
 ELL = [(0.0, 0.0), (20.0, 0.0), (20.0, 8.0), (8.0, 8.0), (8.0, 16.0), (0.0, 16.0)]
 
 
 def points(text: str, lot=RECT, seed: int = 0, name: str = "P") -> tuple[np.ndarray, list]:
-    m = grammarkit.derive(text, lot=lot, seed=seed)
+    m = derive_cga(text, lot=lot, seed=seed)
     parts = [p for p in m.parts if p.name == name]
     return np.array([p.origin for p in parts]), parts
 
@@ -88,7 +95,7 @@ def test_counts_round_and_zero_makes_nothing():
 
 
 def test_scattered_inserts_are_a_watertight_model():
-    m = grammarkit.derive("Lot --> scatter(surface, 25, uniform) { all: Tree }\n"
+    m = derive_cga("Lot --> scatter(surface, 25, uniform) { all: Tree }\n"
                           "Tree --> s(0.4, 0.4, 3) center(xy) i(\"builtin:cylinder\") Trunk.\n", lot=RECT, seed=2)
     assert sum(p.name == "Trunk" for p in m.parts) == 25
     assert m.mesh.is_watertight
@@ -96,8 +103,8 @@ def test_scattered_inserts_are_a_watertight_model():
 
 def test_bad_scatter_arguments_are_located_errors():
     with pytest.raises(GrammarError, match="surface.volume.scope"):
-        grammarkit.derive("Lot --> scatter(everywhere, 3, uniform) { all: P. }\n", lot=RECT)
+        derive_cga("Lot --> scatter(everywhere, 3, uniform) { all: P. }\n", lot=RECT)
     with pytest.raises(GrammarError, match="selector"):
-        grammarkit.derive("Lot --> scatter(surface, 3, uniform) { top: P. }\n", lot=RECT)
+        derive_cga("Lot --> scatter(surface, 3, uniform) { top: P. }\n", lot=RECT)
     with pytest.raises(DerivationError, match="scatter"):
-        grammarkit.derive("Lot --> scatter(surface, 1e9, uniform) { all: P. }\n", lot=RECT)
+        derive_cga("Lot --> scatter(surface, 1e9, uniform) { all: P. }\n", lot=RECT)

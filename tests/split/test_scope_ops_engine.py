@@ -12,11 +12,18 @@ import trimesh
 import grammarkit
 from grammarkit.errors import DerivationError
 
+# These tests pin CGA's open-face semantics (`surfaces="cga"`); the default, one watertight
+# solid, is tested in test_cga_solid.py.
+
+def derive_cga(*args, **kw):
+    return grammarkit.derive(*args, surfaces="cga", **kw)
+
+
 LOT = 'Lot --> footprint(rect(10, 4)) '
 
 
 def one(text: str):
-    m = grammarkit.derive(text + "\n")
+    m = derive_cga(text + "\n")
     assert len(m.parts) == 1
     return m, m.parts[0]
 
@@ -53,7 +60,7 @@ def test_rotate_scope_by_30_degrees_makes_the_bounding_box_of_the_turned_axes(tm
     assert m.mesh.bounds[1] == pytest.approx((10, 4, 3), abs=2e-3)
     assert readback_watertight(m, tmp_path)
     # a split along the turned y cuts the solid on slanted planes: the volume is kept
-    m2 = grammarkit.derive(LOT + "extrude(3) rotateScope(30, 0, 0) split(y) { ~1: A. | ~1: B. }\n")
+    m2 = derive_cga(LOT + "extrude(3) rotateScope(30, 0, 0) split(y) { ~1: A. | ~1: B. }\n")
     assert {q.name for q in m2.parts} == {"A", "B"}
     assert m2.mesh.volume == pytest.approx(120, rel=2e-3) and readback_watertight(m2, tmp_path)
 
@@ -108,17 +115,17 @@ def test_mirror_scope_turns_two_axes_and_refuses_one():
     assert flat(p.axes) == pytest.approx(flat(((-1, 0, 0), (0, -1, 0), (0, 0, 1)))) and p.origin == pytest.approx((10, 4, 0))
     assert p.size == pytest.approx((10, 4, 3))
     with pytest.raises(DerivationError) as e:
-        grammarkit.derive(LOT + "extrude(3) mirrorScope(false, false, true) A.\n")
+        derive_cga(LOT + "extrude(3) mirrorScope(false, false, true) A.\n")
     assert "left-handed" in str(e.value) and e.value.span.column > 1
     with pytest.raises(DerivationError) as e:
-        grammarkit.derive(LOT + 'mirrorScope(1, 0, 0) A.\n')
+        derive_cga(LOT + 'mirrorScope(1, 0, 0) A.\n')
     assert "true or false" in str(e.value)
 
 
 def test_mirror_geometry_reflects_inside_the_scope(tmp_path):
     # an asymmetric footprint (a gable point at x = 3) mirrored along x: the point at x = 7
     src = 'Lot --> footprint(polygon(0, 0, 10, 0, 10, 4, 3, 8, 0, 4)) extrude(3) '
-    m0 = grammarkit.derive(src + "A.\n")
+    m0 = derive_cga(src + "A.\n")
     m, p = one(src + "mirrorGeometry(true, false, false) A.")
     assert p.size == pytest.approx((10, 8, 3)) and p.axes[0] == pytest.approx((1, 0, 0))
     top = m.mesh.vertices[m.mesh.vertices[:, 1] > 7.9]
@@ -135,11 +142,11 @@ def test_bad_arguments_are_located_errors():
     for op in ('alignScopeToAxes("w")', 'alignScopeToGeometry(0, "big")',
                'alignScopeToGeometry(0, "any")', "alignScopeToGeometry(0.5)"):
         with pytest.raises(DerivationError) as e:
-            grammarkit.derive(LOT + "extrude(3) " + op + " A.\n")
+            derive_cga(LOT + "extrude(3) " + op + " A.\n")
         assert e.value.span is not None and e.value.span.line == 1, op
 
 
 def test_scope_operations_are_deterministic():
     text = LOT + "extrude(3) rotateScope(17, 23, 41) split(x) { ~1: A. | ~1: B. }\n"
-    a, b = grammarkit.derive(text), grammarkit.derive(text)
+    a, b = derive_cga(text), derive_cga(text)
     assert [(q.origin, q.axes, q.size) for q in a.parts] == [(q.origin, q.axes, q.size) for q in b.parts]

@@ -26,6 +26,7 @@ def png(tmp_path):
 
 
 def derive(text: str, tmp_path=None, **kw):
+    kw.setdefault("surfaces", "cga")  # CGA's open faces: what these tests pin
     if tmp_path is not None:  # a grammar file, so that texture paths resolve beside it
         path = tmp_path / "t.grammar"
         path.write_text(text)

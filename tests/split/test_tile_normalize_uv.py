@@ -8,11 +8,18 @@ import grammarkit
 from grammarkit.cga import translate_cga
 from grammarkit.errors import DerivationError
 
+# These tests pin CGA's open-face semantics (`surfaces="cga"`); the default, one watertight
+# solid, is tested in test_cga_solid.py.
+
+def derive_cga(*args, **kw):
+    return grammarkit.derive(*args, surfaces="cga", **kw)
+
+
 LOT = [(0.0, 0.0), (12.0, 0.0), (12.0, 9.0), (0.0, 9.0)]
 
 
 def uv_range(text: str) -> np.ndarray:
-    m = grammarkit.derive(text, lot=LOT)
+    m = derive_cga(text, lot=LOT)
     uv = np.concatenate([u.reshape(-1, 2) for u in (m.triangle_uvs, m.surface_uvs) if u is not None])
     uv = uv[~np.isnan(uv).any(axis=1)]
     return np.array([uv.min(axis=0), uv.max(axis=0)]).ravel()
@@ -39,10 +46,10 @@ def test_normalize_uv_spans_zero_to_one():
 
 
 def test_without_texture_coordinates_tile_uv_warns_and_changes_nothing():
-    m = grammarkit.derive("Lot --> tileUV(0, 2, 2) F.\n", lot=LOT)  # CityEngine's behaviour
+    m = derive_cga("Lot --> tileUV(0, 2, 2) F.\n", lot=LOT)  # CityEngine's behaviour
     assert any("tileUV(): the shape has no texture coordinates in uv set 0" in w for w in m.warnings)
     with pytest.raises(DerivationError, match="projectUV"):
-        grammarkit.derive("Lot --> normalizeUV(0, uv, separatePerFace) F.\n", lot=LOT)
+        derive_cga("Lot --> normalizeUV(0, uv, separatePerFace) F.\n", lot=LOT)
 
 
 def test_cga_tile_and_normalize_are_translated():
@@ -50,4 +57,4 @@ def test_cga_tile_and_normalize_are_translated():
                       "normalizeUV(0, u, separatePerFace) X.\n", filename="t.cga")
     assert r.ok
     assert "tileUV(0, 4, 3)" in r.text and "normalizeUV(0, u, separatePerFace)" in r.text
-    grammarkit.derive(r.grammar, lot=LOT)
+    derive_cga(r.grammar, lot=LOT)

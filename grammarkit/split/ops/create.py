@@ -34,7 +34,11 @@ def op_extrude(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
         # CGA extrudes against the normal: the volume lies below the face, [h, 0] along z
         z = s.ax[2]
         o = (s.o[0] + z[0] * h, s.o[1] + z[1] * h, s.o[2] + z[2] * h)
-        return s.derived(o, (s.sz[0], s.sz[1], -h), s.poly, VOLUME)
+        v = s.derived(o, (s.sz[0], s.sz[1], -h), s.poly, VOLUME)
+        # it lies inside the solid its face is a view of (if any): comp(f) of it is an opening
+        # cut into that solid in the default mode (the engine's `_keep_comp_volume`)
+        v.on = s.on
+        return v
     # extrude(0) makes a volume without thickness (comp(f) gives its faces; as a terminal it
     # is left out of the solid with a warning)
     return s.derived(s.o, (s.sz[0], s.sz[1], h), s.poly, VOLUME)
