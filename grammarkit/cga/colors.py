@@ -19,7 +19,7 @@ _HSV_N = (5.0, 3.0, 1.0)  # r, g, b
 
 
 def _channel(c: float) -> int:
-    return int(math.floor(min(1.0, max(0.0, c)) * 255.0 + 0.5))
+    return math.floor(min(1.0, max(0.0, c)) * 255.0 + 0.5)
 
 
 def rgb_to_hex(r: float, g: float, b: float) -> str:

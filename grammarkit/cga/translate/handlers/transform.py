@@ -54,8 +54,9 @@ def _h_s(h: HandlerContext):
         back = [back[0], tz.operand if isinstance(tz, Unary) else Num(value=-tz.value), back[1]]
     items.append(OpCall(name="mirrorGeometry", args=tuple(Arg(value=f) for f in flags), span=h.span))
     items.append(OpCall(name="t", args=tuple(Arg(value=v) for v in back), span=h.span))
-    return items, ("s:negative", "s() with a negative size: the geometry is mirrored into place, "
-                   "the scope keeps its positive size (scope.s and the scope origin differ from CGA's)")
+    return items, ("s:negative", ("s() with a negative size: the geometry is mirrored into place, "
+                                  "the scope keeps its positive size (scope.s and the scope origin "
+                                  "differ from CGA's)"))
 
 
 def _positive(v: Any) -> Any:
@@ -93,7 +94,7 @@ def _moved(args: list, h: HandlerContext) -> list:
                   for a, c in zip(args, "xyz"))
     if h.frame == "Y":
         neg = cz.model_copy(update={"value": -cz.value}) if isinstance(cz, Num) else Unary(op="-", operand=cz)
-        cx, cy, cz = cx, neg, cy
+        cy, cz = neg, cy
     return [OpCall(name="t", args=(Arg(value=cx), Arg(value=cy), Arg(value=cz)), span=h.span)]
 
 
@@ -114,8 +115,8 @@ def _h_cleanup_geometry(h: HandlerContext):
     """CGA's cleanupGeometry(components, tolerance) merges vertices, edges and coplanar faces
     closer than the tolerance: the shape stays where it is, only its mesh is tidied."""
     need(h.args, 2, 2, "cleanupGeometry", h.span)
-    return [], ("cleanupGeometry:mesh", "nothing is done (the shape is the same; "
-                "grammarkit welds and unites the mesh when the model is finished)")
+    return [], ("cleanupGeometry:mesh", ("nothing is done (the shape is the same; grammarkit "
+                                         "welds and unites the mesh when the model is finished)"))
 
 
 @register("r")
