@@ -238,10 +238,55 @@ def gable(poly: Polygon, angle: float, overhang: float = 0.0, ridge: str = "x", 
     vertices are moved to their average height (`_even`). Eaves stay at the wall top, the ridge
     is level, the faces are no longer planar where the eaves are not parallel.
     """
+    if index is None and ridge == "auto" and not is_convex(poly):
+        return _gable_wings(poly, angle, overhang, overhang_y)
     direction = _direction(poly, ridge, index)
     if even and index is None:
         return _gable_even(poly, angle, overhang, direction, overhang_y)
     return _pitched(poly, angle, overhang, direction, both_sides=True, overhang_y=overhang_y)
+
+
+def _whole_edge(a: tuple, b: tuple, poly: Polygon, eps: float = 1e-6) -> bool:
+    n = len(poly)
+    return any({(round(a[0] / eps), round(a[1] / eps)), (round(b[0] / eps), round(b[1] / eps))}
+               == {(round(poly[i][0] / eps), round(poly[i][1] / eps)),
+                   (round(poly[(i + 1) % n][0] / eps), round(poly[(i + 1) % n][1] / eps))} for i in range(n))
+
+
+def _gable_wings(poly: Polygon, angle: float, overhang: float, overhang_y: float | None) -> Manifold:
+    """CGA's unindexed gable on a non-convex footprint (L, T, U): not one ridge across the
+    bounding box but one per wing, as CityEngine's skeleton-based gable. Each maximal convex
+    wing (`convex_cover`) is gabled along its longest edge; a wing's end edge is a vertical
+    gable only where it is a whole edge of the footprint (the end of an arm), and hipped where
+    the wing runs on along a longer outline edge (into the other wing); the union is the roof.
+    A negative `overhang_y` moves the gable ends in (a positive one is not applied here)."""
+    t = _check_angle(angle)
+    lift = _fascia(overhang)
+    parts = []
+    for grown in overhung(poly, overhang):
+        _check_vertices(grown, False)
+        for piece in convex_cover(grown):
+            n = len(piece)
+            longest = max(range(n), key=lambda i: (round(math.dist(piece[i], piece[(i + 1) % n]), 9), -i))
+            ux, uy = edge_direction(piece, longest)
+            x0, y0, x1, y1 = bbox(piece)
+            solid = Manifold.extrude(cross_section(piece), t * max(x1 - x0, y1 - y0) + 1.0 + lift)
+            for i in range(n):
+                a, b = piece[i], piece[(i + 1) % n]
+                dx, dy = b[0] - a[0], b[1] - a[1]
+                ln = math.hypot(dx, dy)
+                if ln < 1e-12:
+                    continue
+                nx, ny = -dy / ln, dx / ln
+                if abs(dx * ux + dy * uy) < abs(-dx * uy + dy * ux) and _whole_edge(a, b, grown):
+                    if overhang_y is not None and overhang_y < 0:
+                        solid = solid.trim_by_plane((nx, ny, 0.0), nx * a[0] + ny * a[1] - overhang_y)
+                    continue  # the end of an arm: a vertical gable
+                solid = _keep_below(solid, nx, ny, nx * a[0] + ny * a[1], t, lift)
+            parts.append(solid)
+    if not parts:
+        raise ValueError("the footprint leaves no roof")
+    return _clean(parts[0] if len(parts) == 1 else Manifold.batch_boolean(parts, manifold3d.OpType.Add), lift)
 
 
 def _gable_even(poly: Polygon, angle: float, overhang: float, direction: tuple,

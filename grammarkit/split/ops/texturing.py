@@ -381,8 +381,7 @@ def op_normalize_uv(ctx: Any, s: Shape, args: Any, block: Any) -> Shape:
         raise ValueError(f"normalizeUV(): the mode must be one of {', '.join(NORMALIZE_MODES)}, got {mode!r}")
     m = _state(s).get_uv(k)
     if m is None:
-        raise ValueError(f"normalizeUV(): the shape has no texture coordinates in uv set {k} "
-                         f"(projectUV({k}) first)")
+        return _no_uvs(ctx, s, k, "normalizeUV()")  # as tileUV(): a warning, not the end
     a = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]
     for i, (lo, hi) in enumerate(_uv_range(s, m)):
         if "uv"[i] in which and hi - lo > 1e-12:
