@@ -314,7 +314,8 @@ def section_calibration(rec, args, out):
     print(f"\n6. Calibration and robustness on held-out pens ({n} per snippet per condition; CNN only)")
     print("acc: top-1 with the redraw answer counted wrong; ECE raw: softmax of the logits; ECE cal.: "
           "with the file's temperature T; RMSE: the true snippet's regressor, normalised units; "
-          "paper = the drawing as drawn, rect. = the page's turn undone (the default)")
+          "paper = the drawing as drawn, rect. = the page's turn undone (the default: the classifier averages "
+          "both views, the regressor reads the turned-back one)")
     hdr = (f"{'type':<8}{'condition':<22}{'n':>5}{'acc paper':>10}{'rect.':>7}{'redraw':>8}{'ECE raw':>9}"
            f"{'ECE cal.':>9}{'RMSE paper':>11}{'rect.':>7}{'T':>6}{'below':>7}")
     print(hdr)
@@ -333,8 +334,10 @@ def section_calibration(rec, args, out):
                 x, _turn = rectify_input(x_paper, tm.stage)
                 name = data.snippets[int(data.snippet[i])]
                 truth = next(k for k, g in enumerate(tm.classes) if name in g)
-                ok_paper.append(int(np.argmax(rec.logits(tm, x_paper))) == truth)
-                logits = rec.logits(tm, x)
+                logits_paper = rec.logits(tm, x_paper)
+                ok_paper.append(int(np.argmax(logits_paper)) == truth)
+                # as Recognizer.recognize_input: turned back, both views' logits averaged
+                logits = (logits_paper + rec.logits(tm, x)) / 2 if _turn else logits_paper
                 p_raw, p_cal = softmax(logits, 1.0), softmax(logits, temp)
                 raw_c.append(p_raw.max())
                 cal_c.append(p_cal.max())

@@ -152,11 +152,13 @@ class Recognizer:
             out = tm.network()(torch.from_numpy(x[None, None].astype(np.float32)))
         return out[0].numpy().astype(np.float64)
 
-    def classify(self, tm: TypeModel, x: np.ndarray) -> list[Candidate]:
+    def classify(self, tm: TypeModel, x: np.ndarray, *views: np.ndarray) -> list[Candidate]:
         """Candidates, most probable first, with calibrated probabilities: softmax of the
         logits divided by the type's temperature (calibration.py; 1 when the models file has
-        none)."""
-        probs = softmax(self.logits(tm, x), temperature_of(tm))
+        none). With more `views` of the drawing (its rectified input), the logits of all are
+        averaged."""
+        logits = np.mean([self.logits(tm, v) for v in (x, *views)], axis=0)
+        probs = softmax(logits, temperature_of(tm))
         order = np.argsort(-probs, kind="stable")
         return [Candidate(tm.classes[i][0], float(probs[i]), tuple(tm.classes[i][1:])) for i in order]
 
@@ -178,7 +180,8 @@ class Recognizer:
                         rectify: bool = True) -> Recognition:
         """Recognise a network input (RES x RES ink); see `recognize`. `rectify`: undo a turn
         of the page first on stages seen straight on (rectify.py; False: the drawing as it is,
-        the paper's way). `target` is the sketch's
+        the paper's way); the classifier then averages its logits over the drawing as drawn
+        and turned back. `target` is the sketch's
         line mask at the score canvas (dataset.line_mask with `score_short`); without it the
         input stands in (resized to the score canvas, which loses the long side's detail of an
         elongated canvas). `prior`: the default refinement (`pattern`) maximises the score times
@@ -200,10 +203,13 @@ class Recognizer:
         t = next(k for k, v in self.models.types.items() if v is tm)
         stage = stage or tm.stage
         t0 = time.perf_counter()
-        turn = 0.0
+        turn, drawn = 0.0, x
         if rectify:
             x, turn = rectify_input(x, stage)
-        top = self.classify(tm, x)
+        # turned back, the classifier reads the drawing as well as drawn on average but not on
+        # every drawing (it was fine-tuned on turned pages): it sees both and averages; the
+        # regressors read the turned-back drawing only (their error falls by half there)
+        top = self.classify(tm, x, drawn) if turn else self.classify(tm, x)
         t1 = time.perf_counter()
         if snippet is not None:
             if snippet not in self.library.snippets or self.library.snippets[snippet].object_type != t:
