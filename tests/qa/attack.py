@@ -1,11 +1,12 @@
 """Reproductions of every failure of issue 19 (hardening), run as a user would: the `grammarkit`
-command in a subprocess, under a wall-clock timeout and an address-space cap.
+command in a subprocess, under a CPU-time budget and an address-space cap.
 
 Each case builds its inputs in a fresh folder, runs one command and is classified:
 
 - ``clear``: the expected exit status, no traceback, the expected words in the output;
 - ``traceback``: Python's "Traceback (most recent call last)" reached the user;
-- ``hang``: the command did not end within the timeout (its process group is killed);
+- ``hang``: the command used more CPU time than the case's budget, or slept ten times as long
+  (its process group is killed);
 - ``memory``: the peak resident memory passed 1 GB (measured with wait4's rusage);
 - ``lost``: a file that had to survive was changed or removed;
 - ``wrong``: any other unexpected result (wrong status, message without the expected words).
@@ -78,6 +79,19 @@ class Outcome:
     detail: str = ""
 
 
+WALL_BACKSTOP = 10  # a case asleep (no CPU) is a hang after this many times its budget
+
+
+def _cpu_seconds(pid: int) -> float:
+    """User + system CPU seconds of a running process and its reaped children (Linux /proc;
+    elsewhere infinity, so the wall clock decides as before)."""
+    try:
+        fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+    except (OSError, IndexError):
+        return float("inf")
+    return sum(int(x) for x in fields[11:15]) / os.sysconf("SC_CLK_TCK")
+
+
 def run_case(case: Case, folder: Path | None = None) -> Outcome:
     own = folder is None
     tmp = tempfile.TemporaryDirectory(prefix="gk-attack-") if own else None
@@ -121,7 +135,12 @@ def run_case(case: Case, folder: Path | None = None) -> Outcome:
                     status = os.waitstatus_to_exitcode(wstatus)
                     proc.returncode = status
                     break
-                if time.perf_counter() - t0 > case.timeout:
+                # a hang is judged by work, not by the clock (issue 32: a loaded machine made
+                # slow cases "hang"): the command's CPU time past the case's budget, or (a
+                # command asleep for good uses none) the wall clock past ten times it
+                wall = time.perf_counter() - t0
+                if wall > case.timeout and (_cpu_seconds(proc.pid) > case.timeout
+                                            or wall > WALL_BACKSTOP * case.timeout):
                     hung = True
                     with _quiet():
                         os.killpg(proc.pid, signal.SIGKILL)
@@ -138,7 +157,7 @@ def run_case(case: Case, folder: Path | None = None) -> Outcome:
                 if data is not None and (not p.exists() or p.read_bytes() != data)]
         extra = s.check(work) if s.check else None
         if hung:
-            verdict, detail = "hang", f"killed after {case.timeout:.0f} s"
+            verdict, detail = "hang", f"killed after {seconds:.0f} s (budget {case.timeout:.0f} s of CPU)"
         elif TRACEBACK in output:
             verdict, detail = "traceback", output[output.index(TRACEBACK):][-600:]
         elif peak_mb * (1 << 20) > MEMORY_LIMIT:

@@ -197,6 +197,51 @@ def catches_sigterm(pid: int) -> None:
         time.sleep(0.005)
 
 
+def nothing_half_written(out: Path) -> None:
+    if not out.exists():
+        return
+    listed = [json.loads(x)["file"] for x in (out / "manifest.jsonl").read_text().splitlines()] \
+        if (out / "manifest.jsonl").exists() else []
+    assert {q.name for q in out.glob("*.glb")} == set(listed)
+    assert not (out / ".grammarkit.lock").exists() and not list(out.glob("*.tmp"))
+
+
+def as_from_a_terminal() -> None:
+    """Start the command with SIGINT's default disposition, as a shell in a terminal does,
+    whatever the test runner inherited: a runner started in the background of a script has
+    SIGINT ignored, and a SIGINT sent while it is still ignored (before grammarkit's first line)
+    is discarded by the kernel; from grammarkit's first line on it is obeyed either way (the
+    `ignored` cases of the test above)."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
+def _ignore_sigint() -> None:
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+def signal_at(args: list[str], out: Path, sig: int, delay: float, *, ignored: bool = False,
+              first_line: bool = False) -> tuple[int | None, str]:
+    """Run the CLI with `args -o out` and send `sig` `delay` seconds after the start: (exit
+    status, stderr), status None if it still ran 60 s later (killed). `ignored`: started with
+    SIGINT ignored (a background job of a script), the signal sent once grammarkit's first line
+    ran (before it, the kernel discards an ignored SIGINT); `first_line`: `delay` counts from
+    then too, never less. Also benchmarks/bench_hardening.py's."""
+    p = subprocess.Popen([*CLI, *args, "-o", str(out)], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                         text=True, preexec_fn=_ignore_sigint if ignored else as_from_a_terminal)
+    t0 = time.monotonic()
+    if ignored or first_line:
+        catches_sigterm(p.pid)  # grammarkit's first line ran (the interpreter's start is not ours)
+    time.sleep(max(0.0, delay - (time.monotonic() - t0)))
+    p.send_signal(sig)
+    try:
+        code = p.wait(timeout=60)
+    except subprocess.TimeoutExpired:
+        p.kill()
+        p.wait()
+        return None, p.stderr.read()
+    return code, p.stderr.read()
+
+
 # -- signals in the first second -----------------------------------------------------------------
 CASTLE = ROOT / "grammars" / "tiling" / "castle" / "castle.grammar"
 COMMANDS = {
@@ -214,35 +259,11 @@ COMMANDS = {
     (signal.SIGINT, 1.0, True)])
 def test_a_signal_in_the_first_second_stops_the_run(tmp_path, command, sig, delay, ignored):
     out = tmp_path / "out"
-    ignore = (lambda: signal.signal(signal.SIGINT, signal.SIG_IGN)) if ignored else None
-    p = subprocess.Popen([*CLI, *COMMANDS[command], "-o", str(out)], stdout=subprocess.PIPE,
-                         stderr=subprocess.PIPE, text=True, preexec_fn=ignore)
-    t0 = time.monotonic()
-    catches_sigterm(p.pid)  # grammarkit's first line ran (the interpreter's start is not ours)
-    time.sleep(max(0.0, delay - (time.monotonic() - t0)))
-    p.send_signal(sig)
-    try:
-        code = p.wait(timeout=30)
-    except subprocess.TimeoutExpired:
-        p.kill()
-        pytest.fail(f"{command} still running 30 s after {sig.name} at {delay} s")
-    err = p.stderr.read()
+    code, err = signal_at(COMMANDS[command], out, sig, delay, ignored=ignored, first_line=True)
+    assert code is not None, f"{command} still running 60 s after {sig.name} at {delay} s"
     assert code == 130, err
     assert "Traceback" not in err and "interrupted" in err
-    if out.exists():
-        listed = [json.loads(x)["file"] for x in (out / "manifest.jsonl").read_text().splitlines()] \
-            if (out / "manifest.jsonl").exists() else []
-        assert {q.name for q in out.glob("*.glb")} == set(listed)
-        assert not (out / ".grammarkit.lock").exists()
-
-
-def nothing_half_written(out: Path) -> None:
-    if not out.exists():
-        return
-    listed = [json.loads(x)["file"] for x in (out / "manifest.jsonl").read_text().splitlines()] \
-        if (out / "manifest.jsonl").exists() else []
-    assert {q.name for q in out.glob("*.glb")} == set(listed)
-    assert not (out / ".grammarkit.lock").exists() and not list(out.glob("*.tmp"))
+    nothing_half_written(out)
 
 
 @pytest.mark.parametrize("command", sorted(COMMANDS))
@@ -256,16 +277,8 @@ def test_a_signal_during_interpreter_start_up_stops_the_command(tmp_path, comman
     that arrives while it is still inherited as ignored is discarded by the kernel: no program
     can see it; from the first line on it is obeyed, see the test above.)"""
     out = tmp_path / "out"
-    p = subprocess.Popen([*CLI, *COMMANDS[command], "-o", str(out)], stdout=subprocess.PIPE,
-                         stderr=subprocess.PIPE, text=True)
-    time.sleep(delay)
-    p.send_signal(sig)
-    try:
-        code = p.wait(timeout=60)
-    except subprocess.TimeoutExpired:
-        p.kill()
-        pytest.fail(f"{command} still running 60 s after {sig.name} at {delay} s")
-    err = p.stderr.read()
+    code, err = signal_at(COMMANDS[command], out, sig, delay)
+    assert code is not None, f"{command} still running 60 s after {sig.name} at {delay} s"
     assert code != 0, err
     if code == 130:  # grammarkit's handler had it: its message, no traceback
         assert "interrupted" in err and "Traceback" not in err, err

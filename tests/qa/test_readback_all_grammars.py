@@ -41,10 +41,10 @@ def trimesh_default_merged(path) -> trimesh.Trimesh:
     return trimesh.Trimesh(loaded.vertices, loaded.faces)
 
 
-def _assert_reads_back(model, tmp_path, label: str) -> None:
+def _assert_reads_back(model, tmp_path, label: str, formats=FORMATS) -> None:
     assert coincident_count(model.mesh.vertices) == 0, label
     volume = model.manifold.volume()
-    for fmt in FORMATS:
+    for fmt in formats:
         path = model.save(tmp_path / f"m.{fmt}")
         what = f"{label} as {fmt}"
         mesh = trimesh_default_merged(path)
@@ -82,11 +82,15 @@ def test_every_example_reads_back_watertight(path, tmp_path):
 def test_random_variations_read_back_watertight(path, tmp_path):
     # 50 variations in all, shared among the examples: resampled attrs and variant bindings
     # (the skyscraper's samples 0, 9 and 21 of seed 7 had window cuts ending exactly on the
-    # podium top before the separation)
+    # podium top before the separation). Their point is the geometry (no coincident vertices,
+    # one watertight body), which every format carries alike: each variation is read back as
+    # GLB, the file most people load, and every fifth in all five formats (the round trip of
+    # each format is the test above's too); issue 32: this test took minutes on a busy machine
     k = EXAMPLES.index(path)
     n = VARIATIONS // len(EXAMPLES) + (1 if k < VARIATIONS % len(EXAMPLES) else 0)
     for var, m in variations(path, n, seed=7):
-        _assert_reads_back(m, tmp_path, f"{path.stem} variation {var.index} {var.attrs} {var.bindings}")
+        label = f"{path.stem} variation {var.index} {var.attrs} {var.bindings}"
+        _assert_reads_back(m, tmp_path, label, FORMATS if var.index % 5 == 0 else ("glb",))
 
 
 def _edge_touching_boxes():

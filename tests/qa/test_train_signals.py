@@ -159,15 +159,36 @@ def test_sketch_training_stops_cleanly_with_its_workers(tmp_path, sig):
     assert_stopped_cleanly(code, err, model)
 
 
-@pytest.mark.parametrize("kind", ["string-vae", "sketch"])
-def test_train_refuses_a_device_as_model_before_training(tmp_path, castle_dataset, kind):
-    link = tmp_path / ("null.vae" if kind == "string-vae" else "null.models")
+def test_train_string_vae_refuses_a_device_as_model_before_training(tmp_path, castle_dataset):
+    link = tmp_path / "null.vae"
     link.symlink_to(os.devnull)
-    args = [castle_dataset] if kind == "string-vae" else [
-        "--library", LIBRARY, "--types", "Window", "--samples", "20", "--no-cache"]
-    done = subprocess.run([*CLI, "train", kind, *map(str, args), "-o", str(link), "--epochs"
-                           if kind == "string-vae" else "--classifier-epochs", "1"],
+    done = subprocess.run([*CLI, "train", "string-vae", str(castle_dataset), "-o", str(link), "--epochs", "1"],
                           check=False, capture_output=True, text=True, timeout=600)
     assert done.returncode == 1, done.stderr
     assert "Traceback" not in done.stderr and str(link) in done.stderr, done.stderr
+    assert link.is_symlink() and os.readlink(link) == os.devnull
+    if "epoch 1/" in done.stderr:  # refused, but only once the model was trained
+        pytest.xfail("train string-vae checks -o only after training; needs the string-VAE "
+                     "plugin to call grammarkit.fileio.check_outputs first")
+
+
+def test_train_sketch_refuses_a_device_as_model_before_training(tmp_path):
+    pytest.importorskip("torch")
+    pytest.importorskip("grammarkit_sketch")
+    link = tmp_path / "null.models"
+    link.symlink_to(os.devnull)
+    run = Running("train", "sketch", "--library", LIBRARY, "--types", "Window", "--samples", "20",
+                  "--no-cache", "--workers", "2", "--classifier-epochs", "1", "-o", link)
+    pid = run.process.pid
+    end = time.monotonic() + 600
+    while run.process.poll() is None and not children(pid) and time.monotonic() < end:
+        time.sleep(0.05)
+    if run.process.poll() is None:  # rendering workers started: training began before the check
+        run.process.kill()
+        run.process.wait()
+        pytest.xfail("train sketch checks -o only after training (minutes); needs the sketch "
+                     "plugin to call grammarkit.fileio.check_outputs first")
+    run._reader.join(timeout=30)
+    err = "".join(run.lines)
+    assert run.process.returncode == 1 and str(link) in err and "Traceback" not in err, err
     assert link.is_symlink() and os.readlink(link) == os.devnull
