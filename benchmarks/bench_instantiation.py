@@ -83,7 +83,7 @@ def e2e_rows(args, grammar, rows_out, runs) -> None:  # noqa: ANN001
     from grammarkit.tiling import validate
 
     for label, backend, opts in runs:
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), time.process_time()
         made = 0
         shapes = []
         deadline = t0 + args.e2e_seconds
@@ -99,11 +99,12 @@ def e2e_rows(args, grammar, rows_out, runs) -> None:  # noqa: ANN001
                     break
         except Exception as exc:  # noqa: BLE001 - the time budget ends the run: report what was made
             print(f"  ({label}: {type(exc).__name__}: {str(exc)[:200]})")
-        secs = time.perf_counter() - t0
+        secs, cpu = time.perf_counter() - t0, time.process_time() - c0
         for shape in shapes:  # checked after the clock stops, for every back end alike
             assert validate(grammar, shape).ok and all(p.mesh.is_watertight for p in shape.parts), label
         parts = statistics.mean(len(sh.parts) for sh in shapes) if shapes else "-"
-        rows_out.append([label, made, secs, 60.0 * made / secs, parts, " ".join(f"{x:.1f}" for x in os.getloadavg())])
+        rows_out.append([label, made, secs, 60.0 * made / secs, parts, " ".join(f"{x:.1f}" for x in os.getloadavg()),
+                         60.0 * made / max(cpu, 1e-9)])
         print(f"  {label}: {made} shapes in {secs:.0f} s", flush=True)
 
 
@@ -135,7 +136,8 @@ def main() -> int:
     ap.add_argument("--skip-e2e", action="store_true")
     ap.add_argument("--parts", default="accuracy,instantiation,sampled,e2e",
                     help="comma-separated parts to run: accuracy, instantiation, sampled, e2e; or `fresh` alone "
-                         "(accuracy on a new sampler run) or `shipped` alone (end to end from the shipped models)")
+                         "(accuracy on a new sampler run), `shipped` alone (end to end from the shipped models) or "
+                         "`decodings` alone (free, masked and placed decoding side by side)")
     ap.add_argument("--sampled-graphs", type=int, default=30, help="sampled part: VAE samples instantiated")
     ap.add_argument("--sampler-seconds", type=float, default=None,
                     help="end-to-end: the graph sampler's row (default: --e2e-seconds)")
@@ -149,9 +151,13 @@ def main() -> int:
                     help="the `fresh` part: held-out graphs from a new graph-sampler run with this seed (the "
                          "shipped dataset used seed 1), scored with --default-model (default: builtin:castle)")
     ap.add_argument("--fresh-iterations", type=int, default=4, help="the `fresh` part: sampler iterations")
-    ap.add_argument("--shipped-rows", default="consistent,placed,placed-small,sampler",
+    ap.add_argument("--shipped-rows", default="consistent,placed,placed-small,default,sampler",
                     help="the `shipped` part's rows (the graph sampler last: the ratios are against it)")
     ap.add_argument("--max-tokens", type=int, default=40, help="the `shipped` part's placed-small row")
+    ap.add_argument("--decode-points", type=int, default=20, help="the `decodings` part: latent points per decoding")
+    ap.add_argument("--max-length", type=int, default=40, help="the `decodings` part: the placed row's length prior")
+    ap.add_argument("--placed-temperature", type=float, default=0.0,
+                    help="the `decodings` part: the placed row's temperature")
     args = ap.parse_args()
     if args.quick:
         args.graphs, args.iterations, args.train_seconds, args.test_graphs, args.e2e_seconds = 60, 2, 40, 10, 30
@@ -174,6 +180,9 @@ def main() -> int:
     grammar = load(ROOT / "grammars" / "tiling" / args.example / f"{args.example}.grammar")
     if set(args.parts.split(",")) == {"fresh"}:
         fresh_accuracy(args, grammar)
+        return 0
+    if set(args.parts.split(",")) == {"decodings"}:
+        decodings_table(args, grammar)
         return 0
     if set(args.parts.split(",")) == {"shipped"}:
         shipped_end_to_end(args, grammar)
@@ -422,6 +431,80 @@ def instantiation_tables(args, grammar, models, test_ds, inst, decoder, cats) ->
           f"{(1 / n_cat) ** 15:.2e} (paper: 1/6^15 = {6.0 ** -15:.2e}).")
 
 
+def decodings_table(args, grammar) -> None:  # noqa: ANN001
+    """The paper's free decoding, the masked decoding and the placed decoding side by side, from
+    the shipped models, on the same perturbation budget: validity, how many decoded latent points
+    end as a new valid 3D shape, and what a shape costs (wall clock and this process's CPU time,
+    since the machine is shared). Free and masked strings are built by the cycle-consistent
+    search with the shipped predictor's votes; placed strings by their own placement."""
+    import numpy as np
+
+    from grammarkit.tiling import validate
+    from grammarkit_string_vae.consistent import ConsistentDecoder, instantiate_consistent
+    from grammarkit_string_vae.edgemodel import load_edge_model
+    from grammarkit_string_vae.graphs import GraphSet
+    from grammarkit_string_vae.instantiate import Instantiator
+    from grammarkit_string_vae.modelfile import load_vae
+    from grammarkit_string_vae.placed import PlacedDecoder
+    from grammarkit_string_vae.sampling import Sampler, SamplingSettings
+
+    vae = load_vae(args.vae, grammar=grammar)
+    em = load_edge_model(f"builtin:{args.example}", grammar)
+    inst = Instantiator(grammar, em.categories)
+    consistent = ConsistentDecoder(inst, beam=args.beam)
+    train = GraphSet()
+    for s in vae.train_strings:
+        train.add(vae_graph(vae, s))
+    rows_ = []
+    specs = [("free (paper)", SamplingSettings(decoding="free", batch=2)),
+             ("masked", SamplingSettings(decoding="masked", batch=2)),
+             (f"placed, length prior <= {args.max_length} tokens, temperature {args.placed_temperature}",
+              SamplingSettings(decoding="placed", batch=2, max_length=args.max_length,
+                               temperature=args.placed_temperature))]
+    print(f"\n## Decodings side by side: {args.decode_points} perturbed latent points each, shipped models\n")
+    for label, st in specs:
+        sampler = Sampler(vae, st, seed=args.seed)
+        if st.decoding == "placed":
+            sampler.placed = PlacedDecoder(vae, inst, temperature=st.temperature)
+        seen = GraphSet()
+        built, parts, per_shape = 0, [], []
+        w0, c0 = time.perf_counter(), time.process_time()
+        last = c0
+        while sampler.decoded_points < args.decode_points:
+            for smp in sampler.run("perturb", 1):
+                g = smp.decoded.graph
+                if not smp.valid or g in train or not seen.add(g):
+                    continue
+                if smp.decoded.placement is not None:
+                    asm, _why = inst.build(g, smp.decoded.placement.frames, smp.decoded.placement.variants)
+                else:
+                    votes = {e: v for e, (_k, v) in em.predict(g, strings=8, seed=len(seen), voting="logprob").items()}
+                    asm = instantiate_consistent(inst, consistent, g, votes, tries=args.tries).assembly
+                if asm is not None:
+                    assert validate(grammar, asm).ok
+                    built += 1
+                    parts.append(len(g))
+                    now = time.process_time()
+                    per_shape.append(now - last)
+                    last = now
+        wall, cpu = time.perf_counter() - w0, time.process_time() - c0
+        n = sampler.decoded_points
+        rows_.append([label, n, f"{sampler.valid_points / n:.3f}", f"{built}/{n}", f"{len(seen)}",
+                      statistics.median(parts) if parts else "-", 60.0 * built / wall, 60.0 * built / cpu,
+                      statistics.median(per_shape) if per_shape else "-"])
+        print(f"  {label}: {built} shapes from {n} points in {wall:.0f} s ({cpu:.0f} s CPU)", flush=True)
+    print(table(["decoding", "latent points", "validity", "new valid shapes built in 3D", "new distinct graphs",
+                 "median parts", "shapes per minute (wall)", "shapes per CPU minute", "median CPU s per shape"],
+                rows_))
+    print(f"\nload average at the end: {' '.join(f'{x:.1f}' for x in os.getloadavg())}")
+
+
+def vae_graph(vae, text):  # noqa: ANN001, ANN201
+    from grammarkit_string_vae.strings import decode
+
+    return decode(text, vae.alphabet).graph
+
+
 def shipped_end_to_end(args, grammar) -> None:  # noqa: ANN001
     """Valid 3D shapes per minute from the shipped models (no training, no dataset): masked
     decoding with the cycle-consistent search, placed decoding, and the graph sampler, in one run."""
@@ -431,6 +514,8 @@ def shipped_end_to_end(args, grammar) -> None:  # noqa: ANN001
                        {**ship, "search": "consistent"}),
         "placed": ("string-vae: placed decoding (string and categories together, width 16)", "string-vae",
                    {**ship, "decoding": "placed"}),
+        "default": ("string-vae: no options (the shipped models: placed decoding, length prior <= 40 tokens)",
+                    "string-vae", {}),
         "placed-small": (f"string-vae: placed decoding, started from training strings of <= {args.max_tokens} tokens",
                          "string-vae", {**ship, "decoding": "placed", "max_tokens": str(args.max_tokens)}),
         "sampler": ("graph sampler (isomorphism dedupe)", "graph-sampler", {"dedupe": "isomorphism"}),
@@ -443,7 +528,7 @@ def shipped_end_to_end(args, grammar) -> None:  # noqa: ANN001
     for r in rows_:
         r.append(f"{r[3] / base_rate:.4f}x" if base_rate else "-")
     print(table(["back end", "valid shapes", "seconds", "shapes per minute", "mean parts", "load average after",
-                 "vs graph sampler"], rows_))
+                 "shapes per CPU minute (this process)", "vs graph sampler"], rows_))
 
 
 def end_to_end(args, grammar, models, full) -> None:  # noqa: ANN001
@@ -481,7 +566,7 @@ def end_to_end(args, grammar, models, full) -> None:  # noqa: ANN001
     for r in rows_:
         r.append(f"{r[3] / base_rate:.4f}x" if base_rate else "-")
     print(table(["back end", "valid shapes", "seconds", "shapes per minute", "mean parts", "load average after",
-                 "vs graph sampler"], rows_))
+                 "shapes per CPU minute (this process)", "vs graph sampler"], rows_))
     print(f"\nload average at the end: {' '.join(f'{x:.1f}' for x in os.getloadavg())}")
 
 

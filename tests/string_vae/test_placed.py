@@ -25,7 +25,7 @@ def shipped(castle_grammar):
     vae = load_vae("builtin:castle", grammar=castle_grammar)
     em = load_edge_model("builtin:castle", castle_grammar)
     inst = Instantiator(castle_grammar, em.categories)
-    return vae, inst, PlacedDecoder(vae, inst, width=64)
+    return vae, inst, PlacedDecoder(vae, inst, width=16)
 
 
 def test_a_buildable_training_string_passes_the_placement_masks_and_builds(shipped, castle_grammar):
@@ -86,3 +86,48 @@ def test_max_tokens_starts_sampling_only_from_short_training_strings(shipped):
     assert len(pool) < len(vae.train_strings)
     assert len(Sampler(vae, SamplingSettings(), seed=0).pool) == len(vae.train_strings)
     assert sampler._targets([(int(pool[0]),)]) == [len(vae.train_strings[int(pool[0])])]  # the length prior
+
+
+def test_the_length_bucketed_prior_draws_budgets_from_short_training_strings(shipped):
+    from grammarkit_string_vae.sampling import Sampler, SamplingSettings
+
+    vae, _inst, _dec = shipped
+    sampler = Sampler(vae, SamplingSettings(max_length=40, batch=2), seed=0)
+    targets = sampler._targets([(i,) for i in range(50)])  # start points of any size
+    short = {len(t) for t in vae.train_strings if len(t) <= 40}
+    assert set(targets) <= short and len(set(targets)) > 1
+    assert len(sampler.pool) == len(vae.train_strings)  # the start points stay the whole pool
+
+
+def test_the_sampler_reports_every_decoded_point(shipped):
+    from grammarkit_string_vae.sampling import Sampler, SamplingSettings
+
+    vae, _inst, _dec = shipped
+    sampler = Sampler(vae, SamplingSettings(batch=1, steps=2, max_tokens=20), seed=0)  # short strings: fast
+    seen = []
+    sampler.on_point = lambda: seen.append(sampler.decoded_points)  # the progress bar's hook
+    list(sampler.run("perturb", 1))
+    assert seen and seen[-1] == sampler.decoded_points and seen == sorted(seen)
+
+
+def test_no_model_option_uses_the_shipped_models_or_says_what_ships():
+    from grammarkit.errors import GrammarkitError
+    from grammarkit_string_vae.generate import shipped_defaults
+    from grammarkit_string_vae.options import StringVAEOptions
+
+    opts = shipped_defaults(StringVAEOptions(), "castle")
+    assert (opts.model, opts.categories, opts.decoding, opts.max_length) == \
+        ("builtin:castle", "builtin:castle", "placed", 40)
+    given = shipped_defaults(StringVAEOptions(model="m.vae"), "castle")
+    assert (given.categories, given.decoding, given.max_length) == (None, "masked", None)
+    with pytest.raises(GrammarkitError, match="no model ships for grammar 'balltrack'.*shipped: castle"):
+        shipped_defaults(StringVAEOptions(), "balltrack")
+
+
+def test_a_time_limit_ends_a_placed_run_and_says_so(tmp_path):
+    pytest.importorskip("torch")
+    # the shipped models by default (placed decoding); the budget is over before the first point
+    res = CliRunner().invoke(main, ["derive", str(CASTLE), "--backend", "string-vae", "-n", "5",
+                                    "--time-limit", "0.001", "-o", str(tmp_path / "out")])
+    assert res.exit_code == 0, res.output
+    assert "made 0 of 5" in res.output and "time limit" in res.output, res.output

@@ -76,12 +76,22 @@ def small_graphs(draw, types):
     return TypedGraph.make(tt, edges)
 
 
+@pytest.fixture(scope="module")
+def rule_pairs(castle, ranges):
+    """Per grammar: its rules as read from the grammar (checked with Rules.check_neighbors) and
+    as the decoder's boxes (read back from JSON). Made once: reading a grammar's rules is the
+    expensive part, the property below is about the graphs."""
+    out = []
+    for grammar in (castle, ranges):
+        rules = TopologyRules.from_grammar(grammar)
+        out.append((rules, TopologyRules.from_json(rules.to_json())))
+    return out
+
+
 @settings(max_examples=150, deadline=None)
 @given(data=st.data())
-def test_boxes_accept_exactly_what_the_grammar_rules_accept(castle, ranges, data):
-    for grammar in (castle, ranges):
-        rules = TopologyRules.from_grammar(grammar)  # checks with Rules.check_neighbors
-        boxes = TopologyRules.from_json(rules.to_json())  # checks with the decoder's boxes
+def test_boxes_accept_exactly_what_the_grammar_rules_accept(rule_pairs, data):
+    for rules, boxes in rule_pairs:
         g = data.draw(small_graphs(tuple(rules.types)))
         assert rules.is_valid(g) == boxes.is_valid(g), (g, rules.check(g), boxes.check(g))
 
@@ -124,7 +134,7 @@ def test_masked_random_walks_are_always_valid_and_end_within_the_budget(which, c
     vocab = _vocab(rules)
     auto = Automaton(rules, vocab, 40)
     rng = np.random.default_rng(3)
-    for _ in range(25):
+    for _ in range(12):  # a dozen walks: the property per walk is what counts; more only cost time
         text = _walk(auto, rng)
         parsed = decode(text, vocab.alphabet)
         assert rules.check(parsed.graph) == [], text

@@ -29,27 +29,29 @@ def generate(request: Request) -> Iterator[Result]:
     from .sampling import Sampler, SamplingSettings
     from .strings import convert
 
-    opts = request.options
+    opts = shipped_defaults(request.options, request.grammar.name)
     t0 = time.perf_counter()
     vae = load_vae(opts.model, grammar=request.grammar)
     settings = SamplingSettings(decoding=opts.decoding, temperature=opts.temperature,
                                 magnitude=opts.magnitude, steps=opts.steps,
                                 local_magnitude=opts.local_magnitude, points=opts.points,
-                                path_length=opts.path_length, batch=opts.batch, max_tokens=opts.max_tokens)
+                                path_length=opts.path_length, batch=opts.batch, max_tokens=opts.max_tokens,
+                                max_length=opts.max_length)
     if opts.decoding == "placed" and not opts.categories:
         raise GrammarkitError("--option decoding=placed needs edge categories: --option categories=FILE.edges "
                               "(or builtin:castle)")
     if opts.decoding == "placed":  # seconds per point: small batches, so the time budget is polled often
         settings = SamplingSettings(**{**settings.__dict__, "batch": min(opts.batch, 2)})
     sampler = Sampler(vae, settings, seed=request.seed)
+    limit = opts.max_decodes or 200 * max(1, request.n)
     # placed decoding takes seconds per latent point: the sampler polls the graceful budget and
     # the hard deadline between points (the hard one then raises at the loop's check below)
-    sampler.stop = lambda: request.time_is_up() or (request.deadline is not None and time.monotonic() > request.deadline)
+    sampler.stop = lambda: (request.time_is_up() or (request.deadline is not None and time.monotonic() > request.deadline)
+                            or sampler.decoded_points >= limit)
     train = GraphSet()
     for g in sampler.train_graphs:
         train.add(g)
     seen = GraphSet()
-    limit = opts.max_decodes or 200 * max(1, request.n)
     em = inst = None
     if opts.categories:
         from .edgemodel import load_edge_model
@@ -69,11 +71,22 @@ def generate(request: Request) -> Iterator[Result]:
     inst_stats = {"instantiated": 0, "failed": 0, "tries": 0, "monte_carlo": 0, "seconds": 0.0}
     advance = request.progress("string-vae", request.n)
     index = 0
+    last_new = 0  # decoded points when the last shape was yielded (the patience rule)
+
+    def on_point() -> None:  # the bar moves per decoded latent point, not only per shape
+        advance(0, decoded=sampler.decoded_points, made=index, lost=sampler.decoded_points - index)
+    sampler.on_point = on_point
     skipped = {"invalid": 0, "training": 0, "duplicate": 0, "too large": 0}
     stages = {"decoding": 0, "categories": 0, "3D placement": 0}  # where the graphs that were not built failed
     stopped = None
     while index < request.n and sampler.decoded_points < limit and stopped is None:
         request.check_deadline()
+        if request.time_is_up():  # the sampler stops early then and yields nothing: stop here too
+            stopped = "time limit"
+            break
+        if sampler.decoded_points - last_new >= opts.patience:
+            stopped = "patience"
+            break
         for s in sampler.run(opts.mode, 1):
             if index >= request.n:
                 break
@@ -134,6 +147,7 @@ def generate(request: Request) -> Iterator[Result]:
                        "histogram": g.histogram(), "mode": opts.mode, "decoding": opts.decoding,
                        "novel": g not in train, **extra_inst})
             index += 1
+            last_new = sampler.decoded_points
             elapsed = time.perf_counter() - t0
             advance(1, decoded=sampler.decoded_points,
                     eta=f"{elapsed / index * (request.n - index):.0f}s")
@@ -145,10 +159,13 @@ def generate(request: Request) -> Iterator[Result]:
         stats["instantiation"] = {**inst_stats, "seconds": round(inst_stats["seconds"], 2), "failures": failures}
     for key, c in sampler.lost.items():  # latent points that decoded to nothing usable
         stages[key] = stages.get(key, 0) + c
+    # valid graphs the run could not use: training graphs and graphs made already
+    stages["novelty"] = skipped["training"] + skipped["duplicate"]
     stats["lost"] = stages
     if index < request.n:
-        why = (f"the time limit was reached" if stopped else
-               f"the decoding limit was reached ({limit} latent points: --option max-decodes=N)")
+        why = {"time limit": "the time limit was reached",
+               "patience": f"no new shape in the last {opts.patience} latent points (--option patience=N)",
+               None: f"the decoding limit was reached ({limit} latent points: --option max-decodes=N)"}[stopped]
         worst = max(stages, key=stages.get)
         neck = (f"; the bottleneck is {worst} ({stages[worst]} of {sum(stages.values())} graphs lost there: "
                 f"{', '.join(f'{k} {v}' for k, v in stages.items())})" if any(stages.values()) else "")
@@ -156,6 +173,32 @@ def generate(request: Request) -> Iterator[Result]:
                               f"points{neck}; skipped {skipped}"
                               + (f"; {inst_stats['failed']} could not be instantiated ({failures})" if inst else ""))
     return stats
+
+
+def shipped_defaults(opts, grammar_name: str):  # noqa: ANN001, ANN201
+    """The options with the shipped models filled in when no model is given: the grammar's
+    `builtin:` VAE, its edge categories (unless given), placed decoding and the length prior of
+    strings of at most 40 tokens (unless given), the settings docs/string-vae.md measures.
+    A grammar without shipped weights is told what ships and how to train one."""
+    from .modelfile import WEIGHTS
+
+    decoding = opts.decoding or "masked"
+    if opts.model is not None:
+        return opts.model_copy(update={"decoding": decoding})
+    shipped = sorted(p.stem for p in WEIGHTS.glob("*.vae"))
+    if grammar_name not in shipped:
+        raise GrammarkitError(
+            f"the string-vae back end needs --option model=FILE.vae: no model ships for grammar {grammar_name!r} "
+            f"(shipped: {', '.join(shipped) or 'none'}); make one with `grammarkit dataset` and `grammarkit train "
+            "string-vae` (docs/string-vae.md, \"Training data\")")
+    update = {"model": f"builtin:{grammar_name}"}
+    if opts.categories is None and (WEIGHTS / f"{grammar_name}.edges").is_file():
+        update["categories"] = f"builtin:{grammar_name}"
+    cats = update.get("categories", opts.categories)
+    update["decoding"] = opts.decoding or ("placed" if cats else "masked")
+    if update["decoding"] == "placed" and opts.max_length is None and opts.max_tokens is None:
+        update["max_length"] = 40
+    return opts.model_copy(update=update)
 
 
 def build_placed(inst, g, placement):  # noqa: ANN001, ANN201

@@ -14,19 +14,24 @@ class StringVAEOptions(BaseModel):
 
     model_config = ConfigDict(extra="forbid", frozen=True, protected_namespaces=())
 
-    model: str = Field(..., description="the trained model file (.vae, from `grammarkit train string-vae`), "
-                       "or builtin:castle for the shipped one")
+    model: Optional[str] = Field(None, description="the trained model file (.vae, from `grammarkit train "
+                                 "string-vae`), or builtin:castle for the shipped one; default: the grammar's "
+                                 "shipped model, with its shipped categories and placed decoding")
     mode: Literal["perturb", "interpolate", "path", "prior"] = Field(
         "perturb", description="latent sampling: around training points, between two, along a latent "
         "path, or from the prior N(0, I)")
-    decoding: Literal["masked", "free", "placed"] = Field(
-        "masked", description="masked: grammar-constrained, valid by construction; free: the paper's "
+    decoding: Optional[Literal["masked", "free", "placed"]] = Field(
+        None, description="default: placed when the shipped models are used (no model option), else masked. "
+        "masked: grammar-constrained, valid by construction; free: the paper's "
         "decoding, invalid strings dropped; placed: string and edge categories decoded together, every "
         "step masked by what can still be placed in 3D (needs categories; see docs/string-vae.md)")
     width: int = Field(16, ge=1, description="placed decoding: placements kept per written prefix")
     placed_steps: int = Field(150, ge=1, description="placed decoding: search steps per latent point")
     max_tokens: Optional[int] = Field(None, ge=2, description="size control: perturb, interpolate and path "
                                       "start only from training points whose string has at most this many tokens")
+    max_length: Optional[int] = Field(None, ge=2, description="placed decoding's length prior: every sample's "
+                                      "budget is the length of a random training string of at most this many "
+                                      "tokens (start points stay the whole pool)")
     slack: float = Field(0.15, ge=0, description="placed decoding: the length prior's slack (budget = the "
                          "start string's length x (1 + slack))")
     temperature: float = Field(0.0, ge=0, description="0: most likely token; > 0: sample tokens")
@@ -39,6 +44,8 @@ class StringVAEOptions(BaseModel):
     batch: int = Field(128, ge=1, description="latent points decoded together")
     max_decodes: Optional[int] = Field(None, ge=1, description="stop after decoding this many latent "
                                        "points (default: 200 x n)")
+    patience: int = Field(60, ge=1, description="stop after this many decoded latent points without a new "
+                          "shape (and say why)")
     include_training: bool = Field(False, description="also yield graphs of the training set")
     categories: Optional[str] = Field(None, description="edge-category model (.edges, from `grammarkit train "
                                       "edge-categories`, or builtin:castle for the shipped one): instantiate every "

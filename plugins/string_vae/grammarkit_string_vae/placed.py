@@ -97,6 +97,7 @@ class PlacedDecoder:
         self.width = max(1, int(width))
         self.homing = float(homing)
         self._autos: dict[int, Automaton] = {}
+        self._cands: dict[tuple, list] = {}
         self.types = list(vae.alphabet.types)
         steps = [float(np.linalg.norm(c.matrix[:3, 3])) for c in self.cats.categories]
         self.step_max = (max(steps) if steps else 1.0) * 1.05 + 2 * instantiator.tolerance
@@ -151,6 +152,42 @@ class PlacedDecoder:
                 seen[key] = h
         return list(seen.values())
 
+    def _candidates(self, tx: str, ty: str, parent_variant: str) -> list:
+        """Every (category, placement in the parent's frame, child variant) of a tx -> ty edge,
+        in category order (the beam keeps them all and ranks them by frequency, so the
+        instantiator's Monte-Carlo order is not needed); cached per pair and parent variant."""
+        key = (tx, ty, parent_variant)
+        hit = self._cands.get(key)
+        if hit is None:
+            hit = self._cands[key] = [
+                (k, self.cats.placement(k, tx, ty), self.cats.variants(k, tx, ty)[1] or self.inst.default_variant[ty])
+                for k in self.cats.pair_categories(tx, ty)
+                if parent_variant is None or self.cats.variants(k, tx, ty)[0] in ("", parent_variant)]
+        return hit
+
+    def _may_close(self, ctx: "_Ctx", beam: list, ty: str) -> bool:
+        """Can a type-`ty` letter under the current part land within touching distance of an
+        open ring's owner in some hypothesis (bounding spheres only)? A cheap filter before the
+        exact placement of every candidate."""
+        st = ctx.state
+        parent = st.current
+        owners = sorted(set(st.rings.values()))
+        if parent < 0 or not owners:
+            return False
+        ry = max(self.geom._r(t, v) for t, v in self.lib.variants if t == ty) + 2 * self.inst.tolerance
+        for hyp in beam:
+            if hyp.touched:
+                continue
+            cands = self._candidates(ctx.types[parent], ty, hyp.variants[parent])
+            if not cands:
+                continue
+            Y = np.array([(hyp.frames[parent] @ A)[:3, 3] for _k, A, _v in cands])
+            for o in owners:
+                reach = self.geom._r(ctx.types[o], hyp.variants[o]) + ry
+                if (np.linalg.norm(Y - hyp.frames[o][:3, 3], axis=1) <= reach).any():
+                    return True
+        return False
+
     def _spots(self, types: list, frames: list, o: int) -> list:
         """Where a part joined to part `o` can sit (frame origins), by every category of o's type."""
         to, Fo = types[o], frames[o]
@@ -158,7 +195,17 @@ class PlacedDecoder:
                for ty in set(self.types) for k in self.cats.pair_categories(to, ty)]
         return out or [Fo[:3, 3]]
 
-    def _place(self, ctx: "_Ctx", hyp: _Hyp, parent: int, ty: str, Fy: np.ndarray, vy: str):
+    def _arrays(self, ctx: "_Ctx", hyp: _Hyp) -> tuple[np.ndarray, np.ndarray]:
+        """The hypothesis' frame origins (n, 3) and bounding radii (n,), made once per
+        hypothesis and step (every candidate placement of the step reads them)."""
+        T, F, V = ctx.types, hyp.frames, hyp.variants
+        if not F:
+            return np.zeros((0, 3)), np.zeros(0)
+        return (np.array([f[:3, 3] for f in F]),
+                np.array([self.geom._r(T[p], V[p]) for p in range(len(F))]))
+
+    def _place(self, ctx: "_Ctx", hyp: _Hyp, parent: int, ty: str, Fy: np.ndarray, vy: str,
+               arrays: tuple | None = None):
         """The placed parts (besides the parent) that a part of type `ty` at `Fy` touches, with
         their cycle edges' categories, or None with the reason the placement is masked out."""
         T, F, V = ctx.types, hyp.frames, hyp.variants
@@ -168,7 +215,7 @@ class PlacedDecoder:
         n = len(F)
         if n == 0:
             return {}, None
-        P = np.array([f[:3, 3] for f in F])
+        P, R = arrays if arrays is not None else self._arrays(ctx, hyp)
         owners = set(ctx.state.rings.values())
         d = np.linalg.norm(P - Fy[:3, 3], axis=1)
         # an open ring's owner must stay reachable with the tokens left (each part one step)
@@ -181,7 +228,7 @@ class PlacedDecoder:
             near = min([d[o]] + [float(np.linalg.norm(P[o] - P[q])) for q in stack])
             if near > (left + 1) * self.step_max:
                 return None, "reach"
-        radius = np.array([self.geom._r(T[p], V[p]) for p in range(n)]) + self.geom._r(ty, vy)
+        radius = R + self.geom._r(ty, vy)
         touched: dict[int, int] = {}
         for j in np.flatnonzero(d <= radius + 2 * self.inst.tolerance):
             p = int(j)
@@ -205,12 +252,12 @@ class PlacedDecoder:
             if parent < 0:
                 cands = [(None, self.lib.start_frame.get(ty, np.eye(4)), self.lib.default[ty])]
             else:
-                tx = ctx.types[parent]
                 cands = [(k, hyp.frames[parent] @ A, vy)
-                         for k, A, vy in self.inst._candidates(tx, ty, None, True, ctx.rng, hyp.variants[parent])]
+                         for k, A, vy in self._candidates(ctx.types[parent], ty, hyp.variants[parent])]
+            arrays = self._arrays(ctx, hyp)
             for k, Fy, vy in cands:
                 self.stats["letters"] += 1
-                touched, why = self._place(ctx, hyp, parent, ty, Fy, vy)
+                touched, why = self._place(ctx, hyp, parent, ty, Fy, vy, arrays)
                 if touched is None:
                     self.stats[why] += 1
                     ctx.fails[why] = ctx.fails.get(why, 0) + 1
@@ -352,7 +399,8 @@ class PlacedDecoder:
         if ctx.forced is None and st.rings and any(self.vocab.kind(t)[0] == "node" for t in order):
             # a letter that meets a part whose ring is open (so closes it) goes first: rings
             # close as soon as the geometry lets them, not only when the network remembers
-            beams = {t: self._next_beam(ctx, beam, t) for t in order if self.vocab.kind(t)[0] == "node"}
+            beams = {t: self._next_beam(ctx, beam, t) for t in order
+                     if self.vocab.kind(t)[0] == "node" and self._may_close(ctx, beam, self.types[self.vocab.kind(t)[1]])}
             closes = [t for t in order if any(hy.touched for hy in beams.get(t, ()))]
             order = closes + [t for t in order if t not in closes]
         tried = 0

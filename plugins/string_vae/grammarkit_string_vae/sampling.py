@@ -13,6 +13,10 @@ training graph) and decode latent points with `decoding.decode_latents` (free or
   made by repeatedly splitting every segment at the training point closest to both of its
   ends; its segments are then sampled like `interpolate`.
 
+Placed decoding (placed.py) takes a length budget per point, the *length prior*: the start
+string's length, or with `max_length` a random training string's of at most that length (the
+length-bucketed prior). `on_point()` is called after every decoded point (progress).
+
 `Sampler.run(n)` yields `Sample`s in order; each knows the latent point, the decoded string,
 whether it is valid and its graph, and which training graphs it came from. Everything is
 drawn from one numpy generator seeded by the caller: same seed, same samples.
@@ -47,6 +51,7 @@ class SamplingSettings:
     path_length: int = 32
     batch: int = 128  # seeds decoded together
     max_tokens: int | None = None  # size control: start only from training points whose string is this short
+    max_length: int | None = None  # placed decoding's length prior: budgets drawn from training strings this short
 
 
 @dataclass
@@ -75,6 +80,7 @@ class Sampler:
     valid_points: int = 0
     placed: object = None  # decoding "placed": the placed.PlacedDecoder that decodes each point
     stop: object = None  # a callable: True when the run's time is up (placed decoding polls it per point)
+    on_point: object = None  # a callable, called after every decoded latent point (progress)
 
     def __post_init__(self) -> None:
         self.rng = np.random.default_rng(self.seed)
@@ -100,10 +106,24 @@ class Sampler:
 
     def _targets(self, parents: list[tuple[int, ...]]) -> list[int]:
         """The length prior: per latent point, the length of the training strings it starts
-        from (their mean), or a random training string's."""
+        from (their mean), or a random training string's. With `max_length`, the length of a
+        random training string of at most that many tokens instead (a length-bucketed prior:
+        the start point still comes from the whole pool, so the latent chooses the content
+        and the bucket the size)."""
         S = self.vae.train_strings
+        if self.settings.max_length is not None:
+            bucket = self._bucket()
+            return [int(bucket[int(self.rng.integers(len(bucket)))]) for _ in parents]
         return [int(round(np.mean([len(S[a]) for a in ps]))) if ps else len(S[int(self.rng.integers(len(S)))])
                 for ps in parents]
+
+    def _bucket(self) -> list[int]:
+        """The training strings' lengths (in characters, as the budget counts them) of at most
+        `max_length`; the shortest training string's when none is that short."""
+        S = self.vae.train_strings
+        m = self.settings.max_length
+        lengths = sorted(len(t) for t in S if len(t) <= m)
+        return lengths or [min(len(t) for t in S)]
 
     def _decode(self, z: np.ndarray, parents: list[tuple[int, ...]] | None = None) -> list[Decoded]:
         self._calls += 1
@@ -114,12 +134,18 @@ class Sampler:
                 if self.stop is not None and self.stop():
                     break
                 out.append(self.placed.decode(z[i], targets[i], seed=self.seed * 7919 + self._calls * 1009 + i))
+                self.decoded_points += 1
+                if self.on_point is not None:
+                    self.on_point()
+            self.decoded_points -= len(out)
             self._count(out)
             return out
         out = decode_latents(self.vae.model, torch.from_numpy(np.ascontiguousarray(z, dtype=np.float32)),
                              vocab=self.vae.vocab, rules=self.vae.rules, mode=self.settings.decoding,
                              temperature=self.settings.temperature, seed=self.seed * 7919 + self._calls)
         self._count(out)
+        if self.on_point is not None:
+            self.on_point()
         return out
 
     def _count(self, out: list[Decoded]) -> None:
