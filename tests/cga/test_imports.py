@@ -50,7 +50,7 @@ def test_imported_files_warn_in_their_own_file(tmp_path):
     rep = result.report.to_json()
     assert rep["constructs"]["warned"] == 0  # main.cga's own constructs all translate
     assert [(w["file"], w["line"]) for w in rep["imported_warned"]] == [(lib, 2)]
-    model = grammarkit.derive(result.grammar, seed=0, lot=RECT)
+    model = grammarkit.derive(result.grammar, seed=0, lot=RECT, surfaces="cga")
     assert abs(_bbox(model)[1][2] - 9.0) < 1e-6
     assert {p.color for p in model.parts} == {"#ac7f49"}
 

@@ -13,7 +13,8 @@ from _cga_helpers import imported, line, LOT  # noqa: E402  (tests/cga/conftest.
 
 
 def derive(r):
-    return grammarkit.derive(r.grammar, lot=LOT)
+    # CityEngine's open faces: these tests compare terminals with CGA's own geometry
+    return grammarkit.derive(r.grammar, lot=LOT, surfaces="cga")
 
 
 def part(m, name):

@@ -14,7 +14,7 @@ RECT = [(0.0, 0.0), (20.0, 0.0), (20.0, 12.0), (0.0, 12.0)]
 def _derive(text: str):
     result = translate_cga(text, filename="t.cga")
     assert result.ok, [d.message for d in result.diagnostics]
-    model = grammarkit.derive(result.grammar, seed=0, lot=RECT)
+    model = grammarkit.derive(result.grammar, seed=0, lot=RECT, surfaces="cga")  # CGA's own geometry
     parts = [np.asarray(model.mesh.vertices).reshape(-1, 3)]
     if model.surface_vertices is not None:
         parts.append(np.asarray(model.surface_vertices).reshape(-1, 3))

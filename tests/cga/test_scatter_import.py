@@ -25,7 +25,7 @@ def test_scatter_of_a_rule_and_of_a_call_with_arguments():
 def test_a_bare_name_block_and_gaussian_arguments():
     r = imported("Lot --> scatter(surface, 50, gaussian, left, '0.1) { Leaf }\n")
     assert line(r, "Lot") == "Lot --> scatter(surface, 50, gaussian, left, 0.1) { all: Leaf. }"
-    p = np.array([q.origin for q in grammarkit.derive(r.grammar, lot=LOT).parts if q.name == "Leaf"])
+    p = np.array([q.origin for q in grammarkit.derive(r.grammar, lot=LOT, surfaces="cga").parts if q.name == "Leaf"])
     assert len(p) == 50 and p[:, 0].mean() < 3.0
 
 

@@ -26,7 +26,7 @@ def test_lot_projection_maps_cga_z_to_a_mirrored_grammarkit_y():
     # from the back
     r = imported("Lot --> setupProjection(0, scope.xz, 4, 2, 1, 0.5) projectUV(0) X.\n")
     assert "setupProjection(0, scope.xy, 4, -2, 1, scope.sy - 0.5)" in line(r, "Lot")
-    m = grammarkit.derive(r.grammar, lot=LOT)
+    m = grammarkit.derive(r.grammar, lot=LOT, surfaces="cga")  # UVs of open faces
     V, F, uv = m.surface_vertices, m.surface_faces, m.surface_uvs
     x, y = V[F][..., 0], V[F][..., 1]
     cga_z = 16.0 - y  # CGA's lot z: 0 at the back edge (y = 16), 16 at the street
@@ -36,7 +36,7 @@ def test_lot_projection_maps_cga_z_to_a_mirrored_grammarkit_y():
 def test_world_projection_axes_are_y_up_in_cga():
     r = imported("Lot --> setupProjection(0, world.xz, 3, 3) projectUV(0) X.\n")
     assert "setupProjection(0, world.xy, 3, -3)" in line(r, "Lot")
-    m = grammarkit.derive(r.grammar, lot=LOT)
+    m = grammarkit.derive(r.grammar, lot=LOT, surfaces="cga")  # UVs of open faces
     V, F, uv = m.surface_vertices, m.surface_faces, m.surface_uvs
     assert np.allclose(uv[..., 1], -V[F][..., 1] / 3.0)  # CGA's world z is grammarkit's -y
 
@@ -51,7 +51,7 @@ def test_uv_operations_and_materials_translate():
                   'set(material.colormap, "w.png")', "set(material.color.r, 0.2)", "deleteUV(2)"):
         assert piece in text
     assert r.report.warned == 0
-    m = grammarkit.derive(r.grammar, lot=LOT)
+    m = grammarkit.derive(r.grammar, lot=LOT, surfaces="cga")  # UVs of open faces
     assert m.surface_uvs is not None
     assert {t.color for t in m.tags if t.name == "X"} == {"#33ffff"}  # CGA's default colour is white
 
