@@ -80,18 +80,26 @@ def derive_once(workers: int, n: int, seed: int, options: list[str]) -> dict:
     return {"wall": wall, "cpu": cpu, "new": written, "attempts": stats.get("attempts")}
 
 
+def measure(configs, runs: int, once) -> dict:
+    """{(label, workers): [once(workers, seed, options) for each run]} (the same seeds everywhere)."""
+    return {(label, workers): [once(workers, 100 + r, opts) for r in range(runs)]
+            for label, workers, opts in configs}
+
+
+def table_head(title: str, head: str) -> None:
+    print(f"\n## {title}\n")
+    print(head)
+    print("|---" * (head.count("|") - 1) + "|")
+
+
 def derive_table(runs: int, n: int) -> None:
     configs = [("issue 33 (defaults)", 1, []), ("issue 33 (defaults)", 2, []),
                ("baseline: geometric-keys=false", 1, ["geometric-keys=false"])]
-    rows = {}
-    for label, workers, opts in configs:
-        rows[(label, workers)] = [derive_once(workers, n, 100 + r, opts) for r in range(runs)]
-    print(f"\n## derive castle.grammar --backend graph-sampler -n {n}, start-up included, "
-          f"median of {runs} run(s) (seeds 100..)\n")
-    head = ("| code path | workers | written | attempts | wall s | CPU s | new/min (wall) | "
-            "new/min (CPU) | vs baseline (wall) | vs 1 worker (wall) |")
-    print(head)
-    print("|---" * (head.count("|") - 1) + "|")
+    rows = measure(configs, runs, lambda w, seed, opts: derive_once(w, n, seed, opts))
+    table_head(f"derive castle.grammar --backend graph-sampler -n {n}, start-up included, "
+               f"median of {runs} run(s) (seeds 100..)",
+               "| code path | workers | written | attempts | wall s | CPU s | new/min (wall) | "
+               "new/min (CPU) | vs baseline (wall) | vs 1 worker (wall) |")
 
     def rate(rs, key):
         return statistics.median(60.0 * r["new"] / r[key] for r in rs)
@@ -110,17 +118,12 @@ def throughput(grammar, runs: int, n: int, iterations: int, per_shape: int) -> N
     configs = [("issue 33", 1, {}), ("issue 33", 2, {}),
                ("geometric-keys=false", 1, {"geometric_keys": False}),
                ("full recompute (baseline)", 1, {"geometric_keys": False, "incremental": False})]
-    results = {}
-    for label, workers, opts in configs:
-        rows = [one_run(grammar, workers=workers, seed=100 + r, n=n, iterations=iterations,
-                        attempts_per_shape=per_shape, **opts) for r in range(runs)]
-        results[(label, workers)] = rows
-    print(f"\n## Throughput in one process: castle, n <= {n}, iterations <= {iterations}, "
-          f"attempts_per_shape={per_shape}, median of {runs} run(s) (seeds 100..)\n")
-    head = ("| code path | workers | new variants | attempts | attempts/new | parts (min-mean-max) "
-            "| seconds | CPU s (this process) | attempts/s | new variants/min | vs baseline |")
-    print(head)
-    print("|---" * (head.count("|") - 1) + "|")
+    results = measure(configs, runs, lambda w, seed, opts: one_run(
+        grammar, workers=w, seed=seed, n=n, iterations=iterations, attempts_per_shape=per_shape, **opts))
+    table_head(f"Throughput in one process: castle, n <= {n}, iterations <= {iterations}, "
+               f"attempts_per_shape={per_shape}, median of {runs} run(s) (seeds 100..)",
+               "| code path | workers | new variants | attempts | attempts/new | parts (min-mean-max) "
+               "| seconds | CPU s (this process) | attempts/s | new variants/min | vs baseline |")
     base = results[("full recompute (baseline)", 1)]
     base_rate = statistics.median(60.0 * r["new"] / r["seconds"] for r in base)
     for (label, workers), rows in results.items():
