@@ -211,11 +211,6 @@ def search_files(query: str, base: "str | Path") -> list[str]:
     return sorted(found)
 
 
-def file_search(query: str, base: "str | Path") -> str:
-    """CGA's fileSearch: the matching files as a CGA list ("a;b;", "" when none)."""
-    return "".join(p + ";" for p in search_files(query, base))
-
-
 def file_random(rng: Any, files: list[str]) -> str:
     """CGA's fileRandom: one of `files` (sorted), drawn with the shape's generator; "" when
     there is none. One number is drawn either way, so that the random values drawn after it

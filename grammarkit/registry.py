@@ -299,11 +299,6 @@ class Registries:
                                        "registered at run time or given by hand)")
         return (self._rebuild, ())
 
-    @property
-    def installed(self) -> bool:
-        """Whether these are the installed plugins' registries (rebuilt in worker processes)."""
-        return self._rebuild is not None
-
     def _get(self, kind: str) -> dict:
         value = self._values.get(kind)
         if value is None:

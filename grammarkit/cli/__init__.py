@@ -59,8 +59,8 @@ if _is_the_command() and threading.current_thread() is threading.main_thread():
 
 import click  # noqa: E402 - after the signal handlers, on purpose
 
-from .. import __version__
-from ..errors import GrammarkitError
+from .. import __version__  # noqa: E402 - after the signal handlers, as click is
+from ..errors import GrammarkitError  # noqa: E402 - after the signal handlers, as click is
 
 # name -> (module, command attribute) of the built-in subcommands, imported on first use.
 BUILTIN_COMMANDS: dict[str, tuple[str, str]] = {
@@ -93,7 +93,7 @@ class GrammarkitGroup(click.Group):
         # which `--help` must not do (`grammarkit plugins` lists them)
         return sorted(set(BUILTIN_COMMANDS) | set(self.commands))
 
-    def get_command(self, ctx: click.Context, name: str):  # noqa: ANN201
+    def get_command(self, ctx: click.Context, name: str) -> click.Command | None:
         cmd = super().get_command(ctx, name)
         if cmd is not None:
             return cmd
@@ -108,7 +108,7 @@ class GrammarkitGroup(click.Group):
             return cmd
         return self._plugin_command(name)
 
-    def _plugin_command(self, name: str):  # noqa: ANN202
+    def _plugin_command(self, name: str) -> click.Command | None:
         from ..plugins import get_plugin_manager
 
         command = get_plugin_manager().cli_commands().get(name)
@@ -117,7 +117,7 @@ class GrammarkitGroup(click.Group):
             return command
         return None
 
-    def invoke(self, ctx: click.Context):  # noqa: ANN201
+    def invoke(self, ctx: click.Context) -> object:
         try:
             return super().invoke(ctx)
         except GrammarkitError as exc:

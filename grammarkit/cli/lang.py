@@ -5,6 +5,7 @@ import json
 import os
 import sys
 from pathlib import Path
+from typing import Any
 
 import click
 
@@ -101,7 +102,7 @@ def check(files: tuple[Path, ...], as_json: bool, emit_ir: bool, max_size: int |
         sys.exit(1)
 
 
-def _check_lazily(source, filename: str | None, limit: int):  # noqa: ANN001, ANN202
+def _check_lazily(source: Any, filename: str | None, limit: int) -> Any:
     """Check with grammarkit's own operations, functions and constraints first; load the
     third-party plugins only if the grammar names something those do not provide. So `check`
     of a grammar that needs no plugin never runs plugin code (issue 19)."""
@@ -161,7 +162,7 @@ def fmt(files: tuple[Path, ...], in_place: bool, check_only: bool, max_size: int
         sys.exit(1)
 
 
-def _backend_options(manager) -> dict[str, dict[str, list[dict]]]:  # noqa: ANN001
+def _backend_options(manager: Any) -> dict[str, dict[str, list[dict]]]:
     """plugin -> back end -> its options ([{name, type, default, doc}]), for `plugins`."""
     from ..jsonable import to_jsonable
     from ..run import describe_options

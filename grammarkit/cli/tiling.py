@@ -13,7 +13,7 @@ import click
 from ..errors import ShapeError
 
 
-def _load_grammar(path: Path):  # noqa: ANN202
+def _load_grammar(path: Path) -> Any:
     """Parse + resolve imports + check (grammarkit.dsl.load), keeping the file's location."""
     from .. import dsl
 

@@ -15,7 +15,7 @@ from __future__ import annotations
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Callable, Iterator, Mapping, Sequence
+from typing import Any, Callable, Generator, Iterator, Mapping, Sequence
 
 from ..errors import GrammarkitError, PluginError
 from .backend import BackendSpec, Request, Result
@@ -112,9 +112,9 @@ class RunSummary:
 def _registries(registries: Any) -> Any:
     if registries is not None:
         return registries
-    from ..plugins import get_plugin_manager  # the API edge: the only read of the global manager
+    from ..plugins import default_registries  # the run layer's one read of the installed plugins
 
-    return get_plugin_manager().registries()
+    return default_registries()
 
 
 def _grammar(grammar: Any) -> Any:
@@ -167,10 +167,11 @@ def _plugin_failure(spec: BackendSpec, exc: BaseException) -> PluginError:
                        f"{type(exc).__name__}: {exc}")
 
 
-def _drive(spec: BackendSpec, request: Request) -> Iterator[Result]:
-    """Iterate a back end's generator, turning its crashes into errors that name it; the
-    generator's return value (its summary) is stored on `request`'s holder by the caller."""
-    gen = spec.run(request)  # type: ignore[misc]
+def _drive(spec: BackendSpec, request: Request) -> Generator[Result, None, dict]:
+    """Iterate a back end's generator, turning its crashes into errors that name it; returns
+    the generator's return value (its summary, a dict)."""
+    assert spec.run is not None  # resolve_backend refuses a back end without a run function
+    gen = iter(spec.run(request))
     try:
         while True:
             try:
@@ -195,7 +196,9 @@ def _drive(spec: BackendSpec, request: Request) -> Iterator[Result]:
                                   f"yielded a {type(result).__name__}, not a grammarkit.run.Result")
             yield result
     finally:
-        gen.close()
+        close = getattr(gen, "close", None)  # a generator; a plain iterator has nothing to close
+        if close is not None:
+            close()
 
 
 def _request(grammar: Any, spec: BackendSpec, registries: Any, *, n: int, seed: int, start: int,
@@ -214,10 +217,10 @@ def _request(grammar: Any, spec: BackendSpec, registries: Any, *, n: int, seed: 
             raise GrammarkitError(f"{what} must be a whole number >= {lo}, got {value!r}")
     if isinstance(seed, bool) or not isinstance(seed, int):
         raise GrammarkitError(f"seed must be an integer, got {seed!r}")
-    for what, value in (("timeout", timeout), ("time_limit", time_limit)):
-        if value is not None and (isinstance(value, bool) or not isinstance(value, (int, float))
-                                  or not value > 0):
-            raise GrammarkitError(f"{what} must be a positive number of seconds, got {value!r}")
+    for what, seconds in (("timeout", timeout), ("time_limit", time_limit)):
+        if seconds is not None and (isinstance(seconds, bool) or not isinstance(seconds, (int, float))
+                                    or not seconds > 0):
+            raise GrammarkitError(f"{what} must be a positive number of seconds, got {seconds!r}")
     opts = parse_options(spec.options, options, backend=spec.name)
     if executor is None:
         executor = make_executor(None, workers)

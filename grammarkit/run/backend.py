@@ -20,6 +20,6 @@ from __future__ import annotations
 
 # The contract itself lives beside the other specs (grammarkit.registry), so that the registry
 # and the hooks need not import the run layer; this is its documented import path.
-from ..registry import BackendSpec, Request, Result, RunFunction  # noqa: F401
+from ..registry import BackendSpec, Request, Result, RunFunction
 
 __all__ = ["BackendSpec", "Request", "Result", "RunFunction"]

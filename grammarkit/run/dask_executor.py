@@ -133,7 +133,7 @@ def _state_for(recipe: _Recipe) -> tuple[Any, tuple[str, int]]:
                  and not _busy.get(k)]
         base_key = max(older, key=lambda k: k[1]) if older else None
         base = _states.pop(base_key) if base_key is not None else None
-    if base is not None:
+    if base is not None and base_key is not None:
         state = base
         for fn, args in recipe.log[base_key[1]:]:
             fn(state, *args)

@@ -121,7 +121,7 @@ def attr_vector(columns: Sequence[AttrColumn], attrs: Mapping[str, Any],
         if col.kind == "range":
             span = (col.hi or 0.0) - (col.lo or 0.0)
             try:
-                x = 0.0 if span == 0 else (float(value) - float(col.lo)) / span
+                x = 0.0 if span == 0 else (float(value) - float(col.lo or 0.0)) / span
             except (TypeError, ValueError):
                 x = float("nan")
             vec.append(x if math.isfinite(x) else 0.0)

@@ -38,7 +38,10 @@ import threading
 import time
 import weakref
 from collections import deque
-from typing import Any, Callable, Iterable, Iterator, Sequence
+from typing import TYPE_CHECKING, Any, Callable, Iterable, Iterator, Sequence, cast
+
+if TYPE_CHECKING:  # pragma: no cover - types only
+    from multiprocessing.connection import Connection
 
 from .executor_protocol import (  # noqa: F401 - the protocol, re-exported where it always was
     GUARD_HINT, Executor, Session, WorkerError, default_workers, main_without_phantom_file,
@@ -130,6 +133,7 @@ class _Worker:
             self.proc.start()
         child.close()
         self.ready = False
+        self.busy = False  # taken by a session (WorkerPool)
         self.sessions: set[int] = set()
 
     def alive(self) -> bool:
@@ -161,20 +165,20 @@ class WorkerPool:
         """`count` workers for a session: live idle ones first, new ones started for the rest."""
         with self._lock:
             self._workers[:] = [w for w in self._workers if w.alive()]
-            free = [w for w in self._workers if not getattr(w, "busy", False)]
+            free = [w for w in self._workers if not w.busy]
             taken = free[:count]
             while len(taken) < count:
                 w = _Worker()
                 self._workers.append(w)
                 taken.append(w)
             for w in taken:
-                w.busy = True  # type: ignore[attr-defined]
+                w.busy = True
             return taken
 
     def release(self, workers: Sequence[_Worker], *, broken: bool) -> None:
         with self._lock:
             for w in workers:
-                w.busy = False  # type: ignore[attr-defined]
+                w.busy = False
                 if broken or not w.alive():
                     w.kill()
                     if w in self._workers:
@@ -183,11 +187,11 @@ class WorkerPool:
     def idle(self) -> int:
         """Live workers not used by a session (a later session starts with these for free)."""
         with self._lock:
-            return sum(1 for w in self._workers if w.alive() and not getattr(w, "busy", False))
+            return sum(1 for w in self._workers if w.alive() and not w.busy)
 
     def pids(self) -> list[int]:
         with self._lock:
-            return [w.proc.pid for w in self._workers if w.alive()]
+            return [w.proc.pid for w in self._workers if w.alive() and w.proc.pid is not None]
 
     def close(self) -> None:
         """Stop every worker of this pool."""
@@ -211,11 +215,6 @@ def shutdown_workers() -> None:
     """Stop the workers of every local executor of this process (tests, notebooks)."""
     for pool in list(_POOLS):
         pool.close()
-
-
-def idle_workers() -> int:
-    """Live idle workers of every local executor of this process."""
-    return sum(pool.idle() for pool in list(_POOLS))
 
 
 # ---------------------------------------------------------------------------------------------
@@ -334,7 +333,7 @@ class _LocalSession:
                             break
                     continue
                 conns = list(out) + [w.conn for w in self.workers if not w.ready]
-                for conn in wait(conns, timeout=1.0):
+                for conn in cast("list[Connection]", wait(conns, timeout=1.0)):
                     w = next(x for x in self.workers if x.conn is conn)
                     try:
                         msg = conn.recv()
@@ -359,7 +358,8 @@ class _LocalSession:
         from multiprocessing.connection import wait
 
         starting = [w.conn for w in self.workers if not w.ready]
-        for conn in wait(starting, timeout=timeout) if starting else ():
+        ready = cast("list[Connection]", wait(starting, timeout=timeout)) if starting else []
+        for conn in ready:
             w = next(x for x in self.workers if x.conn is conn)
             try:
                 msg = conn.recv()

@@ -69,7 +69,7 @@ def portable_error(exc: BaseException) -> BaseException:
     try:
         pickle.loads(pickle.dumps(exc))
         return exc
-    except Exception:  # noqa: BLE001
+    except Exception:  # noqa: BLE001 - whatever pickling raises, the text is sent instead
         text = "".join(traceback.format_exception_only(type(exc), exc)).strip()
         return WorkerError(text)
 
@@ -81,11 +81,11 @@ def main_without_phantom_file() -> Iterator[None]:
     child would die looking for it: hide it while starting (the work never lives in it)."""
     main = sys.modules.get("__main__")
     path = getattr(main, "__file__", None)
-    if path is None or os.path.isfile(path):
+    if main is None or path is None or os.path.isfile(path):
         yield
         return
-    del main.__file__  # type: ignore[union-attr]
+    del main.__file__
     try:
         yield
     finally:
-        main.__file__ = path  # type: ignore[union-attr]
+        main.__file__ = path

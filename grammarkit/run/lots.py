@@ -191,6 +191,7 @@ def _rings(geometry: Any) -> tuple[list[list[list]], str | None]:
     coords = geometry.get("coordinates")
     if kind == "Invalid":
         return [], f"unreadable shape ({geometry.get('error')})"
+    polys: Any  # checked below: the file may hold anything
     if kind == "Polygon":
         polys = [coords]
     elif kind == "MultiPolygon":
@@ -339,7 +340,7 @@ def read_lots(path: str | Path, *, seed: int = 0, degrees: str = "project", hole
             raw.append({"feature": fi, "source_id": sid, "part": None, "props": props, "error": err})
             continue
         for pi, rings in enumerate(polys):
-            entry = {"feature": fi, "source_id": sid, "part": pi + 1 if len(polys) > 1 else None,
+            entry: dict[str, Any] = {"feature": fi, "source_id": sid, "part": pi + 1 if len(polys) > 1 else None,
                      "props": props, "error": None, "holes": len(rings) - 1}
             outer, err = _points(rings[0])
             if err is None:
@@ -436,7 +437,7 @@ def read_lots(path: str | Path, *, seed: int = 0, degrees: str = "project", hole
             if err is None and far > MAX_EXTENT:
                 err = (f"lies {far / 1000:.0f} km from the other lots' origin (more than "
                        f"{MAX_EXTENT / 1000:.0f} km); split the file by district")
-            if err is None and abs(polygon_area(polygon)) < MIN_AREA:
+            if err is None and polygon is not None and abs(polygon_area(polygon)) < MIN_AREA:
                 err = (f"is degenerate: its area is {abs(polygon_area(polygon)):.3g} m² (less than "
                        f"{MIN_AREA:g} m²)")
             if err is None and r.get("holes"):

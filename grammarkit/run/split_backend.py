@@ -23,7 +23,7 @@ This module stays light (pydantic only): the engine is imported when a run start
 from __future__ import annotations
 
 import time
-from typing import Any, Iterator, Optional
+from typing import Any, Generator, Optional
 
 from pydantic import BaseModel, ConfigDict, Field, field_validator
 
@@ -246,7 +246,7 @@ def _derive_item(state: _State, item: Any) -> Result:
                   metrics=metrics, extra=extra, attachments=attachments)
 
 
-def run(request: Request) -> Iterator[Result]:
+def run(request: Request) -> Generator[Result, None, dict]:
     from ..split import check_attrs
 
     attrs = dict(request.attrs)

@@ -45,7 +45,6 @@ __all__ = ["ModelFile", "OutputFolder", "RunMismatch", "WriteStopped", "check_ou
 MANIFEST = "manifest.jsonl"
 RUN_FILE = "run.json"
 PENDING = ".pending.json"
-CORE_FIELDS = ("id", "index", "seed", "parents", "metrics", "file", "attachments")
 MODEL_SUFFIXES = frozenset({".glb", ".gltf", ".obj", ".stl", ".ply"})
 
 
@@ -412,7 +411,7 @@ def image_as(png: bytes, path: Path) -> bytes:
     from PIL import Image
 
     fmt = Image.registered_extensions()[path.suffix.lower()]
-    image = Image.open(io.BytesIO(png))
+    image: Image.Image = Image.open(io.BytesIO(png))
     if fmt in ("JPEG", "BMP") and image.mode == "RGBA":
         image = image.convert("RGB")
     buf = io.BytesIO()

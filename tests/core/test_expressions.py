@@ -154,7 +154,7 @@ def test_compile_expr_needs_the_functions_explicitly():
 
     e = parse("const v = 1").consts[0].value
     with pytest.raises(TypeError, match="functions"):
-        compile_expr(e, lambda name, span: None, None)  # type: ignore[arg-type]
+        compile_expr(e, lambda name, span: None, None)  # type: ignore[arg-type]  # the missing functions= is the point
 
 
 def test_load_of_a_good_grammar_is_unaffected():

@@ -48,7 +48,7 @@ def test_json_round_trip_keeps_spans():
 def test_ir_is_immutable():
     g = _sample_grammar(1)
     with pytest.raises(Exception):
-        g.name = "x"  # type: ignore[misc]
+        g.name = "x"  # type: ignore[misc]  # frozen: the assignment must fail
 
 
 def test_family_and_typed_views():

@@ -37,7 +37,7 @@ def test_split_run_continues_to_the_same_bytes(small, tmp_path):
     part = run_backend(small, out=tmp_path / "part", n=2, seed=2, options={"variations": True})
     rest = run_backend(small, out=tmp_path / "part", n=5, seed=2, options={"variations": True})
     assert (part.written, rest.resumed, rest.written) == (2, 2, 3)
-    strip = lambda p: [{k: v for k, v in json.loads(x).items() if k != "metrics"}  # noqa: E731
+    strip = lambda p: [{k: v for k, v in json.loads(x).items() if k != "metrics"}  # noqa: E731 - a one-line helper
                        for x in (p / "manifest.jsonl").read_text().splitlines()]
     assert strip(tmp_path / "part") == strip(tmp_path / "whole")
     for f in (tmp_path / "whole").glob("*.glb"):
@@ -117,16 +117,16 @@ def test_an_exporter_that_writes_nothing_replaces_nothing(small, tmp_path):
 def test_the_time_budget_stops_a_run(small, tmp_path):
     import time
 
-    def run(request):
-        import trimesh
+    import trimesh  # imported before the clock starts: on a loaded machine it takes a while
 
+    def run(request):
         for i in range(100):
             time.sleep(0.05)
             request.check_deadline()
             yield Result(id=f"b{i}", index=i, model=trimesh.creation.box())
 
     with pytest.raises(LimitError, match="time budget"):
-        run_backend(small, out=tmp_path / "o", n=100, timeout=0.3, registries=_registries(_spec(run)))
+        run_backend(small, out=tmp_path / "o", n=100, timeout=1.0, registries=_registries(_spec(run)))
     lines = (tmp_path / "o" / "manifest.jsonl").read_text().splitlines()
     assert 1 <= len(lines) < 100  # what was written is listed; a re-run continues
 
