@@ -17,7 +17,7 @@ from typing import Iterator
 from lark import Lark, Token, Tree
 from lark.exceptions import LarkError, UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken
 
-from ..errors import Diagnostic, GrammarError
+from ..errors import Diagnostic
 from ..gcpause import paused_gc  # noqa: F401  (grammarkit.dsl re-exports it)
 from ..fileio import DEFAULT_MAX_BYTES, decode_source, read_limited, read_source  # noqa: F401 - re-exported
 from ..ir.base import Span

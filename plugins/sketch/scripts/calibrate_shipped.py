@@ -60,7 +60,6 @@ def main(argv: list[str] | None = None) -> int:
     args = ap.parse_args(argv)
     if args.output.resolve() == SHIPPED.resolve() and not args.replace_shipped:
         ap.error(f"{args.output} is the shipped weights file; pass --replace-shipped to write it")
-    import numpy as np
 
     from grammarkit_sketch.calibration import (expected_calibration_error, fit_temperature,
                                                redraw_threshold, softmax)

@@ -84,7 +84,6 @@ def train_vae(dataset: Dataset, config: TrainConfig = TrainConfig(), *,
     """Train a StringVAE on `dataset`; `progress(row)` is called after every epoch."""
     import torch
 
-    from .decoding import decode_latents
     from .model import ModelConfig, StringVAE
 
     n_graphs = len(dataset.graphs)
