@@ -114,11 +114,14 @@ def _check_image(path: Path, option: str) -> None:
               "instead of continuing it")
 @click.option("--json", "as_json", is_flag=True, help="print the run's summary as JSON on stdout "
               "(for scripts) instead of a few lines for people")
+@click.option("--surfaces", type=click.Choice(["solid", "cga"]), default=None,
+              help="split grammars: solid (default) makes one watertight solid per mass; cga "
+              "keeps CityEngine's open faces (the split back end's option surfaces=)")
 def derive(file: Path, out: Path, preview: Path | None, seed: int, sets: tuple[str, ...],
            fmt: str | None, tree: Path | None, variations: int | None, backend: str | None,
            count: int | None, iterations: int, workers: int | None, options: tuple[str, ...],
            executor_spec: str, timeout: float | None, time_limit: float | None, overwrite: bool,
-           as_json: bool) -> None:
+           as_json: bool, surfaces: str | None) -> None:
     """Derive a model from the grammar FILE.
 
     \b
@@ -132,6 +135,8 @@ def derive(file: Path, out: Path, preview: Path | None, seed: int, sets: tuple[s
 
     console = Console(stderr=True)
     limits = {"timeout": timeout, "time_limit": time_limit}
+    if surfaces is not None:  # one spelling of the back-end option, checked with the others
+        options = (*options, f"surfaces={surfaces}")
     with hard_deadline(timeout):
         _derive(file, out, preview, seed, sets, fmt, tree, variations, backend, count, iterations,
                 workers, options, executor_spec, limits, overwrite, as_json, console)

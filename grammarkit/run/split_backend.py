@@ -23,7 +23,7 @@ This module stays light (pydantic only): the engine is imported when a run start
 from __future__ import annotations
 
 import time
-from typing import Any, Generator, Optional
+from typing import Any, Generator, Literal, Optional
 
 from pydantic import BaseModel, ConfigDict, Field, field_validator
 
@@ -78,6 +78,8 @@ class SplitOptions(BaseModel):
                                      "<id>.<style>.png: sketch, lines, shaded, shaded+lines")
     render_size: int = Field(256, ge=16, le=MAX_RENDER_SIZE, description="render width and "
                              "height in pixels")
+    surfaces: Literal["solid", "cga"] = Field("solid", description="solid: one watertight "
+                                              "solid per mass; cga: CityEngine's open faces")
     dataset: bool = Field(False, description="record every item as grammarkit batch does: a "
                           "failing one is listed with its error and the run goes on")
     # how the run treats a failure, not what it makes: left out of run.json (exclude), so the
@@ -161,15 +163,16 @@ def _derive(state: _State, index: int, lot: Any) -> tuple[Any, int | None]:
     if lot is not None:
         model = derive(state.grammar, seed=lot.seed, attrs={**state.attrs, **lot.attrs},
                        limits=state.limits, lot=lot.polygon, choices=dict(lot.choices) or None,
-                       registries=state.registries)
+                       registries=state.registries, surfaces=state.options.surfaces)
         return model, lot.seed
     if state.options.variations:
         (var, model), = variations(state.grammar, 1, seed=state.seed, attrs=state.attrs,
-                                   limits=state.limits, start=index, registries=state.registries)
+                                   limits=state.limits, start=index, registries=state.registries,
+                                   surfaces=state.options.surfaces)
         return model, var.seed
     seed = state.seed + index
     return derive(state.grammar, seed=seed, attrs=state.attrs, limits=state.limits,
-                  registries=state.registries), seed
+                  registries=state.registries, surfaces=state.options.surfaces), seed
 
 
 def _lot_fields(lot: Any) -> dict[str, Any]:

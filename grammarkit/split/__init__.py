@@ -274,16 +274,16 @@ def derive(grammar: Any, *, seed: int = 0, attrs: Mapping[str, Any] | None = Non
 
 
 def variations(grammar: Any, n: int, *, seed: int = 0, attrs: Mapping[str, Any] | None = None,
-               limits: Limits | None = None, start: int = 0, registries: Any = None
-               ) -> Iterator[tuple[Any, Model]]:
+               limits: Limits | None = None, start: int = 0, registries: Any = None,
+               surfaces: str = "solid") -> Iterator[tuple[Any, Model]]:
     """Yield `n` (Variation, Model) pairs: variations start, start+1, ... (each depends only on
     `seed` and its index, so workers can derive disjoint index ranges). What varies and how it
-    is drawn: grammarkit.split.variation."""
-    return _variations(grammar, n, seed, attrs, limits, start, _registries(registries))
+    is drawn: grammarkit.split.variation. `surfaces` as for `derive`."""
+    return _variations(grammar, n, seed, attrs, limits, start, _registries(registries), surfaces)
 
 
 def _variations(grammar: Any, n: int, seed: int, attrs: Mapping[str, Any] | None, limits: Limits | None,
-                start: int, registries: Any) -> Iterator[tuple[Any, Model]]:
+                start: int, registries: Any, surfaces: str = "solid") -> Iterator[tuple[Any, Model]]:
     import random
 
     from .variation import Variation, sample_attrs, snippet_weights
@@ -311,5 +311,5 @@ def _variations(grammar: Any, n: int, seed: int, attrs: Mapping[str, Any] | None
         sampled = sample_attrs(compiled, rng, fixed)
         run_seed = rng.getrandbits(32)
         model = derive(g, seed=run_seed, attrs=sampled, limits=limits, choices=choices or None,
-                       registries=registries)
+                       registries=registries, surfaces=surfaces)
         yield Variation(i, run_seed, model.attrs, dict(compiled.bindings)), model
