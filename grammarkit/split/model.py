@@ -593,12 +593,15 @@ class Model:
         per group the rules, source lines and semantic tags (docs/derive.md, "Files")."""
         return export_scene(self)
 
-    def save(self, path: Any, format: str | None = None, textures: str = "embed") -> Any:
+    def save(self, path: Any, format: str | None = None, textures: str = "embed",
+             texture_seams: bool = False) -> Any:
         """Write the model through grammarkit's exporters (format from `format` or the suffix:
         glb, gltf, obj, stl, ply), atomically; returns the path. Colours, materials, terminal
         groups and attrs are kept (see docs/derive.md, "Files"). glTF/GLB texture images (CGA
         texturing, docs/cga.md) are embedded, or with `textures="reference"` referenced by
-        URIs relative to the written file."""
+        URIs relative to the written file. A textured closed solid is written seamless and
+        untextured, so that it reads back watertight everywhere; `texture_seams=True` writes
+        it with TEXCOORD_0 (textured in viewers, open pieces to trimesh)."""
         from dataclasses import replace as replace_spec
         from functools import partial
         from pathlib import Path
@@ -608,13 +611,13 @@ class Model:
 
         path = Path(path)
         spec = exporter_for(path, format)
-        if textures != "embed":
+        if textures not in ("embed", "reference"):
+            raise ValueError(f"textures must be 'embed' or 'reference', got {textures!r}")
+        if textures != "embed" or texture_seams:
             encoders = {"glb": encode_glb, "gltf": encode_gltf}
-            if textures != "reference":
-                raise ValueError(f"textures must be 'embed' or 'reference', got {textures!r}")
             if spec.format in encoders:
-                spec = replace_spec(spec, encode=partial(encoders[spec.format], textures="reference",
-                                                         base=path.parent))
+                spec = replace_spec(spec, encode=partial(encoders[spec.format], textures=textures,
+                                                         base=path.parent, texture_seams=texture_seams))
         write_files({path: encode_with(spec, self)})
         return path
 

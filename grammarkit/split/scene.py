@@ -133,4 +133,5 @@ def export_scene(model: Any) -> Any:
               "materials": sorted({t[4] for t in raw if t[4]})}
     if model._ctx.reports:
         extras["reports"] = model.reports  # CGA's reports, in the building node's extras
-    return Scene(name, solids, extras)
+    # CityEngine's open-face output keeps CityEngine's textured look (docs/derive.md, "Files")
+    return Scene(name, solids, extras, texture_seams=model._ctx.surfaces_mode == "cga")

@@ -27,11 +27,14 @@ def test_textured_files_validate_cleanly(tmp_path):
     (tmp_path / "t.grammar").write_text(TEXT)
     m = grammarkit.derive(str(tmp_path / "t.grammar"), lot=LOT)
     assert m.triangle_uvs is not None
-    files = [m.save(tmp_path / "m.glb"), m.save(tmp_path / "m.gltf"),
-             m.save(tmp_path / "r.gltf", textures="reference"), m.save(tmp_path / "r.glb", textures="reference")]
+    seams = dict(texture_seams=True)  # TEXCOORD_0 on textured primitives (CityEngine's look)
+    files = [m.save(tmp_path / "m.glb", **seams), m.save(tmp_path / "m.gltf", **seams),
+             m.save(tmp_path / "r.gltf", textures="reference", **seams),
+             m.save(tmp_path / "r.glb", textures="reference", **seams),
+             m.save(tmp_path / "seamless.glb")]  # the default: one seamless, untextured primitive
     reports = list(validate_gltf(files).values())
-    assert len(reports) == 4
-    for r in reports[:3]:
+    assert len(reports) == 5
+    for r in reports[:3] + reports[4:]:
         assert (r["errors"], r["warnings"], r["infos"], r["hints"]) == (0, 0, 0, 0), r
     # a GLB that references its images: valid, the validator only notes the URIs (info URI_GLB)
     r = reports[3]

@@ -61,15 +61,9 @@ def test_corpus_building_is_one_watertight_solid_per_mass(imported, package, lot
     assert model.triangle_count == len(model.mesh.faces)
     path = model.save(tmp_path / f"{package}.glb")
     back = trimesh.load(path, force="mesh")
-    if model.triangle_uvs is None:
-        # untextured: the GLB is one primitive, watertight as it is read
-        _closed(back)
-        assert back.body_count == model.mesh.body_count
-    else:
-        # textured solids are written with UV seams (docs/derive.md, "Files"): welded by
-        # position they are the same closed solid
-        back.merge_vertices(merge_tex=True, merge_norm=True)
-        _closed(back, bodies=False)
+    # textured or not, the GLB's solid is one seamless primitive, watertight as it is read
+    _closed(back)
+    assert back.body_count == model.mesh.body_count
 
 
 def test_cga_mode_keeps_cityengines_open_faces(imported):

@@ -217,9 +217,21 @@ def test_the_cli_writes_textured_glb(tmp_path, png):
         'Lot --> extrude(6) comp(f) { side: setupProjection(0, scope.xy, 2, 3) texture("bricks.png") projectUV(0) '
         "Wall. | volume: Mass. }\n")
     out = tmp_path / "out.glb"
-    res = CliRunner().invoke(main, ["derive", str(tmp_path / "t.grammar"), "-o", str(out)])
+    # CityEngine's open-face output keeps the textured look (TEXCOORD_0, with vertex seams)
+    res = CliRunner().invoke(main, ["derive", str(tmp_path / "t.grammar"), "-o", str(out), "--surfaces", "cga"])
     assert res.exit_code == 0, res.output
     data = out.read_bytes()
     doc = json.loads(data[20:20 + int.from_bytes(data[12:16], "little")])
     assert doc["images"][0]["mimeType"] == "image/png"
     assert any("TEXCOORD_0" in p["attributes"] for m in doc["meshes"] for p in m["primitives"])
+    # the default: one seamless primitive, watertight as trimesh reads it, the image named only
+    res = CliRunner().invoke(main, ["derive", str(tmp_path / "t.grammar"), "-o", str(out)])
+    assert res.exit_code == 0, res.output
+    data = out.read_bytes()
+    doc = json.loads(data[20:20 + int.from_bytes(data[12:16], "little")])
+    assert "images" not in doc
+    assert all("TEXCOORD_0" not in p["attributes"] for m in doc["meshes"] for p in m["primitives"])
+    prim_materials = [mat for m in doc["meshes"] for p in m["primitives"]
+                      for mat in p.get("extras", {}).get("grammarkit", {}).get("materials", [])]
+    assert any(mat["extras"].get("colormap") == "bricks.png" for mat in prim_materials + doc["materials"])
+    assert trimesh.load(out, force="mesh").is_watertight

@@ -21,9 +21,13 @@
   no mesh but their `faces` ranges, and the primitive's `extras.grammarkit` holds `runs`
   ([terminal node, material, first face, count]) and the `materials` they index (see
   `_one_primitive`); the primitive's own material is the most used one (what other viewers
-  show). The surface layer (open faces, `--surfaces cga`) and textured solids (TEXCOORD_0
-  needs seams) are exempt: they keep one mesh per terminal with a primitive per material,
-  all indexing one shared POSITION accessor.
+  show). A textured closed solid is written the same way, untextured (its materials keep
+  their colours and name their image in `extras.colormap`): TEXCOORD_0 needs a vertex per
+  (position, uv) pair, and those seams make trimesh and three.js read the solid as open
+  pieces. `texture_seams=True` writes textured solids with TEXCOORD_0 and seams instead (what
+  a viewer textures). The surface layer (open faces, `--surfaces cga`) and, with
+  `texture_seams=True`, textured solids keep one mesh per terminal with a primitive per
+  material, all indexing one shared POSITION accessor.
 - **Per-face labels.** Triangles are written grouped by label in the order of
   `extras.grammarkit.labels`; `face_labels(path)` in `meshio` reads the label of every face.
 """
@@ -65,7 +69,8 @@ class _GltfBuilder:
     does not offer, and doing it directly is several times faster."""
 
     def __init__(self, ambiguous: set[str] = frozenset(), textures: str = "embed",
-                 base: Path | None = None) -> None:
+                 base: Path | None = None, texture_seams: bool = False) -> None:
+        self.texture_seams = texture_seams  # textured closed solids with TEXCOORD_0 and seams
         self.ambiguous = ambiguous  # material names used with several colours
         self.textures = textures  # "embed" (image in the buffer) or "reference" (relative URI)
         self.base = base  # the output file's folder, for "reference"
@@ -78,7 +83,7 @@ class _GltfBuilder:
         self.views: list[dict] = []
         self.accessors: list[dict] = []
         self.materials: list[dict] = []
-        self.material_index: dict[Material, int] = {}
+        self.material_index: dict[tuple[Material, bool], int] = {}
         self.meshes: list[dict] = []
         self.nodes: list[dict] = []
 
@@ -110,15 +115,17 @@ class _GltfBuilder:
         self.accessors.append({"bufferView": view, "componentType": ctype, "count": len(f), "type": "SCALAR"})
         return len(self.accessors) - 1
 
-    def material(self, mat: Material) -> int:
-        idx = self.material_index.get(mat)
+    def material(self, mat: Material, untextured: bool = False) -> int:
+        idx = self.material_index.get((mat, untextured))
         if idx is None:
-            self.materials.append(self.material_entry(mat))
-            idx = self.material_index[mat] = len(self.materials) - 1
+            self.materials.append(self.material_entry(mat, untextured))
+            idx = self.material_index[(mat, untextured)] = len(self.materials) - 1
         return idx
 
-    def material_entry(self, mat: Material) -> dict:
-        """The glTF material object of `mat` (not yet part of the document)."""
+    def material_entry(self, mat: Material, untextured: bool = False) -> dict:
+        """The glTF material object of `mat` (not yet part of the document); `untextured`:
+        without its baseColorTexture (a seamless solid has no TEXCOORD_0), the image named in
+        `extras.colormap` only."""
         lin = srgb_to_linear(np.asarray(mat.rgba[:3], dtype=np.float64) / 255.0)
         glassy = bool(mat.name) and "glass" in mat.name.lower()
         name = mat.label
@@ -136,10 +143,10 @@ class _GltfBuilder:
         if mat.roughness is not None:
             entry["pbrMetallicRoughness"]["roughnessFactor"] = round(float(mat.roughness), 6)
         if mat.texture is not None:
-            tex = self.texture(mat.texture)
+            tex = None if untextured else self.texture(mat.texture)
             if tex is not None:
                 entry["pbrMetallicRoughness"]["baseColorTexture"] = {"index": tex}
-            else:
+            elif not untextured:  # (a seamless solid does not read its images at all)
                 entry["extras"]["missing_texture"] = mat.texture
             entry["extras"]["colormap"] = Path(mat.texture).name
         if mat.extras:
@@ -235,7 +242,8 @@ def _unique_node_names(nodes: list[dict], solid_nodes: list[int]) -> set[str]:
     return taken
 
 
-def _build_gltf(scene: Scene, textures: str = "embed", base: Path | None = None) -> tuple[dict, bytes]:
+def _build_gltf(scene: Scene, textures: str = "embed", base: Path | None = None,
+                texture_seams: bool = False) -> tuple[dict, bytes]:
     if textures not in ("embed", "reference"):
         raise ShapeError(f"textures must be 'embed' or 'reference', got {textures!r}")
     colours_of: dict[str, set] = {}
@@ -243,7 +251,8 @@ def _build_gltf(scene: Scene, textures: str = "embed", base: Path | None = None)
         for mat in solid.materials:
             if mat.name:
                 colours_of.setdefault(mat.name, set()).add(mat.rgba)
-    b = _GltfBuilder({n for n, c in colours_of.items() if len(c) > 1}, textures, base)
+    texture_seams = texture_seams or scene.texture_seams
+    b = _GltfBuilder({n for n, c in colours_of.items() if len(c) > 1}, textures, base, texture_seams)
     children: list[int] = []
     shared_mesh: dict[bytes, int] = {}
     all_labels: list[str] = []
@@ -272,7 +281,9 @@ def _build_gltf(scene: Scene, textures: str = "embed", base: Path | None = None)
         cuts = np.flatnonzero(np.diff(skey)) + 1
         starts = np.concatenate([[0], cuts])
         ends = np.concatenate([cuts, [len(skey)]])
-        if len(starts) > 1 and not solid.extras.get("surface") and not any(m.texture for m in solid.materials):
+        textured_solid = solid.uv is not None and any(m.texture for m in solid.materials)
+        seamless = not solid.extras.get("surface") and not (textured_solid and texture_seams)
+        if seamless and (len(starts) > 1 or textured_solid):
             # a closed solid in several groups/materials: ONE primitive (see _one_primitive)
             node_entry.update(_one_primitive(b, solid, F[order], pos, skey, starts, ends, n_mat, all_labels))
             one_primitive_solids += 1
@@ -372,8 +383,10 @@ def _one_primitive(b: _GltfBuilder, solid: Solid, faces: np.ndarray, pos: int, s
         g, m = divmod(int(skey[s]), n_mat)
         runs.append([position_of[g], material_of[m], s, e - s])
     acc = b.indices(faces, len(solid.vertices))
-    prim = {"attributes": {"POSITION": pos}, "indices": acc, "mode": 4, "material": b.material(palette[main]),
-            "extras": {"grammarkit": {"materials": [b.material_entry(palette[m]) for m in used],
+    # no TEXCOORD_0 here (it would need seams): textured materials are written untextured
+    prim = {"attributes": {"POSITION": pos}, "indices": acc, "mode": 4,
+            "material": b.material(palette[main], untextured=True),
+            "extras": {"grammarkit": {"materials": [b.material_entry(palette[m], untextured=True) for m in used],
                                       "runs": runs}}}
     b.meshes.append({"name": solid.name, "primitives": [prim]})
     return {"mesh": len(b.meshes) - 1, "children": kids}
@@ -413,10 +426,12 @@ def _json_bytes(doc: dict) -> bytes:
     return json.dumps(doc, separators=(",", ":"), sort_keys=False, allow_nan=False).encode("utf-8")
 
 
-def encode_glb(obj: Any, textures: str = "embed", base: Path | None = None) -> bytes:
+def encode_glb(obj: Any, textures: str = "embed", base: Path | None = None,
+               texture_seams: bool = False) -> bytes:
     """GLB bytes. Texture images are embedded (`textures="embed"`) or referenced by URIs
-    relative to the folder `base` the file will be written to (`"reference"`)."""
-    doc, binary = _build_gltf(solids_of(obj), textures, base)
+    relative to the folder `base` the file will be written to (`"reference"`). Textured
+    closed solids are written seamless and untextured unless `texture_seams` (module doc)."""
+    doc, binary = _build_gltf(solids_of(obj), textures, base, texture_seams)
     js = _json_bytes(doc)
     js += b" " * ((-len(js)) % 4)
     total = 12 + 8 + len(js) + 8 + len(binary)
@@ -425,8 +440,9 @@ def encode_glb(obj: Any, textures: str = "embed", base: Path | None = None) -> b
                      struct.pack("<I4s", len(binary), b"BIN\0"), binary])
 
 
-def encode_gltf(obj: Any, textures: str = "embed", base: Path | None = None) -> bytes:
-    doc, binary = _build_gltf(solids_of(obj), textures, base)
+def encode_gltf(obj: Any, textures: str = "embed", base: Path | None = None,
+                texture_seams: bool = False) -> bytes:
+    doc, binary = _build_gltf(solids_of(obj), textures, base, texture_seams)
     doc["buffers"][0]["uri"] = "data:application/octet-stream;base64," + base64.b64encode(binary).decode("ascii")
     doc["buffers"][0]["byteLength"] = len(binary)
     return json.dumps(doc, indent=1, allow_nan=False).encode("utf-8")

@@ -83,6 +83,9 @@ class Scene:
     name: str
     solids: list[Solid]
     extras: dict = field(default_factory=dict)
+    # glTF: textured closed solids with TEXCOORD_0 and vertex seams (CityEngine's look) rather
+    # than seamless and untextured (watertight as read); a CGA open-face model asks for it
+    texture_seams: bool = False
 
 
 def srgb_to_linear(c: np.ndarray | Sequence[float]) -> np.ndarray:
