@@ -29,11 +29,9 @@ LOTS = {"rect": [(0.0, 0.0), (20.0, 0.0), (20.0, 12.0), (0.0, 12.0)],
 # only the footprint (x, y) and the floor are compared
 RANDOM_HEIGHT = {"extrusion_rule", "simple_rule2019"}
 # known differences, each a reason (the packages still import and derive as they come)
-KNOWN = {("parthenon", "lshape"): (
-    "roofGable on the L-shaped roof face: geometry.roofs.gable runs one ridge across the whole "
-    "footprint (1.83 m high over the 13.6 m bounding box), CityEngine gables each wing (1.29 m "
-    "over the 9.6 m wing), so the pediments' simas stand 0.54 m higher; the fix is in "
-    "geometry/roofs.py (cgasolid's), proposed in the cgapkg report")}
+# (package, lot) pairs with a known difference from CityEngine, each with its cause: none now
+# (parthenon on the L lot was 0.54 m off until roofGable gabled each wing of an L-shaped face)
+KNOWN: dict[tuple[str, str], str] = {}
 
 py7zr = pytest.importorskip("py7zr", reason="7z rule packages need the optional py7zr (grammarkit[cga])")
 
