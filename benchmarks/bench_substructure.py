@@ -30,9 +30,9 @@ sys.path.insert(0, str(ROOT / "plugins" / "substructure"))
 sys.path.insert(0, str(ROOT / "plugins" / "graph_sampler"))
 
 from grammarkit.tiling import Assembly, Part, read_assembly  # noqa: E402
-from grammarkit_substructure.search import (  # noqa: E402
-    OrderedGraph, brute_force_operations, find_operations, find_symmetries,
-)
+from grammarkit_substructure.brute_force import brute_force_operations  # noqa: E402
+from grammarkit_substructure.operations import find_operations  # noqa: E402
+from grammarkit_substructure.search import OrderedGraph, find_symmetries  # noqa: E402
 from grammarkit_substructure.shape import Shape  # noqa: E402
 
 EXAMPLES = ROOT / "grammars" / "tiling"

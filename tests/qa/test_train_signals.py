@@ -66,10 +66,9 @@ def children(pid: int) -> list[int]:
     return [int(x) for x in text.split()]
 
 
-# What a worker that multiprocessing was still starting prints when the stop lands inside
-# `Process.start()`: its start-up data arrives cut short. Only grammarkit.run.executor can
-# prevent it (block SIGINT/SIGTERM around the start); reported, and an expected failure here.
-SPAWN_CUT_SHORT = ("multiprocessing/spawn.py", "pickle.load(from_parent)", "EOFError: Ran out of input")
+# What a worker that multiprocessing was still starting printed when the stop landed inside
+# `Process.start()` (its start-up data cut short), before grammarkit.run.executor deferred
+# SIGINT/SIGTERM around the start: now a failure like any other traceback.
 
 
 def assert_stopped_cleanly(code: int, err: str, model: Path) -> None:
@@ -77,12 +76,7 @@ def assert_stopped_cleanly(code: int, err: str, model: Path) -> None:
     assert "interrupted" in err, err
     assert model.read_bytes() == OLD_MODEL  # the earlier model is intact, nothing half-written
     assert sorted(p.name for p in model.parent.iterdir()) == [model.name]  # no temporary file
-    if "Traceback" in err:
-        tracebacks = err.count("Traceback (most recent call last)")
-        if all(s in err for s in SPAWN_CUT_SHORT) and err.count("EOFError: Ran out of input") == tracebacks:
-            pytest.xfail("a worker being started when the signal came printed multiprocessing's "
-                         "traceback (needs grammarkit.run.executor to defer the signal)")
-        pytest.fail(err)
+    assert "Traceback" not in err, err
 
 
 def make_castle_dataset(folder: Path) -> Path:
@@ -167,9 +161,7 @@ def test_train_string_vae_refuses_a_device_as_model_before_training(tmp_path, ca
     assert done.returncode == 1, done.stderr
     assert "Traceback" not in done.stderr and str(link) in done.stderr, done.stderr
     assert link.is_symlink() and os.readlink(link) == os.devnull
-    if "epoch 1/" in done.stderr:  # refused, but only once the model was trained
-        pytest.xfail("train string-vae checks -o only after training; needs the string-VAE "
-                     "plugin to call grammarkit.fileio.check_outputs first")
+    assert "epoch 1/" not in done.stderr  # refused before training, not once the model was made
 
 
 def test_train_sketch_refuses_a_device_as_model_before_training(tmp_path):
@@ -186,8 +178,7 @@ def test_train_sketch_refuses_a_device_as_model_before_training(tmp_path):
     if run.process.poll() is None:  # rendering workers started: training began before the check
         run.process.kill()
         run.process.wait()
-        pytest.xfail("train sketch checks -o only after training (minutes); needs the sketch "
-                     "plugin to call grammarkit.fileio.check_outputs first")
+        pytest.fail("train sketch started training before refusing a device as -o")
     run._reader.join(timeout=30)
     err = "".join(run.lines)
     assert run.process.returncode == 1 and str(link) in err and "Traceback" not in err, err

@@ -16,7 +16,7 @@ from pathlib import Path
 import pytest
 
 from grammarkit.tiling import read_assembly
-from grammarkit_substructure.search import find_operations
+from grammarkit_substructure.operations import find_operations
 from grammarkit_substructure.shape import Shape
 
 ROOT = Path(__file__).resolve().parents[2]

@@ -7,10 +7,11 @@ import numpy as np
 import pytest
 
 from grammarkit.tiling import read_assembly
-from grammarkit_substructure.search import (
-    OrderedGraph, brute_force_operations, brute_force_symmetries, find_operations, find_symmetries,
-    random_ordered_graph,
+from grammarkit_substructure.brute_force import (
+    brute_force_operations, brute_force_symmetries, random_ordered_graph,
 )
+from grammarkit_substructure.operations import find_operations
+from grammarkit_substructure.search import OrderedGraph, find_symmetries
 from grammarkit_substructure.shape import Shape
 
 ROOT = Path(__file__).resolve().parents[2]

@@ -246,10 +246,13 @@ def train_sketch_command(library: Path, output: Path, samples: int, classifier_e
     ranges (Nishida et al. 2016)."""
     from rich.console import Console
 
+    from grammarkit.fileio import check_outputs
+
     from .dataset import DEFAULT_CACHE
     from .models import save_models
     from .training import TrainConfig, train
 
+    check_outputs({"-o": output})  # a device, FIFO or socket is refused before minutes of training
     console = Console(stderr=True)
     cfg = TrainConfig(samples=samples, classifier_epochs=classifier_epochs,
                       regressor_epochs=regressor_epochs, style=style, seed=seed, threads=threads,

@@ -251,6 +251,9 @@ def train_string_vae(dataset_dir: Path, out: Path, epochs: int, batch_size: int,
     if out.suffix.lower() in (".glb", ".json", ".grammar"):
         raise click.BadParameter(f"{out.name!r} does not look like a model file; use a name ending in .vae",
                                  param_hint="-o")
+    from grammarkit.fileio import check_outputs
+
+    check_outputs({"-o": out}, inputs=[dataset_dir])  # refused before training, not after it
     ds = load_dataset(dataset_dir)
     cfg = TrainConfig(epochs=epochs, batch_size=batch_size, lr=lr, latent=latent, hidden=hidden,
                       seed=seed, threads=threads, time_limit=time_limit, strings_per_epoch=strings_per_epoch)

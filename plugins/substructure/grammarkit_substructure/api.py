@@ -7,7 +7,8 @@ from typing import Any, Callable
 from grammarkit.errors import ShapeError
 from grammarkit.tiling import Assembly
 
-from .search import Operation, find_operations
+from .operations import find_operations
+from .search import Operation
 from .shape import ORIGINS, Shape, embed
 
 

@@ -24,7 +24,7 @@ from typing import Any, Iterator
 
 import numpy as np
 
-from .search import find_operations
+from .operations import find_operations
 from .shape import Shape, embed
 
 BATCH = 16
