@@ -15,18 +15,12 @@ import grammarkit
 from grammarkit.cga import translate_cga
 from grammarkit.cga.colors import hsv_to_rgb, rgb_to_hex
 from grammarkit.cli import main as cli_main
+from _cga_helpers import bbox as _bbox  # noqa: E402  (tests/cga/conftest.py)
 
 ROOT = Path(__file__).resolve().parents[2]
 CORPUS = ROOT / "grammars" / "cga"
 RECT = [(0.0, 0.0), (20.0, 0.0), (20.0, 12.0), (0.0, 12.0)]
 
-
-def _bbox(model) -> np.ndarray:
-    parts = [np.asarray(model.mesh.vertices).reshape(-1, 3)]
-    if model.surface_vertices is not None:
-        parts.append(np.asarray(model.surface_vertices).reshape(-1, 3))
-    v = np.vstack(parts)
-    return np.array([v.min(axis=0), v.max(axis=0)])
 
 
 def _two_files(tmp_path: Path) -> Path:

@@ -18,7 +18,7 @@ import grammarkit
 from grammarkit.cli import main as cli_main
 from grammarkit.functions import lshape
 
-from ._cga_helpers import imported
+from ._cga_helpers import bbox as _bbox, imported
 
 ROOT = Path(__file__).resolve().parents[2]
 PACKAGES = ROOT / "grammars" / "cga" / "packages"
@@ -44,13 +44,6 @@ def run(*args, cwd: Path):
     finally:
         os.chdir(old)
 
-
-def _bbox(model) -> np.ndarray:
-    parts = [np.asarray(model.mesh.vertices).reshape(-1, 3)]
-    if model.surface_vertices is not None:
-        parts.append(np.asarray(model.surface_vertices).reshape(-1, 3))
-    v = np.vstack(parts)
-    return np.array([v.min(axis=0), v.max(axis=0)])
 
 
 def _import(rpk: Path, tmp_path: Path) -> Path:
