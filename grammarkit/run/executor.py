@@ -29,7 +29,6 @@ back ends never see which one runs them.
 """
 from __future__ import annotations
 
-import contextlib
 import itertools
 import multiprocessing as mp
 import pickle
@@ -125,34 +124,12 @@ def _serve(conn: Any) -> None:  # pragma: no cover - runs in the child process
                 return
 
 
-@contextlib.contextmanager
-def _signals_deferred() -> Iterator[None]:
-    """Hold SIGINT/SIGTERM while a worker is being started and deliver them after: a stop that
-    landed inside `Process.start()` cut the child's start-up data short, and the child printed
-    multiprocessing's `EOFError: Ran out of input` traceback (issue 31). Python handlers, not
-    a signal mask: the mask is per thread, and a progress bar's thread would take the signal."""
-    if threading.current_thread() is not threading.main_thread():
-        yield  # only the main thread may change handlers; signals are handled there anyway
-        return
-    caught: list[int] = []
-    old = {sig: signal.getsignal(sig) for sig in (signal.SIGINT, signal.SIGTERM)}
-    for sig in old:
-        signal.signal(sig, lambda signum, frame: caught.append(signum))
-    try:
-        yield
-    finally:
-        for sig, handler in old.items():
-            signal.signal(sig, handler)
-        if caught:
-            signal.raise_signal(caught[0])  # now, to the handler that was in place
-
-
 class _Worker:
     def __init__(self) -> None:
         ctx = mp.get_context("spawn")  # fork deadlocks in manifold3d's TBB thread pool
         self.conn, child = ctx.Pipe()
         self.proc = ctx.Process(target=_worker_main, args=(child,), daemon=True)
-        with main_without_phantom_file(), _signals_deferred():
+        with main_without_phantom_file():
             self.proc.start()
         child.close()
         self.ready = False
