@@ -19,6 +19,11 @@ measured model of a 100-node cluster building 1M buildings.
    nodes of --cores-per-node cores; the smallest is the throughput, and its stage the
    bottleneck.
 
+4. Write-behind: the same batches (local executor, 1 worker) with the run layer's write-behind
+   thread (grammarkit.run.write_behind, the default) and with synchronous writes
+   (GRAMMARKIT_WRITE_BEHIND=0, the behaviour without the thread), alternating run by run, so
+   that both see the same machine load. `--only write-behind` prints only this table.
+
 Every number is the median of --runs runs. The machine this was written on has 2 cores shared
 with other agents: numbers are noisy; re-run it on a quiet machine for the record.
 """
@@ -88,6 +93,32 @@ def measure(label, grammar, lots, executor, runs, tmp) -> dict:
         per_item.append(work / n)
     return {"label": label, "workers": executor.workers, "wall": statistics.median(walls),
             "n": n, "overhead": statistics.median(overheads), "item": statistics.median(per_item)}
+
+
+def write_behind_table(grammars: list[tuple[str, Path, Path]], executor, runs: int, tmp: Path) -> None:
+    """Seconds per batch with the write-behind thread and with synchronous writes, alternating."""
+    import os
+
+    print("\n## Write-behind against synchronous writes (local x1, alternating runs)\n")
+    print("| batch | items | synchronous (s) | write-behind (s) | ratio (behind / sync) |")
+    print("|---|---|---|---|---|")
+    saved = os.environ.get("GRAMMARKIT_WRITE_BEHIND")
+    try:
+        for label, grammar, lots in grammars:
+            one_batch(grammar, lots, executor, tmp)  # warm-up
+            times: dict[str, list[float]] = {"0": [], "1": []}
+            for _ in range(runs):
+                for mode in ("0", "1"):
+                    os.environ["GRAMMARKIT_WRITE_BEHIND"] = mode
+                    wall, _, n = one_batch(grammar, lots, executor, tmp)
+                    times[mode].append(wall)
+            sync, behind = statistics.median(times["0"]), statistics.median(times["1"])
+            print(f"| {label} | {n} | {sync:.3f} | {behind:.3f} | {behind / sync:.2f}x |")
+    finally:
+        if saved is None:
+            os.environ.pop("GRAMMARKIT_WRITE_BEHIND", None)
+        else:
+            os.environ["GRAMMARKIT_WRITE_BEHIND"] = saved
 
 
 def throughput_table(title: str, rows: list[dict]) -> None:
@@ -165,6 +196,7 @@ def main() -> int:
     ap.add_argument("--cores-per-node", type=int, default=16)
     ap.add_argument("--buildings", type=int, default=1_000_000)
     ap.add_argument("--nic-gbit", type=float, default=10.0, help="the parent's network, Gbit/s")
+    ap.add_argument("--only", choices=("write-behind",), help="print only this table")
     args = ap.parse_args()
 
     from grammarkit.run.dask_executor import DaskExecutor
@@ -176,6 +208,16 @@ def main() -> int:
     print(f"# grammarkit batch benchmark: {args.lots} lots of {BLOCK.name} "
           f"(and {4 * args.lots} of {TINY.name}), median of {args.runs} runs")
     print("# this machine: 2 cores shared with other agents; the numbers are noisy")
+    behind_rows = [(f"{TINY.name}, {args.lots} lots", TINY, grid_lots(tmp / "t.geojson", args.lots)),
+                   (f"{TINY.name}, {4 * args.lots} lots", TINY, small_lots),
+                   (f"{BLOCK.name}, {args.lots} lots", BLOCK, lots)]
+    if args.only == "write-behind":
+        from grammarkit.run.executor import LocalExecutor as Local
+
+        with Local(1, parallel="never") as local:
+            write_behind_table(behind_rows, local, args.runs, tmp)
+        shutil.rmtree(tmp, ignore_errors=True)
+        return 0
 
     startup = {}
     executors = {}
@@ -198,6 +240,7 @@ def main() -> int:
         small = [measure(label, TINY, small_lots, ex, args.runs, tmp) for label, ex in executors.items()]
         throughput_table(f"Small items ({TINY.name}, ~{1000 * small[0]['item']:.0f} ms): what chunking "
                          "and the writer cost", small)
+        write_behind_table(behind_rows, executors["local x1"], args.runs, tmp)
         print("\n## Start-up (not in the tables above)\n")
         print("| executor | seconds |")
         print("|---|---|")

@@ -108,6 +108,7 @@ def e2e_rows(args, grammar, rows_out, runs) -> None:  # noqa: ANN001
         print(f"  {label}: {made} shapes in {secs:.0f} s", flush=True)
 
 
+# long: the argument list of every part of the benchmark, then the parts in order
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--example", default="castle")
@@ -155,7 +156,14 @@ def main() -> int:
                     help="the `shipped` part's rows (the graph sampler last: the ratios are against it)")
     ap.add_argument("--max-tokens", type=int, default=40, help="the `shipped` part's placed-small row")
     ap.add_argument("--decode-points", type=int, default=20, help="the `decodings` part: latent points per decoding")
-    ap.add_argument("--max-length", type=int, default=40, help="the `decodings` part: the placed row's length prior")
+    ap.add_argument("--max-length", default="40", help="the `decodings` part: the placed rows' length priors, "
+                    "comma-separated (`none`: the start string's length)")
+    ap.add_argument("--past-known", choices=("on", "off", "both"), default="on",
+                    help="the `decodings` part: perturbation grows its offset past training graphs and repeats "
+                    "(the back end's search_past_known), or stops at any other graph (off), or both rows")
+    ap.add_argument("--decodings", default="free,masked,placed", help="the `decodings` part: which decodings")
+    ap.add_argument("--reference", default=None, help="the `decodings` part: dataset folders (comma-separated) "
+                    "of graph-sampler outputs (other seeds) for novelty against the sampler")
     ap.add_argument("--placed-temperature", type=float, default=0.0,
                     help="the `decodings` part: the placed row's temperature")
     args = ap.parse_args()
@@ -166,10 +174,9 @@ def main() -> int:
     import torch
 
     from grammarkit.dsl import load
-    from grammarkit.tiling import validate
-    from grammarkit_string_vae.consistent import ConsistentDecoder, instantiate_consistent
+    from grammarkit_string_vae.consistent import ConsistentDecoder
     from grammarkit_string_vae.dataset import Dataset
-    from grammarkit_string_vae.edgemodel import (EdgeTrainConfig, _examples, evaluate, load_edge_model,
+    from grammarkit_string_vae.edgemodel import (EdgeTrainConfig, load_edge_model,
                                                  save_edge_model, train_edge_model)
     from grammarkit_string_vae.instantiate import Instantiator
 
@@ -431,14 +438,32 @@ def instantiation_tables(args, grammar, models, test_ds, inst, decoder, cats) ->
           f"{(1 / n_cat) ** 15:.2e} (paper: 1/6^15 = {6.0 ** -15:.2e}).")
 
 
+def reference_graphs(paths):  # noqa: ANN001, ANN201
+    """The graphs of dataset folders (comma-separated; e.g. 1,000 graph-sampler outputs of
+    another seed) as one GraphSet, for novelty against the sampler; None without --reference."""
+    from grammarkit_string_vae.dataset import load_dataset
+    from grammarkit_string_vae.graphs import GraphSet
+
+    if not paths:
+        return None
+    ref = GraphSet()
+    for path in paths.split(","):
+        for g in load_dataset(path).graphs:
+            ref.add(g)
+    return ref
+
+
+# long: one measurement loop per decoding row with its counters (valid, built, new, new to the
+# sampler, CPU per shape), printed as one table
 def decodings_table(args, grammar) -> None:  # noqa: ANN001
     """The paper's free decoding, the masked decoding and the placed decoding side by side, from
-    the shipped models, on the same perturbation budget: validity, how many decoded latent points
-    end as a new valid 3D shape, and what a shape costs (wall clock and this process's CPU time,
-    since the machine is shared). Free and masked strings are built by the cycle-consistent
-    search with the shipped predictor's votes; placed strings by their own placement."""
-    import numpy as np
-
+    the same models, on the same perturbation budget: validity, the share of valid decoded
+    graphs built in 3D, novelty of the built shapes against the training graphs and against
+    `--reference` (graph-sampler outputs), distinct shapes, and what a new shape costs (wall
+    clock and this process's CPU time, since the machine is shared). Free and masked strings are
+    built by the cycle-consistent search with the predictor's votes; placed strings by their own
+    placement. Every valid decoded graph is built, training graphs and repeats too, so the build
+    rate is of all of them; only graphs new to the training set and the run count as shapes."""
     from grammarkit.tiling import validate
     from grammarkit_string_vae.consistent import ConsistentDecoder, instantiate_consistent
     from grammarkit_string_vae.edgemodel import load_edge_model
@@ -455,46 +480,67 @@ def decodings_table(args, grammar) -> None:  # noqa: ANN001
     train = GraphSet()
     for s in vae.train_strings:
         train.add(vae_graph(vae, s))
+    ref = reference_graphs(args.reference)
     rows_ = []
-    specs = [("free (paper)", SamplingSettings(decoding="free", batch=2)),
-             ("masked", SamplingSettings(decoding="masked", batch=2)),
-             (f"placed, length prior <= {args.max_length} tokens, temperature {args.placed_temperature}",
-              SamplingSettings(decoding="placed", batch=2, max_length=args.max_length,
-                               temperature=args.placed_temperature))]
-    print(f"\n## Decodings side by side: {args.decode_points} perturbed latent points each, shipped models\n")
-    for label, st in specs:
+    specs = []
+    for dec in args.decodings.split(","):
+        if dec in ("free", "masked"):
+            specs.append(("free (paper)" if dec == "free" else "masked", SamplingSettings(decoding=dec, batch=2)))
+    for lim in (args.max_length.split(",") if "placed" in args.decodings else []):
+        m = None if lim == "none" else int(lim)
+        specs.append((f"placed, length prior {'<= ' + str(m) + ' tokens' if m else 'the start string'}"
+                      f", temperature {args.placed_temperature}",
+                      SamplingSettings(decoding="placed", batch=2, max_length=m, temperature=args.placed_temperature)))
+    past = {"on": [True], "off": [False], "both": [False, True]}[args.past_known]
+    specs = [(f"{label}{', past known graphs' if p else ''}", st, p) for label, st in specs for p in past]
+    print(f"\n## Decodings side by side: {args.decode_points} perturbed latent points each, model {args.vae}"
+          f" ({len(vae.train_strings)} training graphs; reference: {len(ref) if ref is not None else 0} sampler graphs)\n")
+    for label, st, past_known in specs:
         sampler = Sampler(vae, st, seed=args.seed)
         if st.decoding == "placed":
             sampler.placed = PlacedDecoder(vae, inst, temperature=st.temperature)
         seen = GraphSet()
-        built, parts, per_shape = 0, [], []
+        if past_known:  # as the back end does (search_past_known): grow the offset past known graphs
+            sampler.known = lambda g, seen=seen: g in train or g in seen
+        valid_graphs = built_graphs = new = new_ref = 0
+        parts, per_shape = [], []
         w0, c0 = time.perf_counter(), time.process_time()
         last = c0
         while sampler.decoded_points < args.decode_points:
             for smp in sampler.run("perturb", 1):
-                g = smp.decoded.graph
-                if not smp.valid or g in train or not seen.add(g):
+                if not smp.valid:
                     continue
+                g = smp.decoded.graph
+                valid_graphs += 1
                 if smp.decoded.placement is not None:
                     asm, _why = inst.build(g, smp.decoded.placement.frames, smp.decoded.placement.variants)
                 else:
-                    votes = {e: v for e, (_k, v) in em.predict(g, strings=8, seed=len(seen), voting="logprob").items()}
+                    votes = {e: v for e, (_k, v) in em.predict(g, strings=8, seed=valid_graphs,
+                                                              voting="logprob").items()}
                     asm = instantiate_consistent(inst, consistent, g, votes, tries=args.tries).assembly
-                if asm is not None:
-                    assert validate(grammar, asm).ok
-                    built += 1
-                    parts.append(len(g))
-                    now = time.process_time()
-                    per_shape.append(now - last)
-                    last = now
+                if asm is None:
+                    continue
+                assert validate(grammar, asm).ok
+                built_graphs += 1
+                if g in train or not seen.add(g):
+                    continue
+                new += 1
+                new_ref += ref is not None and g not in ref
+                parts.append(len(g))
+                now = time.process_time()
+                per_shape.append(now - last)
+                last = now
         wall, cpu = time.perf_counter() - w0, time.process_time() - c0
         n = sampler.decoded_points
-        rows_.append([label, n, f"{sampler.valid_points / n:.3f}", f"{built}/{n}", f"{len(seen)}",
-                      statistics.median(parts) if parts else "-", 60.0 * built / wall, 60.0 * built / cpu,
+        rows_.append([label, n, f"{sampler.valid_points / n:.3f}",
+                      f"{built_graphs}/{valid_graphs}" if valid_graphs else "0/0", new,
+                      f"{new_ref}/{new}" if ref is not None else "-",
+                      statistics.median(parts) if parts else "-", 60.0 * new / wall, 60.0 * new / cpu,
                       statistics.median(per_shape) if per_shape else "-"])
-        print(f"  {label}: {built} shapes from {n} points in {wall:.0f} s ({cpu:.0f} s CPU)", flush=True)
-    print(table(["decoding", "latent points", "validity", "new valid shapes built in 3D", "new distinct graphs",
-                 "median parts", "shapes per minute (wall)", "shapes per CPU minute", "median CPU s per shape"],
+        print(f"  {label}: {new} new shapes from {n} points in {wall:.0f} s ({cpu:.0f} s CPU)", flush=True)
+    print(table(["decoding", "latent points", "validity", "valid graphs built in 3D",
+                 "new shapes (built, not training, not repeated)", "of them not among the sampler's",
+                 "median parts", "new shapes per minute (wall)", "per CPU minute", "median CPU s per new shape"],
                 rows_))
     print(f"\nload average at the end: {' '.join(f'{x:.1f}' for x in os.getloadavg())}")
 
@@ -508,11 +554,11 @@ def vae_graph(vae, text):  # noqa: ANN001, ANN201
 def shipped_end_to_end(args, grammar) -> None:  # noqa: ANN001
     """Valid 3D shapes per minute from the shipped models (no training, no dataset): masked
     decoding with the cycle-consistent search, placed decoding, and the graph sampler, in one run."""
-    ship = {"model": f"builtin:{args.example}", "mode": "perturb", "categories": f"builtin:{args.example}"}
+    ship = {"model": args.vae, "mode": "perturb", "categories": f"builtin:{args.example}"}  # --vae: another model
     catalogue = {
         "consistent": ("string-vae: masked decoding, default predictor, cycle-consistent search", "string-vae",
                        {**ship, "search": "consistent"}),
-        "placed": ("string-vae: placed decoding (string and categories together, width 16)", "string-vae",
+        "placed": (f"string-vae: placed decoding (string and categories together, width 16), {args.vae}", "string-vae",
                    {**ship, "decoding": "placed"}),
         "default": ("string-vae: no options (the shipped models: placed decoding, length prior <= 40 tokens)",
                     "string-vae", {}),

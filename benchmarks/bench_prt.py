@@ -6,6 +6,9 @@
     python benchmarks/bench_prt.py --record tests/cga/data/prt_reference.json
     python benchmarks/bench_prt.py --baseline           # also time the open-face single union
     python benchmarks/bench_prt.py --surfaces cga       # CityEngine's open faces as the default
+    python benchmarks/bench_prt.py --previous           # also time the solid mode before issue 27's
+                                                        # second step (prev ms, prev tris)
+    python benchmarks/bench_prt.py --last               # ... before its third step (last ms, last tris)
 
 PyPRT (`pip install pyprt`) is Esri's, under Esri's terms: never a dependency of grammarkit,
 only this optional reference. Without it the PRT columns are empty.
@@ -27,6 +30,17 @@ grammarkit's model is checked as the user gets it too: `glb` says whether the GL
 the triangles of the open surface layer (0 in the default `surfaces="solid"` mode).
 `--baseline` also times, alternating with the others, the derivation as it was before issue
 27: `surfaces="cga"` (open faces) and one batched union of every solid (`base ms`).
+
+`--previous` times, alternating too, the default solid mode as it was before issue 27's second
+step (open pieces closed without the convex-patch step, the walls of openings as slabs of their
+own: grammarkit.geometry.closing.CONVEX_PATCHES and grammarkit.split.engine.REVEAL_VIEWS off),
+with its triangles (`prev ms`, `prev tris`). `--last` times the solid mode before issue 27's third
+step (`last ms`, `last tris`: the numpy sliver pre-check and the parts left out of the union in
+window openings, grammarkit.split.union.SLIVER_PRECHECK and FREE_PARTS, off).
+
+On a machine shared by many jobs wall-clock times swing by several times between runs; `cpu x`
+is the ratio of the processes' CPU time (time.process_time, all threads) for the same alternating
+runs, steadier there.
 
 `--record` writes PRT's bounding boxes as reference numbers for tests/cga (which cannot need
 PyPRT).
@@ -96,14 +110,45 @@ class single_union:
         model.MIN_GROUPED, model.ALWAYS_GROUPED = self.saved
 
 
-def gk_time(grammar, lot, surfaces: str, single: bool) -> float:
+class previous_solid:
+    """The default solid mode before issue 27's second step (see the module docstring); with
+    `last=True`, before its third step only (the second step's solid mode)."""
+
+    def __init__(self, last: bool = False):
+        self.last = last
+
+    def __enter__(self):
+        from grammarkit.geometry import closing
+        from grammarkit.split import engine, union
+        self.saved = closing.CONVEX_PATCHES, engine.REVEAL_VIEWS, union.FREE_PARTS, union.SLIVER_PRECHECK
+        if not self.last:
+            closing.CONVEX_PATCHES = engine.REVEAL_VIEWS = False
+        union.FREE_PARTS = union.SLIVER_PRECHECK = False
+
+    def __exit__(self, *exc):
+        from grammarkit.geometry import closing
+        from grammarkit.split import engine, union
+        closing.CONVEX_PATCHES, engine.REVEAL_VIEWS, union.FREE_PARTS, union.SLIVER_PRECHECK = self.saved
+
+
+def gk_time(grammar, lot, surfaces: str, single: bool, previous: bool = False,
+            last: bool = False) -> tuple[float, float]:
+    """(wall seconds, CPU seconds) of one derive."""
     import contextlib
 
     import grammarkit
-    with single_union() if single else contextlib.nullcontext():
-        t = time.perf_counter()
+    with single_union() if single else contextlib.nullcontext(), \
+            previous_solid(last) if previous or last else contextlib.nullcontext():
+        t, c = time.perf_counter(), time.process_time()
         grammarkit.derive(grammar, seed=0, lot=lot, surfaces=surfaces)
-        return time.perf_counter() - t
+        return time.perf_counter() - t, time.process_time() - c
+
+
+def gk_triangles(grammar, lot, last: bool = False) -> int:
+    import grammarkit
+    with previous_solid(last):
+        m = grammarkit.derive(grammar, seed=0, lot=lot)
+    return int(m.solid_triangle_count + m.surface_triangle_count)
 
 
 def glb_watertight(model) -> bool:
@@ -138,10 +183,10 @@ def prt_run(pyprt, rpk: Path, lot) -> dict:
     for x, y in lot:
         coords += [x, 0.0, -y]
     gen = pyprt.ModelGenerator([pyprt.InitialShape(coords)])
-    t = time.perf_counter()
+    t, c = time.perf_counter(), time.process_time()
     models = gen.generate_model([{}], str(rpk.resolve()), "com.esri.pyprt.PyEncoder",
                                 {"emitReport": False, "emitGeometry": True})
-    dt = time.perf_counter() - t
+    dt, dc = time.perf_counter() - t, time.process_time() - c
     verts, tris, nfaces = [], [], 0
     base = 0
     for m in models:
@@ -160,7 +205,7 @@ def prt_run(pyprt, rpk: Path, lot) -> dict:
     faces = np.asarray(tris, int).reshape(-1, 3)
     bbox = [allv.min(axis=0).tolist(), allv.max(axis=0).tolist()] if len(allv) else None
     tight, bodies = _mesh_stats(allv, faces)
-    return {"time": dt, "bbox": bbox, "triangles": int(len(faces)), "faces": nfaces,
+    return {"time": dt, "cpu": dc, "bbox": bbox, "triangles": int(len(faces)), "faces": nfaces,
             "watertight": tight, "bodies": bodies}
 
 
@@ -182,6 +227,10 @@ def main(argv=None) -> int:
                     help="compose with one batched union of every solid (the baseline's way)")
     ap.add_argument("--baseline", action="store_true",
                     help="also time surfaces=cga with a single union (before issue 27)")
+    ap.add_argument("--previous", action="store_true",
+                    help="also time the solid mode before issue 27's second step")
+    ap.add_argument("--last", action="store_true",
+                    help="also time the solid mode before issue 27's third step (last ms, last tris)")
     args = ap.parse_args(argv)
     try:
         import pyprt  # noqa: F401 - optional reference (Esri's terms), never a dependency
@@ -194,7 +243,8 @@ def main(argv=None) -> int:
             grammar, err = import_package(rpk, Path(tmp))
             for lot_name, lot in _lots().items():
                 row = {"package": rpk.stem, "lot": lot_name, "derives": False, "error": err}
-                gk, prt, gk_t, prt_t, base_t = None, None, [], [], []
+                gk, prt, gk_t, prt_t, base_t, prev_t, gk_c, prt_c = None, None, [], [], [], [], [], []
+                last_t: list = []
                 if grammar is not None:
                     try:  # once untimed: the GLB check, and warm caches for every timed run
                         gk = gk_run(grammar, lot, args.surfaces, check_glb=True)
@@ -202,25 +252,40 @@ def main(argv=None) -> int:
                         row["error"] = f"derive: {str(exc).splitlines()[0][:120]}"
                 for _ in range(max(1, args.runs)):  # alternate: the same machine state for both
                     if grammar is not None and row["error"] is None:
-                        gk_t.append(gk_time(grammar, lot, args.surfaces, args.single_union))
+                        wall, cpu = gk_time(grammar, lot, args.surfaces, args.single_union)
+                        gk_t.append(wall)
+                        gk_c.append(cpu)
                         if args.baseline:
-                            base_t.append(gk_time(grammar, lot, "cga", True))
+                            base_t.append(gk_time(grammar, lot, "cga", True)[0])
+                        if args.previous:
+                            prev_t.append(gk_time(grammar, lot, "solid", False, previous=True)[0])
+                        if args.last:
+                            last_t.append(gk_time(grammar, lot, "solid", False, last=True)[0])
                     if pyprt is not None:
                         prt = prt_run(pyprt, rpk, lot)
                         prt_t.append(prt["time"])
+                        prt_c.append(prt["cpu"])
                 row["derives"] = gk is not None and row["error"] is None
                 row["gk"], row["prt"] = gk, prt
                 row["bbox_diff"] = bbox_diff(gk and gk["bbox"], prt and prt["bbox"])
                 row["gk_ms"] = statistics.median(gk_t) * 1e3 if gk_t else None
                 row["prt_ms"] = statistics.median(prt_t) * 1e3 if prt_t else None
                 row["base_ms"] = statistics.median(base_t) * 1e3 if base_t else None
+                row["prev_ms"] = statistics.median(prev_t) * 1e3 if prev_t else None
+                row["prev_tris"] = gk_triangles(grammar, lot) if prev_t else None
+                row["last_ms"] = statistics.median(last_t) * 1e3 if last_t else None
+                row["last_tris"] = gk_triangles(grammar, lot, last=True) if last_t else None
+                row["cpu_ratio"] = (statistics.median(gk_c) / statistics.median(prt_c)
+                                    if gk_c and prt_c and statistics.median(prt_c) > 0 else None)
+                row["gk_cpu_ms"] = statistics.median(gk_c) * 1e3 if gk_c else None
+                row["prt_cpu_ms"] = statistics.median(prt_c) * 1e3 if prt_c else None
                 row["ratio"] = row["gk_ms"] / row["prt_ms"] if gk_t and prt_t and row["prt_ms"] else None
                 rows.append(row)
                 if prt is not None:
                     reference.setdefault(rpk.stem, {})[lot_name] = {
                         "bbox": [[round(c, 4) for c in prt["bbox"][0]], [round(c, 4) for c in prt["bbox"][1]]]
                         if prt["bbox"] else None, "triangles": prt["triangles"]}
-    _print(rows, pyprt is not None, args.baseline)
+    _print(rows, pyprt is not None, args.baseline, args.previous, args.last)
     if args.record is not None and reference:
         args.record.parent.mkdir(parents=True, exist_ok=True)
         args.record.write_text(json.dumps({"source": "PyPRT generate_model, default attributes, lots of "
@@ -236,10 +301,14 @@ def _fmt(v, spec=".2f") -> str:
     return "-" if v is None else format(v, spec)
 
 
-def _print(rows: list, have_prt: bool, baseline: bool = False) -> None:
+# long: one table, one column group per option, and the summed line
+def _print(rows: list, have_prt: bool, baseline: bool = False, previous: bool = False,
+           last: bool = False) -> None:
     print(f"{'package':18} {'lot':6} {'der':3} {'bbox d(m)':>9} {'terms':>6} {'prt faces':>9} "
           f"{'tris gk':>8} {'tris prt':>8} {'tris x':>6} {'open':>6} {'tight gk/prt':>12} {'glb':>3} "
-          f"{'bodies gk/prt':>13} {'gk ms':>8} {'prt ms':>8} {'ratio':>6}" + (f" {'base ms':>8}" if baseline else ""))
+          f"{'bodies gk/prt':>13} {'gk ms':>8} {'prt ms':>8} {'ratio':>6} {'cpu x':>6}"
+          + (f" {'base ms':>8}" if baseline else "") + (f" {'prev ms':>8} {'prev tris':>9}" if previous else "")
+          + (f" {'last ms':>8} {'last tris':>9}" if last else ""))
     for r in rows:
         gk, prt = r["gk"] or {}, r["prt"] or {}
         tight = f"{_yn(gk.get('watertight'))}/{_yn(prt.get('watertight'))}"
@@ -249,8 +318,11 @@ def _print(rows: list, have_prt: bool, baseline: bool = False) -> None:
               f"{_fmt(r['bbox_diff'], '.3f'):>9} {gk.get('terminals', '-')!s:>6} {prt.get('faces', '-')!s:>9} "
               f"{gk.get('triangles', '-')!s:>8} {prt.get('triangles', '-')!s:>8} {_fmt(tris_x):>6} "
               f"{gk.get('open', '-')!s:>6} {tight:>12} {_yn(gk.get('glb')):>3} {bodies:>13} "
-              f"{_fmt(r['gk_ms'], '.1f'):>8} {_fmt(r['prt_ms'], '.1f'):>8} {_fmt(r['ratio']):>6}"
-              + (f" {_fmt(r.get('base_ms'), '.1f'):>8}" if baseline else ""))
+              f"{_fmt(r['gk_ms'], '.1f'):>8} {_fmt(r['prt_ms'], '.1f'):>8} {_fmt(r['ratio']):>6} "
+              f"{_fmt(r.get('cpu_ratio')):>6}"
+              + (f" {_fmt(r.get('base_ms'), '.1f'):>8}" if baseline else "")
+              + (f" {_fmt(r.get('prev_ms'), '.1f'):>8} {r.get('prev_tris') or '-'!s:>9}" if previous else "")
+              + (f" {_fmt(r.get('last_ms'), '.1f'):>8} {r.get('last_tris') or '-'!s:>9}" if last else ""))
         if r["error"]:
             print(f"    {r['error']}")
     timed = [r for r in rows if r["gk_ms"] is not None and r["prt_ms"] is not None]
@@ -258,8 +330,18 @@ def _print(rows: list, have_prt: bool, baseline: bool = False) -> None:
         gk_sum, prt_sum = sum(r["gk_ms"] for r in timed), sum(r["prt_ms"] for r in timed)
         line = (f"summed over {len(timed)} package x lot rows: grammarkit {gk_sum:.1f} ms, PyPRT "
                 f"{prt_sum:.1f} ms, ratio {gk_sum / prt_sum:.2f}")
+        cpu = [r for r in timed if r.get("gk_cpu_ms") is not None and r.get("prt_cpu_ms")]
+        if cpu:
+            line += (f"; CPU {sum(r['gk_cpu_ms'] for r in cpu):.1f} vs {sum(r['prt_cpu_ms'] for r in cpu):.1f} ms, "
+                     f"ratio {sum(r['gk_cpu_ms'] for r in cpu) / sum(r['prt_cpu_ms'] for r in cpu):.2f}")
         if baseline and all(r.get("base_ms") is not None for r in timed):
             line += f"; baseline {sum(r['base_ms'] for r in timed):.1f} ms"
+        if previous and all(r.get("prev_ms") is not None for r in timed):
+            prev = sum(r["prev_ms"] for r in timed)
+            line += f"; previous solid mode {prev:.1f} ms (ratio {prev / prt_sum:.2f})"
+        if last and all(r.get("last_ms") is not None for r in timed):
+            lt = sum(r["last_ms"] for r in timed)
+            line += f"; last step's solid mode {lt:.1f} ms (ratio {lt / prt_sum:.2f})"
         print(line)
     if not have_prt:
         print("(PyPRT is not installed: no reference columns; `pip install pyprt`, Esri's terms)")

@@ -16,7 +16,7 @@ from __future__ import annotations
 import math
 import unicodedata
 from pathlib import Path
-from typing import Any, Iterable
+from typing import Any, Callable, Iterable
 
 from .errors import GrammarError
 from .ir import (
@@ -344,18 +344,7 @@ def _statement(p: _Printer, s: Any) -> list[str]:
     elif isinstance(s, AssetDir):
         lines.append(f"asset_dir {format_expr(s.value)}")
     elif isinstance(s, Snippet):
-        head = f"snippet {_ident(s.name, s)} : {_ident(s.object_type, s)} {{"
-        if not s.attrs and not s.rules:
-            lines.append(head + "}")
-        else:
-            lines.append(head)
-            for a in s.attrs:
-                lines.extend(_comments(a.comments, INDENT))
-                lines.append(INDENT + _attr(a))
-            for r in s.rules:
-                lines.extend(_comments(r.comments, INDENT))
-                lines.append(INDENT + _rule(p, r, 1))
-            lines.append("}")
+        lines.extend(_snippet(p, s))
     elif isinstance(s, Use):
         lines.append(f"use {_ident(s.snippet, s)} as {_ident(s.anchor, s)}")
     elif isinstance(s, Default):
@@ -363,55 +352,8 @@ def _statement(p: _Printer, s: Any) -> list[str]:
     elif isinstance(s, Variants):
         opts = " | ".join(f"{_ident(o.snippet, o)}: {_percent(o.weight)}" for o in s.options)
         lines.append(f"variants {_ident(s.object_type, s)} " + (f"{{ {opts} }}" if opts else "{}"))
-    elif isinstance(s, PartDef):
-        text = f"part {_ident(s.name, s)} = {format_expr(s.geometry)}"
-        if s.symmetry is not None or s.mirror:
-            group = s.symmetry if s.symmetry is not None else "none"
-            text += f" symmetry({group}, mirror)" if s.mirror else f" symmetry({group})"
-        if s.up_any:
-            text += " up(any)"
-        elif s.up:
-            text += f" up({', '.join(_direction(d) for d in s.up)})"
-        lines.append(text)
     elif isinstance(s, UpDef):
         lines.append(f"up {s.axis}")
-    elif isinstance(s, SiteDef):
-        text = f"site {_ident(s.part, s)}.{_ident(s.name, s)} at {_vec3(s.position)}"
-        if s.facing != "+x":
-            text += f" facing {s.facing}"
-        if s.mirror is not None:
-            text += f" mirror {s.mirror}"
-        if s.required:
-            text += " required"
-        lines.append(text)
-    elif isinstance(s, DockDef):
-        a = _ident(s.a, s) + (f".{_ident(s.a_site, s)}" if s.a_site is not None else "")
-        b = _ident(s.b, s) + (f".{_ident(s.b_site, s)}" if s.b_site is not None else "")
-        text = f"dock {a} -- {b}"
-        if s.placements:
-            one = " { " + " | ".join(_placement(pl) for pl in s.placements) + " }"
-            if len(text) + len(one) <= WIDTH or len(s.placements) < 2:
-                text += one
-            else:
-                body = "\n".join(INDENT + ("| " if k else "") + _placement(pl)
-                                 for k, pl in enumerate(s.placements))
-                text += " {\n" + body + "\n}"
-        lines.append(text)
-    elif isinstance(s, NeighborRule):
-        parts = []
-        if s.multisets:
-            parts.append(" | ".join("{" + ", ".join(_ident(n, s) for n in m) + "}"
-                                    for m in s.multisets))
-        for c in s.counts:
-            if c.lo < 0 or (c.hi is not None and c.hi < 0):
-                raise _unprintable("neighbour counts cannot be negative", c)
-            if c.hi is None:
-                parts.append(f"{_ident(c.type, c)} in {c.lo}..")
-            elif c.hi == c.lo:
-                parts.append(f"{_ident(c.type, c)} in {c.lo}")
-            else:
-                parts.append(f"{_ident(c.type, c)} in {c.lo}..{c.hi}")
-        lines.append(f"neighbors {_ident(s.part, s)}:" + (" " + ", ".join(parts) if parts else ""))
     elif isinstance(s, ConstraintDef):
         text = f"constraint {_ident(s.name, s)}"
         compared = _count_comparison(s)
@@ -420,24 +362,101 @@ def _statement(p: _Printer, s: Any) -> list[str]:
         elif s.args:
             text += f"({p.args(s.args)})"
         lines.append(text)
+    elif isinstance(s, tuple(_TILING_LINES)):
+        lines.append(next(f for cls, f in _TILING_LINES.items() if isinstance(s, cls))(s))
     elif isinstance(s, ExampleDef):
-        if s.source is not None and s.parts:
-            raise _unprintable("an example is either a file or inline parts, not both", s)
-        if s.source is not None:
-            lines.append(f"example {_ident(s.name, s)} = assembly({format_string(s.source)})")
-        else:
-            entries = [f"{_ident(ip.type, ip)} {_placement(ip.placement)}" for ip in s.parts]
-            one = f"example {_ident(s.name, s)} {{ {'; '.join(entries)} }}" if entries else \
-                f"example {_ident(s.name, s)} {{}}"
-            if len(one) <= WIDTH:
-                lines.append(one)
-            else:
-                lines.append(f"example {_ident(s.name, s)} {{")
-                lines.extend(INDENT + e for e in entries)
-                lines.append("}")
+        lines.extend(_example(s))
     else:
         raise _unprintable(f"unknown statement {type(s).__name__}", s)
     return lines
+
+
+def _snippet(p: _Printer, s: Snippet) -> list[str]:
+    head = f"snippet {_ident(s.name, s)} : {_ident(s.object_type, s)} {{"
+    if not s.attrs and not s.rules:
+        return [head + "}"]
+    lines = [head]
+    for a in s.attrs:
+        lines.extend(_comments(a.comments, INDENT))
+        lines.append(INDENT + _attr(a))
+    for r in s.rules:
+        lines.extend(_comments(r.comments, INDENT))
+        lines.append(INDENT + _rule(p, r, 1))
+    lines.append("}")
+    return lines
+
+
+def _part(s: PartDef) -> str:
+    text = f"part {_ident(s.name, s)} = {format_expr(s.geometry)}"
+    if s.symmetry is not None or s.mirror:
+        group = s.symmetry if s.symmetry is not None else "none"
+        text += f" symmetry({group}, mirror)" if s.mirror else f" symmetry({group})"
+    if s.up_any:
+        text += " up(any)"
+    elif s.up:
+        text += f" up({', '.join(_direction(d) for d in s.up)})"
+    return text
+
+
+def _site(s: SiteDef) -> str:
+    text = f"site {_ident(s.part, s)}.{_ident(s.name, s)} at {_vec3(s.position)}"
+    if s.facing != "+x":
+        text += f" facing {s.facing}"
+    if s.mirror is not None:
+        text += f" mirror {s.mirror}"
+    if s.required:
+        text += " required"
+    return text
+
+
+def _dock(s: DockDef) -> str:
+    a = _ident(s.a, s) + (f".{_ident(s.a_site, s)}" if s.a_site is not None else "")
+    b = _ident(s.b, s) + (f".{_ident(s.b_site, s)}" if s.b_site is not None else "")
+    text = f"dock {a} -- {b}"
+    if s.placements:
+        one = " { " + " | ".join(_placement(pl) for pl in s.placements) + " }"
+        if len(text) + len(one) <= WIDTH or len(s.placements) < 2:
+            text += one
+        else:
+            body = "\n".join(INDENT + ("| " if k else "") + _placement(pl)
+                             for k, pl in enumerate(s.placements))
+            text += " {\n" + body + "\n}"
+    return text
+
+
+def _neighbors(s: NeighborRule) -> str:
+    parts = []
+    if s.multisets:
+        parts.append(" | ".join("{" + ", ".join(_ident(n, s) for n in m) + "}"
+                                for m in s.multisets))
+    for c in s.counts:
+        if c.lo < 0 or (c.hi is not None and c.hi < 0):
+            raise _unprintable("neighbour counts cannot be negative", c)
+        if c.hi is None:
+            parts.append(f"{_ident(c.type, c)} in {c.lo}..")
+        elif c.hi == c.lo:
+            parts.append(f"{_ident(c.type, c)} in {c.lo}")
+        else:
+            parts.append(f"{_ident(c.type, c)} in {c.lo}..{c.hi}")
+    return f"neighbors {_ident(s.part, s)}:" + (" " + ", ".join(parts) if parts else "")
+
+
+# the tiling statements that print as one line, by IR class
+_TILING_LINES: dict[type, Callable[[Any], str]] = {
+    PartDef: _part, SiteDef: _site, DockDef: _dock, NeighborRule: _neighbors}
+
+
+def _example(s: ExampleDef) -> list[str]:
+    if s.source is not None and s.parts:
+        raise _unprintable("an example is either a file or inline parts, not both", s)
+    if s.source is not None:
+        return [f"example {_ident(s.name, s)} = assembly({format_string(s.source)})"]
+    entries = [f"{_ident(ip.type, ip)} {_placement(ip.placement)}" for ip in s.parts]
+    one = f"example {_ident(s.name, s)} {{ {'; '.join(entries)} }}" if entries else \
+        f"example {_ident(s.name, s)} {{}}"
+    if len(one) <= WIDTH:
+        return [one]
+    return [f"example {_ident(s.name, s)} {{", *(INDENT + e for e in entries), "}"]
 
 
 def print_grammar(grammar: Grammar, *, header: bool = True) -> str:

@@ -51,7 +51,22 @@ _BINARY = {"+": "+", "-": "-", "*": "*", "/": "/", "%": "%", "==": "==", "!=": "
            "<": "<", "<=": "<=", ">": ">", ">=": ">="}
 _INDEX_REFS = {"split.index", "split.total", "comp.index", "comp.total", "comp.sel"}
 _GEOMETRY_REFS = {"geometry.area", "geometry.volume", "geometry.nVertices", "geometry.isRectangular"}
+# counts CGA has and grammarkit's geometry queries give through nVertices: exact on faces
+# (n outline vertices, n edges, 1 face) and on the prisms extrude() makes (2n vertices, 3n
+# edges, n + 2 faces); on meshes (booleans, inserted assets) the prism formula is used
+_DERIVED_GEOMETRY = {
+    "geometry.nEdges": lambda nv, vol: Call(func="select", args=(
+        Binary(op=">", left=vol, right=Num(value=0)), Binary(op="*", left=nv, right=Num(value=1.5)), nv)),
+    "geometry.nFaces": lambda nv, vol: Call(func="select", args=(
+        Binary(op=">", left=vol, right=Num(value=0)),
+        Binary(op="+", left=Binary(op="/", left=nv, right=Num(value=2)), right=Num(value=2)), Num(value=1))),
+}
 MAX_INLINE_DEPTH = 16
+
+
+def _derived_geometry(name: str, span: Span | None) -> Any:
+    return _DERIVED_GEOMETRY[name](Ref(name="geometry.nVertices", span=span),
+                                   Ref(name="geometry.volume", span=span))
 
 
 class Untranslatable(Exception):
@@ -262,6 +277,11 @@ def _ref(name: str, span: Span | None, ctx: ExprContext) -> Any:
         return Ref(name=mapped, span=span)
     if name in _INDEX_REFS or name in _GEOMETRY_REFS:
         return Ref(name=name, span=span)
+    if name in _DERIVED_GEOMETRY:
+        return _derived_geometry(name, span)
+    if name in _FUNCTIONS and _FUNCTIONS[name][1] == 0:
+        # a built-in function called without parentheses (`~(rand)`): CGA allows it
+        return Call(func=_FUNCTIONS[name][0], args=(), span=span)
     head = name.split(".", 1)[0]
     if head in ("geometry", "scope", "comp", "split", "initialShape", "material", "seedian",
                 "world", "object", "pivot", "trim", "convert"):
@@ -280,6 +300,8 @@ def _call(name: str, args: list[Any], span: Span | None, ctx: ExprContext) -> An
         # geometry.area() etc.: built-in names of grammarkit (isRectangular's tolerance in
         # degrees is grammarkit's fixed one, see docs/cga.md)
         return Ref(name=name, span=span)
+    if name in _DERIVED_GEOMETRY and not args:
+        return _derived_geometry(name, span)
     if name in _FUNCTIONS:
         gk, lo, hi = _FUNCTIONS[name]
         if len(args) < lo or (hi is not None and len(args) > hi):

@@ -150,11 +150,13 @@ def _derive(file: Path, out: Path, preview: Path | None, seed: int, sets: tuple[
     from ..plugins import get_plugin_manager
     from ..run.api import resolve_backend
 
-    grammar = load(file)
-    registries = get_plugin_manager().registries()
+    registries = get_plugin_manager().registries()  # the edge: passed down from here
+    grammar = load(file, registries=registries)
     spec = resolve_backend(grammar, backend, registries)
     option_values: dict[str, Any] = _pairs(options, "--option")
     attrs = _pairs(sets, "--set")
+    if grammar.family == "split" and attrs:
+        _check_set_names(grammar, file, attrs, registries)
     if grammar.family != "split":
         for given, name in ((sets, "--set"), (variations, "--variations")):
             if given:
@@ -170,7 +172,7 @@ def _derive(file: Path, out: Path, preview: Path | None, seed: int, sets: tuple[
     formats = sorted(registries.exporters)
     if count is None and spec.name == "split":
         _run_single(grammar, file, out, seed, attrs, _format_of(out, fmt, formats), preview, tree,
-                    option_values, limits["timeout"], registries, console)
+                    option_values, limits["timeout"], registries, console, as_json)
         return
     if tree is not None:
         if tree != Path(".") and tree.resolve() != out.resolve():
@@ -190,7 +192,7 @@ def _derive(file: Path, out: Path, preview: Path | None, seed: int, sets: tuple[
 
 def _run_single(grammar: Any, file: Path, out: Path, seed: int, attrs: dict[str, str], fmt: str,
                 preview: Path | None, tree: Path | None, options: dict[str, Any],
-                timeout: float | None, registries: Any, console: Any) -> None:
+                timeout: float | None, registries: Any, console: Any, as_json: bool = False) -> None:
     from ..run.api import run_backend
     from ..run.writer import ModelFile
 
@@ -220,6 +222,11 @@ def _run_single(grammar: Any, file: Path, out: Path, seed: int, attrs: dict[str,
     for msg in entry.get("messages", ()):  # CGA's print() (split grammars), on stderr
         console.print(f"print: {msg}", highlight=False, markup=False)
     m = entry["metrics"]
+    if as_json:  # for scripts: the files written and the model's numbers, one JSON document
+        files = {"model": str(out), **{k: str(p) for k, p in attachments.items() if p is not None}}
+        click.echo(json.dumps({"files": files, "format": fmt, "seed": seed, "metrics": m,
+                               "warnings": list(entry.get("warnings", ()))}, indent=1, default=str))
+        return
     click.echo(f"wrote {out} ({fmt}): {m['triangles']} triangles, {m['terminals']} terminals, "
                f"{m['shapes']} shapes" + (f"; preview {preview}" if preview else "")
                + (f"; tree {tree}" if tree else ""))
@@ -278,6 +285,25 @@ def _run_folder(grammar: Any, file: Path, backend: str, out: Path, n: int, itera
         console.print(f"continued an earlier run: {summary.resumed} results were already in {out}/",
                       highlight=False)
     report_summary(summary, as_json)
+
+
+def _check_set_names(grammar: Any, file: Path, attrs: dict[str, str], registries: Any) -> None:
+    """A `--set` name the grammar has no attr of is a usage error that names the nearest attrs
+    (the compiled grammar is cached: the run reuses it)."""
+    import difflib
+
+    from ..split import compile as compile_split
+
+    compiled = compile_split(grammar, registries=registries)
+    for name in attrs:
+        if compiled.resolve_attr_keys(name):
+            continue
+        known = sorted(compiled.attrs)
+        near = difflib.get_close_matches(name, known + sorted({k.split(".")[-1] for k in known}),
+                                         n=3, cutoff=0.6)
+        hint = ("; did you mean " + " or ".join(repr(n) for n in dict.fromkeys(near)) + "?") if near \
+            else (f"; its attrs: {', '.join(known)}" if known else "; it has no attrs")
+        raise click.BadParameter(f"{file} has no attr {name!r}{hint}", param_hint="--set")
 
 
 def report_summary(summary: Any, as_json: bool) -> None:

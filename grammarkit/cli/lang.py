@@ -145,7 +145,7 @@ def fmt(files: tuple[Path, ...], in_place: bool, check_only: bool, max_size: int
             original, name = _read_input(path, max_size or DEFAULT_MAX_BYTES)
             text = format_grammar(original, filename=name)
         except GrammarError as exc:
-            click.echo(exc.format(), err=True)
+            _report_unformattable(exc, path)
             failed = True
             continue
         if check_only:
@@ -160,6 +160,24 @@ def fmt(files: tuple[Path, ...], in_place: bool, check_only: bool, max_size: int
             click.echo(text, nl=False)
     if failed or (check_only and changed):
         sys.exit(1)
+
+
+FMT_SHOWN_ERRORS = 10  # `fmt` of a file with many errors (often not a grammar at all): the first
+
+
+def _report_unformattable(exc: GrammarError, path: Path) -> None:
+    """Why `fmt` cannot format a file: its first errors in check's layout, then how many more
+    there are and the command that lists them all."""
+    diags = list(exc.diagnostics) or [None]
+    if diags == [None] or len(diags) <= FMT_SHOWN_ERRORS:
+        click.echo(exc.format(), err=True)
+        return
+    for d in diags[:FMT_SHOWN_ERRORS]:
+        click.echo(d.format(), err=True)
+    more = len(diags) - FMT_SHOWN_ERRORS
+    hint = "" if str(path).endswith(".grammar") or str(path) == "-" else " (is it a grammar file?)"
+    click.echo(f"{path}: {_plural(more, 'more error')} not shown{hint}; "
+               f"`grammarkit check {path}` lists them all", err=True)
 
 
 def _backend_options(manager: Any) -> dict[str, dict[str, list[dict]]]:

@@ -106,12 +106,14 @@ def _relative(path: Path, base: Path) -> str:
 @click.option("--count-slack", default=0, show_default=True, type=click.IntRange(min=0),
               help="widen every learned count range by this many parts on each side")
 @click.option("--no-holes", is_flag=True, help="infer no `filled(T, site)` constraints (interior holes)")
+@click.option("--no-sockets", is_flag=True,
+              help="allow only the site pairs the examples show (default: every pair whose sockets fit)")
 @click.option("--up", default="+z", show_default=True, type=click.Choice(["+x", "-x", "+y", "-y", "+z", "-z"]),
               help="the examples' up axis")
 def learn(examples: tuple[Path, ...], output: Path | None, name: str | None, bandwidth: float,
           tolerance: float | None, no_docks: bool, neighbors: str = "none", no_sites: bool = False,
           no_counts: bool = False, count_mode: str = "few", count_slack: int = 0, no_holes: bool = False,
-          up: str = "+z") -> None:
+          up: str = "+z", no_sockets: bool = False) -> None:
     """Learn the tiling grammar that segmented EXAMPLES (GLB/glTF/OBJ files or folders) exhibit.
 
     Example: grammarkit learn examples/*.glb -o castle.grammar"""
@@ -138,7 +140,8 @@ def learn(examples: tuple[Path, ...], output: Path | None, name: str | None, ban
                                     tolerance=tolerance, bandwidth=bandwidth, docks=not no_docks,
                                     neighbors=neighbors, sites=not no_sites,
                                     counts=False if no_counts else (True if count_mode == "few" else "all"),
-                                    count_slack=count_slack, holes=not no_holes, up=up, notes=notes, progress=say)
+                                    count_slack=count_slack, holes=not no_holes, sockets=not no_sockets, up=up, notes=notes,
+                                    progress=say)
     for w in caught:
         click.echo(f"warning: {w.message}", err=True)
     for line in notes:  # what was inferred (counts, symmetries, support): the user should know

@@ -22,8 +22,9 @@ from .frontend import Parsed, load_text, parse_source
 from .imports import resolve_calls, resolve_imports
 from .parser import DEFAULT_MAX_BYTES, KEYWORDS, paused_gc
 
+# resolve_calls is part of the toolkit for engines that build grammars in code
 __all__ = ["parse", "check", "load", "parse_with_header", "check_text", "KEYWORDS", "BUILTIN_REFS",
-           "BUILTIN_CONSTRAINTS", "DEFAULT_MAX_BYTES", "Registries"]
+           "BUILTIN_CONSTRAINTS", "DEFAULT_MAX_BYTES", "Registries", "resolve_calls"]
 
 
 def _parsed(source: Any, filename: str | None, max_bytes: int) -> Parsed:
@@ -113,7 +114,3 @@ def load(source: "str | Path | Grammar", *, filename: str | None = None,
     _raise(diags)
     assert grammar is not None
     return grammar
-
-
-# resolve_calls is part of the module's toolkit for engines that build grammars in code.
-__all__.append("resolve_calls")

@@ -34,12 +34,32 @@ class TilingChecks:
     def check_tiling(self) -> None:
         g = self.g
         values = _Scope(set(self._values), {})
-        sites: dict[tuple[str, str], SiteDef] = {}
         for p in g.parts:
             # the geometry constructor (mesh, box, ...) belongs to the tiling engine; check its args
             for a in p.geometry.args:
                 self.check_expr(a, values)
-        for s in g.sites:
+        sites = self._check_sites(values)
+        self._check_docks(values, sites)
+        ups = g.ups
+        for extra in ups[1:]:
+            self.bag.error("the grammar's up axis is given twice", extra.span,
+                           hint=f"the first `up` is at {ups[0].span}", code="duplicate")
+        for p in g.parts:
+            for d in p.up:
+                for x in d:
+                    self.check_expr(x, values)
+        self._check_neighbor_rules()
+        self._check_constraints(values)
+        for e in g.examples:
+            for ip in e.parts:
+                self._part_ref(ip.type, ip.span or e.span, f"example {e.name}")
+                for x in ip.placement.at + (ip.placement.rot or ()):
+                    self.check_expr(x, values)
+
+    def _check_sites(self, values: _Scope) -> dict[tuple[str, str], SiteDef]:
+        """Sites: their parts, duplicates, positions; returns them by (part, name)."""
+        sites: dict[tuple[str, str], SiteDef] = {}
+        for s in self.g.sites:
             self._part_ref(s.part, s.span, "site")
             key = (s.part, s.name)
             if key in sites:
@@ -47,8 +67,12 @@ class TilingChecks:
             sites[key] = s
             for x in s.position:
                 self.check_expr(x, values)
+        return sites
+
+    def _check_docks(self, values: _Scope, sites: dict[tuple[str, str], SiteDef]) -> None:
+        """Docks: their parts and sites, placements; then the sites no dock names."""
         used_sites: set[tuple[str, str]] = set()
-        for d in g.docks:
+        for d in self.g.docks:
             for part, site in ((d.a, d.a_site), (d.b, d.b_site)):
                 if site is not None:
                     used_sites.add((part, site))
@@ -68,15 +92,9 @@ class TilingChecks:
                 self.bag.warning(f"site {s.part}.{s.name} is not used by any dock (it allows and "
                                  "requires nothing)", s.span, hint=f"dock it: `dock {s.part}.{s.name} -- Other`"
                                  f" or mark it `required`", code="unused-site")
-        ups = g.ups
-        for extra in ups[1:]:
-            self.bag.error("the grammar's up axis is given twice", extra.span,
-                           hint=f"the first `up` is at {ups[0].span}", code="duplicate")
-        for p in g.parts:
-            for d in p.up:
-                for x in d:
-                    self.check_expr(x, values)
-        for n in g.neighbor_rules:
+
+    def _check_neighbor_rules(self) -> None:
+        for n in self.g.neighbor_rules:
             self._part_ref(n.part, n.span, "neighbors")
             for m in n.multisets:
                 for t in m:
@@ -86,8 +104,12 @@ class TilingChecks:
                 if c.hi is not None and c.lo > c.hi:
                     self.bag.error(f"count range {c.lo}..{c.hi} is empty", c.span or n.span,
                                    code="bad-range")
+
+    def _check_constraints(self, values: _Scope) -> None:
+        """Constraints: known names, arguments bound to the constraint's spec; bare names in
+        the other arguments name part types (or values)."""
         known = set(self.reg.constraints) | BUILTIN_CONSTRAINTS
-        for c in g.constraints:
+        for c in self.g.constraints:
             if c.name not in known:
                 self.bag.error(f"unknown constraint '{c.name}'", c.span,
                                hint=_known_hint("constraints", c.name, known),
@@ -105,13 +127,7 @@ class TilingChecks:
                 if id(v) in axis_args:
                     continue
                 if isinstance(v, Ref) and "." not in v.name:
-                    # bare names in constraint arguments name part types (or values)
                     if v.name not in self.parts and v.name not in self._values:
                         self._part_ref(v.name, v.span or c.span, f"constraint {c.name}")
                 else:
                     self.check_expr(v, values)
-        for e in g.examples:
-            for ip in e.parts:
-                self._part_ref(ip.type, ip.span or e.span, f"example {e.name}")
-                for x in ip.placement.at + (ip.placement.rot or ()):
-                    self.check_expr(x, values)

@@ -302,6 +302,7 @@ def read_gltf_solids(path: str | Path) -> list[GltfSolid] | None:
         raise ShapeError(f"{path}: damaged grammarkit glTF file ({type(exc).__name__}: {exc})") from None
 
 
+# long: one walk of the glTF nodes; accessor reads and their located checks share the buffers
 def _solids_from_doc(doc: dict, binary: bytes | None, root: dict, path: Path) -> list[GltfSolid]:
     # One function on purpose: the accessor reader and the colour lookup are closures over this
     # document's buffers and materials, shared by both layouts (formats 2 and 3) read below.

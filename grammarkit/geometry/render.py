@@ -167,6 +167,7 @@ def _row_groups(rows: np.ndarray) -> np.ndarray:
     return groups
 
 
+# long: one numpy pass from gathered triangles to welded edge topology sharing its arrays
 def prepare(obj: Any, *, max_triangles: int = MAX_TRIANGLES) -> RenderGeometry:
     """Gather the triangles of a Trimesh / Scene / Model / Assembly and compute edge topology."""
     if isinstance(obj, RenderGeometry):
@@ -300,6 +301,7 @@ def _front_facing(geom: RenderGeometry, view: View) -> np.ndarray:
     return np.einsum("ij,ij->i", geom.normals, view.view_vectors(centroids)) < 0
 
 
+# long: chunked edge-function z-buffer fill; the stages share the per-frame depth buffers
 def rasterize(geom: RenderGeometry, view: View, *, cull: bool = True,
               chunk: int = 1 << 20) -> Raster:
     """Z-buffer `geom` for `view` (pixel centres at i + 0.5)."""

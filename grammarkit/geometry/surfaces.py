@@ -18,7 +18,7 @@ from typing import Any, Sequence
 import manifold3d
 import numpy as np
 
-__all__ = ["SurfaceMesh", "face_triangles", "reveal_triangles", "clip_by_plane"]
+__all__ = ["SurfaceMesh", "face_triangles", "reveal_triangles", "clip_by_plane", "unit_normals"]
 
 Vec = tuple[float, float, float]
 
@@ -27,6 +27,18 @@ def _to_world(pts: np.ndarray, o: Vec, ax: tuple) -> np.ndarray:
     """(n, 3) scope coordinates -> world coordinates."""
     M = np.asarray(ax, dtype=np.float64)  # rows: the scope's x, y, z axes in world coordinates
     return pts @ M + np.asarray(o, dtype=np.float64)
+
+
+def unit_normals(V: np.ndarray, F: np.ndarray, eps: float = 1e-12
+                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(which triangles have area: cross product longer than `eps`, their unit normals, every
+    triangle's twice area): what the closing of open meshes and the occlusion slabs of open
+    surfaces both start from."""
+    a, b, c = V[F[:, 0]], V[F[:, 1]], V[F[:, 2]]
+    n = np.cross(b - a, c - a)
+    ln = np.linalg.norm(n, axis=1)
+    keep = ln > eps
+    return keep, n[keep] / ln[keep, None], ln
 
 
 def face_triangles(o: Vec, ax: tuple, sz: Vec, poly: Any) -> tuple[np.ndarray, np.ndarray]:

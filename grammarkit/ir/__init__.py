@@ -17,4 +17,14 @@ from .tiling import (
     SiteDef, UpDef,
 )
 
-__all__ = [name for name in dir() if not name.startswith("_")]
+# the IR models, the operator tables and the walker (the submodules stay importable by name)
+__all__ = [
+    "Arg", "AssetDir", "Attr", "Binary", "BlockItem", "Bool", "Branch", "Call", "Case", "CaseArm",
+    "Choice", "ChoiceArm", "Const", "ConstraintDef", "CountRange", "Default", "DockDef",
+    "ExampleDef", "Expr", "Function", "Grammar", "Import", "InlinePart", "Item", "NeighborRule",
+    "Nil", "Node", "Num", "OpCall", "PRECEDENCE", "PartDef", "Pattern", "Placement", "Push", "Ref",
+    "Repeat", "Rule", "SPLIT_KINDS", "Seq", "SiteDef", "Snippet", "Span", "Statement", "Str",
+    "Successor", "TILING_KINDS", "Terminal", "UNARY_PRECEDENCE", "Unary", "UpDef", "Use",
+    "VariantOption", "Variants", "Vector", "block_branches", "block_seqs", "child_seqs",
+    "successor_names", "walk", "walk_seqs",
+]

@@ -117,7 +117,7 @@ def _registries(registries: Any) -> Any:
     return default_registries()
 
 
-def _grammar(grammar: Any) -> Any:
+def _grammar(grammar: Any, registries: Any) -> Any:
     from ..ir.grammar import Grammar
 
     if isinstance(grammar, Grammar) and not grammar.imports:
@@ -126,7 +126,7 @@ def _grammar(grammar: Any) -> Any:
 
     if isinstance(grammar, str) and "\n" not in grammar and grammar.endswith(".grammar"):
         grammar = Path(grammar)
-    return load(grammar)
+    return load(grammar, registries=registries)
 
 
 def resolve_backend(grammar: Any, name: str | None, registries: Any) -> BackendSpec:
@@ -244,7 +244,7 @@ def iter_results(grammar: Any, *, backend: str | None = None, n: int = 1, seed: 
     `time_limit` (seconds) is the graceful budget: no new result is started after it (the
     ones made are kept); `timeout` is the hard stop, a LimitError."""
     registries = _registries(registries)
-    g = _grammar(grammar)
+    g = _grammar(grammar, registries)
     spec = resolve_backend(g, backend if backend is not None else
                            ("split" if g.family == "split" else None), registries)
     request = _request(g, spec, registries, n=n, seed=seed, start=0, iterations=iterations,
@@ -316,7 +316,7 @@ def run_backend(grammar: Any, *, out: "str | Path | ModelFile", backend: str | N
 
     t0 = time.perf_counter()
     registries = _registries(registries)
-    g = _grammar(grammar)
+    g = _grammar(grammar, registries)
     spec = resolve_backend(g, backend, registries)
     fmt = (format or spec.model_format).lower().lstrip(".")
     if fmt not in registries.exporters:
@@ -354,17 +354,23 @@ def run_backend(grammar: Any, *, out: "str | Path | ModelFile", backend: str | N
 
 def shortfall_reason(request: Request, stats: Any, time_limit: float | None) -> str:
     """Why a run made fewer results than asked, in the user's terms."""
-    if request.time_is_up():
-        return f"the time limit ({time_limit:g} s) was reached" if time_limit else \
-            "the time limit was reached"
     reason = stats.get("shortfall") if isinstance(stats, dict) else None
+    if request.time_is_up():
+        # the back end's own account (what it tried, where the candidates went) still says
+        # why the results were few when the clock stopped it
+        limit = f"the time limit ({time_limit:g} s) was reached" if time_limit else \
+            "the time limit was reached"
+        return f"{limit}; {reason}" if reason and reason != "the time limit was reached" else limit
     return reason or "the back end is exhausted: it produced no more results"
 
 
 def _write_results(spec: BackendSpec, request: Request, folder: Any, registries: Any, n: int,
                    fmt: str, preview: bool, on_result: Callable[[dict], None] | None,
                    t0: float, time_limit: float | None) -> RunSummary:
-    """Drive the back end and hand each new result to the writer, until `n` are in the folder."""
+    """Drive the back end and hand each new result to the writer, until `n` are in the folder.
+
+    A folder run writes on a write-behind thread (grammarkit.run.write_behind), so that the
+    next results are derived while one is written; `on_result` still runs in this thread."""
     summary = RunSummary(spec.name, n, 0, folder.resumed, folder.path, folder.manifest, None,
                          executor=getattr(request.executor, "name", type(request.executor).__name__),
                          workers=int(getattr(request.executor, "workers", 1) or 1))
@@ -372,17 +378,19 @@ def _write_results(spec: BackendSpec, request: Request, folder: Any, registries:
         summary.stats = {"note": f"the folder already holds {folder.done} results of this run"}
         _count(summary, folder.entries)
         return summary
-    request = Request(**{**request.__dict__, "start": folder.done})
+    start = folder.done
+    request = Request(**{**request.__dict__, "start": start})
+    sink = _Sink(folder, on_result)
     gen = _drive(spec, request)
     stats: dict = {}
     try:
-        while folder.done < n:
+        while start + sink.handed < n:
             try:
                 result = next(gen)
             except StopIteration as stop:
                 stats = stop.value or {}
                 break
-            if result.index < folder.done:
+            if result.index < start:
                 # recomputed by a back end that cannot start in the middle: already on disk
                 listed = folder.entries[result.index].get("id")
                 if listed != result.id:
@@ -390,13 +398,10 @@ def _write_results(spec: BackendSpec, request: Request, folder: Any, registries:
                                           f"manifest lists {listed!r}; the run is not reproducible "
                                           "(use another folder or --overwrite)")
                 continue
-            entry = _write(spec, folder, result, registries, fmt, preview)
-            summary.written += 1
-            if on_result is not None:
-                on_result(entry)
-            # after the write: the result in hand is kept when the time budget is spent
+            sink.put(*_files_and_entry(spec, result, registries, fmt, preview))
+            # after the hand-over: the result in hand is kept when the time budget is spent
             request.check_deadline()
-            if folder.done < n and request.time_is_up():
+            if start + sink.handed < n and request.time_is_up():
                 break  # the graceful budget: keep what was written, say so below
         else:
             # the back end was asked for n: let it finish so that its summary comes back
@@ -404,8 +409,16 @@ def _write_results(spec: BackendSpec, request: Request, folder: Any, registries:
                 next(gen)
             except StopIteration as stop:
                 stats = stop.value or {}
+    except KeyboardInterrupt:
+        sink.close(abandon=True)  # stop now: the result being written ends, the queue is dropped
+        raise
+    except BaseException:
+        sink.close(quiet=True)  # what was handed over is written, then the run's error is raised
+        raise
     finally:
         gen.close()
+    sink.close()
+    summary.written = folder.done - start
     summary.stats = stats
     if folder.done < n:
         summary.shortfall = shortfall_reason(request, stats, time_limit)
@@ -413,9 +426,64 @@ def _write_results(spec: BackendSpec, request: Request, folder: Any, registries:
     return summary
 
 
-def _write(spec: BackendSpec, folder: Any, result: Result, registries: Any, fmt: str,
-           preview: bool) -> dict:
-    """One result's files and manifest line, handed to the writer; returns the line."""
+class _Sink:
+    """Where `_write_results` hands results: a write-behind thread for a folder (unless
+    GRAMMARKIT_WRITE_BEHIND=0), or the sink's own `add` (a ModelFile, or synchronous writes);
+    `on_result` is called in the caller's thread for each result written."""
+
+    def __init__(self, folder: Any, on_result: Callable[[dict], None] | None):
+        from .write_behind import WriteBehind, write_behind_enabled
+
+        self.folder, self.on_result = folder, on_result
+        self.behind = WriteBehind(folder) if isinstance(folder, OutputFolder) \
+            and write_behind_enabled() else None
+        self.handed = 0
+        self.closed = False
+
+    def put(self, files: dict[str, bytes | str], entry: dict) -> None:
+        if self.behind is not None:
+            self.behind.put(entry, files)
+            self.handed += 1
+            self._report(self.behind.written())
+            return
+        self.handed += 1
+        if not isinstance(self.folder, OutputFolder):  # a ModelFile: one result, named files
+            self._report([self.folder.add(entry, files)])
+            return
+        try:
+            self._report([self.folder.add(entry, files)])
+        except OSError as exc:  # a full disk, a folder gone read-only: the manifest stays a prefix
+            raise WriteStopped(str(exc), self.folder.done) from None
+
+    def _report(self, entries: list[dict]) -> None:
+        if self.on_result is not None:
+            for entry in entries:
+                self.on_result(entry)
+
+    def close(self, abandon: bool = False, quiet: bool = False) -> None:
+        """Wait for the writes; report what was written. `quiet`: a run that is failing anyway
+        (its error is the one to raise, not a write's or a callback's that follows from it)."""
+        if self.closed or self.behind is None:
+            self.closed = True
+            return
+        self.closed = True
+        try:
+            self.behind.close(abandon=abandon)
+        except Exception:  # noqa: BLE001 - quiet: the run's own error is raised instead
+            if not quiet:
+                raise
+        finally:
+            if not abandon:
+                try:
+                    self._report(self.behind.written())
+                except Exception:  # noqa: BLE001 - quiet: as above
+                    if not quiet:
+                        raise
+
+
+def _files_and_entry(spec: BackendSpec, result: Result, registries: Any, fmt: str,
+                     preview: bool) -> tuple[dict[str, bytes | str], dict]:
+    """One result's files ({name: data}) and manifest line."""
     from ..jsonable import to_jsonable
 
     # a data-only result (model None, e.g. a shape string) has no model file
@@ -435,12 +503,7 @@ def _write(spec: BackendSpec, folder: Any, result: Result, registries: Any, fmt:
         if key in entry:
             raise PluginError(f"back end {spec.name!r}: manifest field {key!r} is reserved")
         entry[key] = to_jsonable(value)
-    if not isinstance(folder, OutputFolder):
-        return folder.add(entry, files)
-    try:
-        return folder.add(entry, files)
-    except OSError as exc:  # a full disk, a folder gone read-only: the manifest stays a prefix
-        raise WriteStopped(str(exc), folder.done) from None
+    return files, entry
 
 
 def _count(summary: RunSummary, entries: Sequence[Mapping[str, Any]]) -> None:

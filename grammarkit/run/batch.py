@@ -34,7 +34,7 @@ manifest listing exactly the complete items; running the same batch again contin
 """
 from __future__ import annotations
 
-from dataclasses import asdict
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Mapping, Sequence
 
@@ -68,10 +68,10 @@ def _footprint_warning(grammar: Any) -> str | None:
     return None
 
 
-def _load(grammar: Any) -> Any:
+def _load(grammar: Any, registries: Any) -> Any:
     from ..split import load_grammar
 
-    g = load_grammar(grammar)
+    g = load_grammar(grammar, registries)
     if g.family != "split":
         raise GrammarkitError(f"batch derives split grammars; {g.source_path or g.name} is a "
                               f"{g.family} grammar (use grammarkit derive --backend for its back ends)")
@@ -179,13 +179,11 @@ def run_batch(grammar: Any, items: Any, out: str | Path, *, executor: Any = None
     from ..jsonable import to_jsonable
     from ..split import check_attrs
     from .api import run_backend  # looked up per call: tests/run/test_one_path.py watches it
-    from .lots import LotSet, read_lots
-    from .writer import check_outputs
 
     if isinstance(seed, bool) or not isinstance(seed, int):
         raise GrammarkitError(f"seed must be an integer, got {seed!r}")
-    g = _load(grammar)
     registries = _registries(registries)
+    g = _load(grammar, registries)
     fmt = str(format).lower().lstrip(".")
     if fmt not in registries.exporters:
         raise GrammarkitError(f"unknown output format {fmt!r}; known formats: "
@@ -195,54 +193,109 @@ def run_batch(grammar: Any, items: Any, out: str | Path, *, executor: Any = None
     attrs = dict(attrs or {})
     check_attrs(g, attrs, registries=registries)  # a bad --set fails before any work
     limit_values = _check_limits(limits)
+    batch = _resolve_items(g, items, sample, seed=seed, degrees=degrees, holes=holes, units=units)
+    merge_path = _check_merge(merge, fmt, Path(out), g, batch)
+
+    options = SplitOptions(variations=batch.sample, dataset=True, fail_fast=fail_fast,
+                           renders=renders, render_size=render_size, **limit_values)
+    index_info = {"kind": batch.mode, "seed": seed, "format": fmt,
+                  "renders": {"styles": list(renders), "size": render_size} if renders else None,
+                  "lots": batch.lots_info}
+    finish = _finisher(g, batch, index_info, parquet=index == "parquet", overwrite=overwrite,
+                       merge_path=merge_path, registries=registries)
+    counter = _Progress(progress, batch.n)
+    try:
+        summary = run_backend(
+            g, out=out, backend="split", n=batch.n, seed=seed, attrs=attrs, options=options,
+            executor=executor, workers=workers, format=fmt, progress=counter.factory,
+            timeout=timeout, time_limit=time_limit, overwrite=overwrite,
+            inputs=tuple(batch.inputs), registries=registries, on_result=counter.on_result,
+            items=batch.lotset.lots if batch.lotset is not None else None,
+            run_info={"kind": batch.mode, "lots": to_jsonable(batch.lots_info)}, finish=finish)
+    except GrammarkitError as exc:
+        raise _batch_error(exc, counter.done, batch.n, f"{Path(out)}/manifest.jsonl",
+                           timeout) from None
+    if summary.shortfall is not None:
+        summary.shortfall += "; run the same command again to continue"
+    return summary
+
+
+@dataclass
+class _Items:
+    """What a batch derives: N variations, or a building per lot of `lotset`."""
+
+    mode: str  # "variations" or "lots"
+    n: int
+    sample: bool
+    lotset: Any  # a LotSet, or None for variations
+    inputs: list[Path]  # files no output may replace (the grammar, the lots file)
+    warnings: list[str] = field(default_factory=list)
+
+    @property
+    def lots_info(self) -> dict | None:
+        return self.lotset.describe() if self.lotset is not None else None
+
+    def ids(self, grammar: Any) -> set[str]:
+        if self.lotset is not None:
+            return {lot.id for lot in self.lotset.lots}
+        return {f"{grammar.name or 'model'}_{i:06d}" for i in range(self.n)}
+
+
+def _resolve_items(g: Any, items: Any, sample: bool | None, *, seed: int, degrees: str, holes: str,
+                   units: str) -> _Items:
+    """run_batch's `items` (a lots file, a LotSet or a number of variations), checked."""
+    from .lots import LotSet, read_lots
 
     inputs = [Path(g.source_path)] if getattr(g, "source_path", None) else []
-    warnings: list[str] = []
-    lotset: LotSet | None = None
     if isinstance(items, bool):
         raise GrammarkitError("items must be a lots file, a LotSet or a number of variations")
     if isinstance(items, int):
         if not 1 <= items <= MAX_ITEMS:
             raise GrammarkitError(f"the number of variations must be in [1, {MAX_ITEMS:,}], got {items}")
-        mode, n = "variations", items
-        sample = True if sample is None else bool(sample)
-    else:
-        lotset = items if isinstance(items, LotSet) else read_lots(
-            items, seed=seed, degrees=degrees, holes=holes, units=units)
-        inputs.append(lotset.path)
-        if sample:
-            raise GrammarkitError("sampled attrs (--attrs sample) apply to --variations; a lot's attrs "
-                                  "come from its properties (attrs, attr.<name>) and --set")
-        mode, n, sample = "lots", len(lotset.lots), False
-        hint = _footprint_warning(g)
-        if hint:
-            warnings.append(hint)
-        if lotset.projection is not None:
-            p = lotset.projection
-            warnings.append(f"{lotset.path}: coordinates are lon/lat degrees; projected to metres "
-                            f"(local equirectangular about lon {p['lon0']:.6f}, lat {p['lat0']:.6f})")
+        return _Items("variations", items, True if sample is None else bool(sample), None, inputs)
+    lotset = items if isinstance(items, LotSet) else read_lots(
+        items, seed=seed, degrees=degrees, holes=holes, units=units)
+    inputs.append(lotset.path)
+    if sample:
+        raise GrammarkitError("sampled attrs (--attrs sample) apply to --variations; a lot's attrs "
+                              "come from its properties (attrs, attr.<name>) and --set")
+    batch = _Items("lots", len(lotset.lots), False, lotset, inputs)
+    hint = _footprint_warning(g)
+    if hint:
+        batch.warnings.append(hint)
+    if lotset.projection is not None:
+        p = lotset.projection
+        batch.warnings.append(f"{lotset.path}: coordinates are lon/lat degrees; projected to metres "
+                              f"(local equirectangular about lon {p['lon0']:.6f}, lat {p['lat0']:.6f})")
+    return batch
+
+
+def _check_merge(merge: str | Path | None, fmt: str, out: Path, g: Any, batch: _Items) -> Path | None:
+    """The --merge path, checked against the format, the inputs and the items' own files."""
+    from .writer import check_outputs
+
     merge_path = Path(merge) if merge is not None else None
     if merge_path is not None and (fmt != "glb" or merge_path.suffix.lower() != ".glb"):
         raise GrammarkitError(f"--merge {merge_path}: merging writes one GLB of the items' GLB files; "
                               "use --format glb and a .glb name")
-    check_outputs({"-o": Path(out), "--merge": merge_path}, inputs=inputs)
-    if merge_path is not None and merge_path.parent.resolve() == Path(out).resolve():
-        ids = {lot.id for lot in lotset.lots} if lotset is not None else \
-            {f"{g.name or 'model'}_{i:06d}" for i in range(n)}
-        if merge_path.stem in ids or merge_path.name in ("manifest.jsonl", "run.json"):
+    check_outputs({"-o": out, "--merge": merge_path}, inputs=batch.inputs)
+    if merge_path is not None and merge_path.parent.resolve() == out.resolve():
+        if merge_path.stem in batch.ids(g) or merge_path.name in ("manifest.jsonl", "run.json"):
             raise OutputError(f"{merge_path}: --merge would overwrite an item's file in {out}; "
                               "choose another name")
+    return merge_path
 
-    options = SplitOptions(variations=bool(sample), dataset=True, fail_fast=fail_fast,
-                           renders=renders, render_size=render_size, **limit_values)
-    lots_info = lotset.describe() if lotset is not None else None
+
+def _finisher(g: Any, batch: _Items, info: dict, *, parquet: bool, overwrite: bool,
+              merge_path: Path | None, registries: Any) -> Callable[[Any, RunSummary], None]:
+    """run_backend's `finish` step of a batch: the index and the merged model."""
 
     def finish(folder: Any, summary: RunSummary) -> None:
         """With the folder still locked: the index and the merged model of what is in it."""
-        summary.kind, summary.warnings = mode, warnings
-        if folder.done > n:
+        summary.kind, summary.warnings = batch.mode, batch.warnings
+        if folder.done > batch.n:
             raise GrammarkitError(f"{folder.path}: holds {folder.done} items of this run, more than "
-                                  f"the {n} asked for now; ask for at least {folder.done}")
+                                  f"the {batch.n} asked for now; ask for at least {folder.done}")
         from .dataset import DATASET_JSON, INDEX_JSONL, INDEX_PARQUET, write_index
 
         if overwrite:  # an earlier run's index describes items that are gone
@@ -252,42 +305,31 @@ def run_batch(grammar: Any, items: Any, out: str | Path, *, executor: Any = None
         if entries:
             from ..geometry.camera import Camera
 
-            info = {"grammar": g.name, "grammar_hash": folder.run["grammar_hash"], "kind": mode,
-                    "seed": seed, "format": fmt,
-                    "renders": {"styles": list(renders), "size": render_size,
-                                "camera": asdict(Camera())} if renders else None,
-                    "lots": lots_info}
-            summary.index = write_index(folder.path, grammar=g, entries=entries,
-                                        parquet=index == "parquet", info=info)
+            full = {"grammar": g.name, "grammar_hash": folder.run["grammar_hash"], **info}
+            if full["renders"] is not None:
+                full["renders"] = {**full["renders"], "camera": asdict(Camera())}
+            summary.index = write_index(folder.path, grammar=g, entries=entries, parquet=parquet,
+                                        info=full, registries=registries)
         if merge_path is not None:
             summary.merged = merge_models(folder.path, entries, merge_path)
 
-    counter = _Progress(progress, n)
-    where = f"{Path(out)}/manifest.jsonl"
-    try:
-        summary = run_backend(
-            g, out=out, backend="split", n=n, seed=seed, attrs=attrs, options=options,
-            executor=executor, workers=workers, format=fmt, progress=counter.factory,
-            timeout=timeout, time_limit=time_limit, overwrite=overwrite, inputs=tuple(inputs),
-            registries=registries, on_result=counter.on_result,
-            items=lotset.lots if lotset is not None else None,
-            run_info={"kind": mode, "lots": to_jsonable(lots_info)}, finish=finish)
-    except BatchFailed as exc:
-        raise BatchFailed(f"{exc} (stopped at the first failure: --fail-fast; {counter.done} "
-                          f"items are complete in {where})") from None
-    except WriteStopped as exc:
-        raise WriteStopped(exc.what, exc.done, "batch", "items") from None
-    except LimitError as exc:
-        if exc.diagnostics[0].code != "timeout":
-            raise
-        raise LimitError(f"the batch's time budget (--timeout {timeout:g} s) is spent after "
-                         f"{counter.done} of {n} items; run the same command again to continue",
-                         None, code="timeout") from None
-    except GrammarkitError as exc:
-        if exc.diagnostics[0].code != "executor":
-            raise
-        raise GrammarkitError(f"{exc}; {counter.done} items are complete in {where}; run the "
-                              "same command again to continue") from None
-    if summary.shortfall is not None:
-        summary.shortfall += "; run the same command again to continue"
-    return summary
+    return finish
+
+
+def _batch_error(exc: GrammarkitError, done: int, n: int, where: str,
+                 timeout: float | None) -> GrammarkitError:
+    """A run layer's stop said in a batch's terms (items, how to continue), or `exc` itself."""
+    if isinstance(exc, BatchFailed):
+        return BatchFailed(f"{exc} (stopped at the first failure: --fail-fast; {done} "
+                           f"items are complete in {where})")
+    if isinstance(exc, WriteStopped):
+        return WriteStopped(exc.what, exc.done, "batch", "items")
+    code = exc.diagnostics[0].code
+    if isinstance(exc, LimitError) and code == "timeout":
+        return LimitError(f"the batch's time budget (--timeout {timeout:g} s) is spent after "
+                          f"{done} of {n} items; run the same command again to continue",
+                          None, code="timeout")
+    if code == "executor" and not isinstance(exc, LimitError):
+        return GrammarkitError(f"{exc}; {done} items are complete in {where}; run the "
+                               "same command again to continue")
+    return exc

@@ -56,8 +56,8 @@ def _bound(fn: Any) -> Any:
     return fn(SimpleEnv())
 
 
-def attr_layout(grammar: Any,
-                bindings: Iterable[tuple[str, str]] = ()) -> tuple[list[AttrColumn], list[dict]]:
+def attr_layout(grammar: Any, bindings: Iterable[tuple[str, str]] = (), *,
+                registries: Any = None) -> tuple[list[AttrColumn], list[dict]]:
     """The attr-vector columns of a split grammar, and the attrs left out (with why).
 
     Columns cover the grammar's own bindings, every snippet its `variants` tables may swap in,
@@ -65,8 +65,8 @@ def attr_layout(grammar: Any,
     from ..split import compile as compile_split
     from ..split import load_grammar
 
-    g = load_grammar(grammar)
-    base = compile_split(g)
+    g = load_grammar(grammar, registries)
+    base = compile_split(g, registries=registries)
     otype = {s.name: s.object_type for s in g.snippets}
     tables = {v.object_type: [o.snippet for o in v.options] for v in g.variants}
     pairs: set[tuple[str, str]] = set()
@@ -78,7 +78,7 @@ def attr_layout(grammar: Any,
     compiled = [base]
     for anchor, option in sorted(pairs):
         try:
-            compiled.append(compile_split(g, {anchor: option}))
+            compiled.append(compile_split(g, {anchor: option}, registries=registries))
         except Exception:  # noqa: BLE001 - a binding the items could not use either
             continue
     columns: dict[str, AttrColumn] = {}
@@ -188,7 +188,8 @@ def _parquet_bytes(rows: list[dict]) -> bytes:
 
 
 def write_index(folder: str | Path, *, grammar: Any, entries: Sequence[Mapping[str, Any]] | None = None,
-                parquet: bool = False, info: Mapping[str, Any] | None = None) -> list[Path]:
+                parquet: bool = False, info: Mapping[str, Any] | None = None,
+                registries: Any = None) -> list[Path]:
     """Write `index.jsonl` (and `index.parquet` with parquet=True) and `dataset.json` for a batch
     folder, from its manifest (or the given entries); returns the paths written."""
     from .writer import MANIFEST, write_files
@@ -198,7 +199,7 @@ def write_index(folder: str | Path, *, grammar: Any, entries: Sequence[Mapping[s
         entries = [json.loads(line) for line in (folder / MANIFEST).read_text(encoding="utf-8").splitlines()
                    if line.strip()]
     seen = {(a, sn) for e in entries for a, sn in (e.get("bindings") or {}).items()}
-    columns, skipped = attr_layout(grammar, seen)
+    columns, skipped = attr_layout(grammar, seen, registries=registries)
     rows = index_rows(entries, columns)
     files: dict[Path, bytes | str] = {
         folder / INDEX_JSONL: "".join(json.dumps(r, allow_nan=False) + "\n" for r in rows)}

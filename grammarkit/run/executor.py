@@ -124,14 +124,58 @@ def _serve(conn: Any) -> None:  # pragma: no cover - runs in the child process
                 return
 
 
+class _StopsHeld:
+    """Hold a stop (SIGINT, SIGTERM) asked for while a worker process is being started, and
+    hand it to the handler that was in place once the start is complete: a KeyboardInterrupt
+    inside `Process.start()` cut the child's start-up data short, and the child printed
+    multiprocessing's `EOFError: Ran out of input` traceback (issue 31).
+
+    Only Python-level handlers are swapped, and only where a Python function handles the
+    signal: the signal is never blocked nor re-sent (a re-sent SIGINT met the default
+    disposition once and killed the process, exit -2), and a signal left to the system's
+    default or ignored keeps that disposition untouched. Main thread only (the only one that
+    may change handlers, and where Python runs them)."""
+
+    SIGNALS = (signal.SIGINT, signal.SIGTERM)
+
+    def __init__(self) -> None:
+        self.caught: list[int] = []
+        self.previous: dict[int, Callable[[int, Any], Any]] = {}
+
+    def _hold(self, signum: int, frame: Any) -> None:
+        self.caught.append(signum)
+
+    def __enter__(self) -> "_StopsHeld":
+        if threading.current_thread() is threading.main_thread():
+            for sig in self.SIGNALS:
+                handler = signal.getsignal(sig)
+                if callable(handler):
+                    self.previous[sig] = handler
+                    signal.signal(sig, self._hold)
+        return self
+
+    def __exit__(self, *exc: Any) -> None:
+        for sig, handler in self.previous.items():
+            signal.signal(sig, handler)  # runs a still pending `_hold` first: nothing is lost
+
+    def deliver(self) -> None:
+        """Call the handler that was in place for the first stop held (in grammarkit's
+        command it raises KeyboardInterrupt, here); nothing if no stop came."""
+        if self.caught:
+            self.previous[self.caught[0]](self.caught[0], None)
+
+
 class _Worker:
     def __init__(self) -> None:
         ctx = mp.get_context("spawn")  # fork deadlocks in manifold3d's TBB thread pool
         self.conn, child = ctx.Pipe()
         self.proc = ctx.Process(target=_worker_main, args=(child,), daemon=True)
-        with main_without_phantom_file():
+        with main_without_phantom_file(), _StopsHeld() as stops:
             self.proc.start()
         child.close()
+        if stops.caught:  # started completely; not the pool's yet, so it ends here
+            self.kill()
+            stops.deliver()
         self.ready = False
         self.busy = False  # taken by a session (WorkerPool)
         self.sessions: set[int] = set()
@@ -174,6 +218,13 @@ class WorkerPool:
             for w in taken:
                 w.busy = True
             return taken
+
+    def warm(self, count: int) -> None:
+        """Start workers until `count` are alive (they are idle: the next `take` gets them)."""
+        with self._lock:
+            self._workers[:] = [w for w in self._workers if w.alive()]
+            while len(self._workers) < count:
+                self._workers.append(_Worker())
 
     def release(self, workers: Sequence[_Worker], *, broken: bool) -> None:
         with self._lock:
@@ -230,6 +281,8 @@ class _LocalSession:
         self.workers: list[_Worker] = []
         self.closed = False
         self.local_only = False
+        # work this session ran here, over all its maps (the start rule below reads it)
+        self.spent, self.done, self.first = 0.0, 0, 0.0
 
     # -- state ------------------------------------------------------------------------------
     def update(self, fn: Callable[..., None], *args: Any) -> None:
@@ -248,8 +301,7 @@ class _LocalSession:
         always = self.executor.parallel == "always"
         spent, done_here = 0.0, 0
         while pending:
-            if want > 1 and not self.workers and not self.local_only and (always or (done_here and self._worth_it(
-                    spent / done_here, len(pending)))):
+            if want > 1 and not self.workers and not self.local_only and (always or self._worth_it(len(pending))):
                 self._start_workers(want)
             if self.workers:
                 yield from self._parallel(fn, pending, spent / done_here if done_here else None)
@@ -257,12 +309,27 @@ class _LocalSession:
             _, item = pending.popleft()
             t0 = time.perf_counter()
             result = fn(self.state, item)
-            spent += time.perf_counter() - t0
+            took = time.perf_counter() - t0
+            spent += took
             done_here += 1
+            self.spent += took
+            self.done += 1
+            if self.done == 1:
+                self.first = took
             yield result
 
-    def _worth_it(self, per_item: float, remaining: int) -> bool:
-        work = per_item * remaining
+    def _worth_it(self, remaining: int) -> bool:
+        """Start workers when the work left is expected to repay their start-up. The work left
+        is the larger of this map's remaining items at the session's pace (its first item
+        left out: it pays for caches the others reuse, and alone it made two workers start
+        for a few milliseconds of work) and as much again as the session has run so far (a
+        back end that maps batch after batch, such as the graph sampler, has more to come
+        than one map shows; the rule of the ski rental: pay for the start once the work done
+        equals its price)."""
+        if self.done < 2:
+            return False
+        per_item = (self.spent - self.first) / (self.done - 1)
+        work = max(per_item * remaining, self.spent)
         workers = self.executor.workers
         startup = max(0, workers - self.executor.pool.idle()) * SPAWN_SECONDS / max(1, min(workers, 2))
         return work * (1.0 - 1.0 / workers) > startup + self.executor.min_parallel_seconds
@@ -444,6 +511,17 @@ class LocalExecutor:
 
     def session(self, init: Callable[..., Any], *args: Any) -> _LocalSession:
         return _LocalSession(self, init, args)
+
+    def warm(self, count: int | None = None) -> None:
+        """Start worker processes now (up to `count`, default `workers`), without waiting for
+        them: their start-up (imports) then overlaps with the caller's own preparation, and
+        the next session that goes parallel finds them idle, so its start costs nothing. For
+        callers that know a long run is coming (the graph sampler at large -n); nothing with
+        one worker or parallel="never"."""
+        want = self.workers if count is None else min(self.workers, int(count))
+        if want <= 1 or self.parallel == "never":
+            return
+        self.pool.warm(want)
 
     def close(self) -> None:
         """Stop the worker processes this executor started (its later sessions would have

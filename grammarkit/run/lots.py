@@ -323,7 +323,17 @@ def read_lots(path: str | Path, *, seed: int = 0, degrees: str = "project", hole
     if not features:
         raise LotsError(f"{path}: has no features (no lots to build on)")
 
-    # 1. every polygon with its raw points, or the reason it is unusable
+    raw = _raw_polygons(features)
+    units, projection, origin = _to_metres(raw, units, crs, degrees)
+    run_seed = seed_int(seed)
+    ids = _Ids()
+    lots = [_make_lot(index, r, origin, holes, run_seed, ids) for index, r in enumerate(raw)]
+    return LotSet(path=path, lots=lots, units=units, origin=(float(origin[0]), float(origin[1])),
+                  projection=projection, sha256=hashlib.sha256(data).hexdigest())
+
+
+def _raw_polygons(features: list) -> list[dict]:
+    """Every polygon of the features with its raw points, or the reason it is unusable."""
     raw: list[dict] = []
     for fi, feature in enumerate(features):
         if not isinstance(feature, dict):
@@ -341,7 +351,7 @@ def read_lots(path: str | Path, *, seed: int = 0, degrees: str = "project", hole
             continue
         for pi, rings in enumerate(polys):
             entry: dict[str, Any] = {"feature": fi, "source_id": sid, "part": pi + 1 if len(polys) > 1 else None,
-                     "props": props, "error": None, "holes": len(rings) - 1}
+                                     "props": props, "error": None, "holes": len(rings) - 1}
             outer, err = _points(rings[0])
             if err is None:
                 for hole in rings[1:]:
@@ -350,9 +360,18 @@ def read_lots(path: str | Path, *, seed: int = 0, degrees: str = "project", hole
                         break
             entry["points"], entry["error"] = outer, err
             raw.append(entry)
+    return raw
 
-    # 2. units: degrees or metres
-    usable = [r for r in raw if r["error"] is None and r["points"]]
+
+def _usable(raw: list[dict]) -> list[dict]:
+    return [r for r in raw if r["error"] is None and r["points"]]
+
+
+def _to_metres(raw: list[dict], units: str, crs: str | None, degrees: str
+               ) -> tuple[str, dict | None, tuple[float, float]]:
+    """Decide the units (degrees or metres), project degrees to metres in place (or mark the
+    lots refused), and find the origin: (units, projection or None, origin)."""
+    usable = _usable(raw)
     if units == "auto":
         if crs is not None:
             units = "degrees" if (crs == "geographic" or GEOGRAPHIC_CRS.search(crs)) else "metres"
@@ -365,9 +384,9 @@ def read_lots(path: str | Path, *, seed: int = 0, degrees: str = "project", hole
                     r["error"] = ("looks like longitude/latitude degrees (extent below "
                                   f"{DEGREE_LOT_SIZE} while other lots are in metres); give every "
                                   "lot in the same units")
-    usable = [r for r in raw if r["error"] is None and r["points"]]
+    usable = _usable(raw)
     projection = None
-    origin = (0.0, 0.0)
+    origin: tuple[float, float] = (0.0, 0.0)
     if units == "degrees":
         if degrees == "refuse":
             for r in usable:
@@ -384,82 +403,100 @@ def read_lots(path: str | Path, *, seed: int = 0, degrees: str = "project", hole
                           "metres_per_degree": [kx, ky], "ellipsoid": "WGS84"}
             for r in usable:
                 r["points"] = [((x - lon0) * kx, (y - lat0) * ky) for x, y in r["points"]]
-    usable = [r for r in raw if r["error"] is None and r["points"]]
+    usable = _usable(raw)
     if usable:
         origin = (math.floor(min(p[0] for r in usable for p in r["points"])),
                   math.floor(min(p[1] for r in usable for p in r["points"])))
         if projection is not None:
             projection["origin_m"] = list(origin)
+    return units, projection, origin
 
-    # 3. per-lot checks, ids, seeds, attrs
-    from ..geometry.footprints import validate_polygon
 
-    lots: list[Lot] = []
-    used: dict[str, int] = {}
-    seen_ids: dict[str, int] = {}
-    run_seed = seed_int(seed)
-    for index, r in enumerate(raw):
-        base = r["source_id"] if r["source_id"] is not None else f"lot_{r['feature']:05d}"
-        if r.get("part") is not None:
-            base = f"{base}-{r['part']}"
+@dataclass
+class _Ids:
+    """The file ids given so far (`used`: id -> last suffix) and how often each source id was
+    seen, so that repeated ids get distinct files and seeds."""
+
+    used: dict[str, int] = field(default_factory=dict)
+    seen: dict[str, int] = field(default_factory=dict)
+
+    def take(self, base: str) -> tuple[str, int, str | None]:
+        """(file id, occurrence of `base`, note) for the next lot named `base`."""
         fid = _file_id(base)
         note = None
-        occurrence = seen_ids[base] = seen_ids.get(base, 0) + 1
-        if fid in used:
-            k = used[fid] + 1
-            while f"{fid}_{k}" in used:
+        occurrence = self.seen[base] = self.seen.get(base, 0) + 1
+        if fid in self.used:
+            k = self.used[fid] + 1
+            while f"{fid}_{k}" in self.used:
                 k += 1
-            used[fid] = k
+            self.used[fid] = k
             note = f"the id {base!r} is used by an earlier lot; this lot's files are named {fid}_{k}"
             fid = f"{fid}_{k}"
-        used.setdefault(fid, 1)
-        err = r["error"]
-        props = r["props"]
-        seed_value, serr = _seed(props.get("seed"))
-        attrs, aerr = _attrs(props)
-        choices, cerr = _choices(props)
-        err = err or serr or aerr or cerr
+        self.used.setdefault(fid, 1)
+        return fid, occurrence, note
+
+
+def _make_lot(index: int, r: dict, origin: tuple[float, float], holes: str, run_seed: int,
+              ids: _Ids) -> Lot:
+    """Lot `index` of the file from its raw polygon `r`: id, seed, attrs, the checked polygon
+    or the reason it is not built."""
+    base = r["source_id"] if r["source_id"] is not None else f"lot_{r['feature']:05d}"
+    if r.get("part") is not None:
+        base = f"{base}-{r['part']}"
+    fid, occurrence, note = ids.take(base)
+    props = r["props"]
+    seed_value, serr = _seed(props.get("seed"))
+    attrs, aerr = _attrs(props)
+    choices, cerr = _choices(props)
+    err = r["error"] or serr or aerr or cerr
+    polygon = None
+    if err is None:
+        polygon, err, hole_note = _checked_polygon(r, origin, holes)
+        note = _join(note, hole_note) if hole_note else note
+    if err is not None:
         polygon = None
-        if err is None:
-            pts = [(x - origin[0], y - origin[1]) for x, y in r["points"]]
-            far = max(max(abs(x), abs(y)) for x, y in pts)
-            crossing = None if len(pts) > MAX_VERTICES else _first_crossing(pts)
-            if len(pts) > MAX_VERTICES:  # bounded work per lot, whatever the machine's load
-                err = (f"has {len(pts):,} vertices; the limit per lot is {MAX_VERTICES:,} "
-                       "(simplify the outline)")
-            elif crossing is not None:
-                err = f"is self-intersecting: edges {crossing[0]} and {crossing[1]} cross"
-            else:
-                try:
-                    polygon = validate_polygon(pts)
-                except ValueError as exc:
-                    err = _polygon_message(str(exc))
-            if err is None and far > MAX_EXTENT:
-                err = (f"lies {far / 1000:.0f} km from the other lots' origin (more than "
-                       f"{MAX_EXTENT / 1000:.0f} km); split the file by district")
-            if err is None and polygon is not None and abs(polygon_area(polygon)) < MIN_AREA:
-                err = (f"is degenerate: its area is {abs(polygon_area(polygon)):.3g} m² (less than "
-                       f"{MIN_AREA:g} m²)")
-            if err is None and r.get("holes"):
-                if holes == "fill":
-                    note = _join(note, f"{r['holes']} hole(s) filled: built on the outer ring")
-                else:
-                    err = (f"has {r['holes']} hole(s) (an inner courtyard); the split engine builds "
-                           "on one simple polygon, so lots with holes are not built; use "
-                           "--holes fill to build on the outer ring, or split the lot")
-        if err is not None:
-            polygon = None
-            where = f"feature {r['feature']}" + (f", polygon {r['part']}" if r.get("part") else "")
-            err = f"lot {base!r} ({where}): {err}"
-        # a lot's seed depends on its id (and which occurrence of that id it is), not on its
-        # position: adding or reordering lots keeps every other building
-        key = base if occurrence == 1 else f"{base}#{occurrence}"
-        lseed = seed_value if seed_value is not None else lot_seed(run_seed, key)
-        lots.append(Lot(index=index, id=fid, feature=r["feature"], source_id=r["source_id"],
-                        part=r.get("part"), polygon=polygon, holes=r.get("holes", 0) or 0, seed=lseed,
-                        attrs=attrs, choices=choices, error=err, note=note))
-    return LotSet(path=path, lots=lots, units=units, origin=(float(origin[0]), float(origin[1])),
-                  projection=projection, sha256=hashlib.sha256(data).hexdigest())
+        where = f"feature {r['feature']}" + (f", polygon {r['part']}" if r.get("part") else "")
+        err = f"lot {base!r} ({where}): {err}"
+    # a lot's seed depends on its id (and which occurrence of that id it is), not on its
+    # position: adding or reordering lots keeps every other building
+    key = base if occurrence == 1 else f"{base}#{occurrence}"
+    lseed = seed_value if seed_value is not None else lot_seed(run_seed, key)
+    return Lot(index=index, id=fid, feature=r["feature"], source_id=r["source_id"],
+               part=r.get("part"), polygon=polygon, holes=r.get("holes", 0) or 0, seed=lseed,
+               attrs=attrs, choices=choices, error=err, note=note)
+
+
+def _checked_polygon(r: dict, origin: tuple[float, float], holes: str
+                     ) -> tuple[Any, str | None, str | None]:
+    """(polygon, error, note) of a raw polygon moved to `origin`: bounded, simple, not
+    degenerate, near the others; holes refused or filled."""
+    from ..geometry.footprints import validate_polygon
+
+    pts = [(x - origin[0], y - origin[1]) for x, y in r["points"]]
+    far = max(max(abs(x), abs(y)) for x, y in pts)
+    if len(pts) > MAX_VERTICES:  # bounded work per lot, whatever the machine's load
+        return None, (f"has {len(pts):,} vertices; the limit per lot is {MAX_VERTICES:,} "
+                      "(simplify the outline)"), None
+    crossing = _first_crossing(pts)
+    if crossing is not None:
+        return None, f"is self-intersecting: edges {crossing[0]} and {crossing[1]} cross", None
+    try:
+        polygon = validate_polygon(pts)
+    except ValueError as exc:
+        return None, _polygon_message(str(exc)), None
+    if far > MAX_EXTENT:
+        return None, (f"lies {far / 1000:.0f} km from the other lots' origin (more than "
+                      f"{MAX_EXTENT / 1000:.0f} km); split the file by district"), None
+    if abs(polygon_area(polygon)) < MIN_AREA:
+        return None, (f"is degenerate: its area is {abs(polygon_area(polygon)):.3g} m² (less than "
+                      f"{MIN_AREA:g} m²)"), None
+    if r.get("holes"):
+        if holes == "fill":
+            return polygon, None, f"{r['holes']} hole(s) filled: built on the outer ring"
+        return None, (f"has {r['holes']} hole(s) (an inner courtyard); the split engine builds "
+                      "on one simple polygon, so lots with holes are not built; use "
+                      "--holes fill to build on the outer ring, or split the lot"), None
+    return polygon, None, None
 
 
 def _first_crossing(pts: Sequence[Point]) -> tuple[int, int] | None:

@@ -83,43 +83,64 @@ def merge_glb(items: Iterable[tuple[str, str | Path]], path: str | Path) -> Path
     from .writer import write_files
 
     path = Path(path)
-    out: dict = {"asset": {"version": "2.0", "generator": "grammarkit (merged)"}, "scene": 0,
-                 "nodes": [], "meshes": [], "materials": [], "accessors": [], "bufferViews": []}
-    chunks: list[bytes] = []
-    size = 0
-    labels: list[str] = []
-    material_index: dict[str, int] = {}
-    children: list[int] = []
-    placement: dict | None = None
-    marker: dict | None = None
-    first: Path | None = None
+    merged = _Merged()
     for item_id, file in items:
-        file = Path(file)
+        merged.add(item_id, Path(file))
+    write_files({path: merged.glb(path)})
+    return path
+
+
+class _Merged:
+    """The glTF document being merged: each item's buffer views, accessors, meshes and nodes
+    appended with their indices shifted, materials shared by value, one root for all items."""
+
+    def __init__(self) -> None:
+        self.out: dict = {"asset": {"version": "2.0", "generator": "grammarkit (merged)"}, "scene": 0,
+                          "nodes": [], "meshes": [], "materials": [], "accessors": [], "bufferViews": []}
+        self.chunks: list[bytes] = []
+        self.size = 0
+        self.labels: list[str] = []
+        self.material_index: dict[str, int] = {}
+        self.children: list[int] = []
+        self.placement: dict | None = None
+        self.marker: dict | None = None
+        self.first: Path | None = None
+
+    def add(self, item_id: str, file: Path) -> None:
+        """Append one item's GLB file."""
+        out = self.out
         doc, binary = _read_glb(file)
         root = _root(doc, file)
-        if placement is None:
-            placement, marker, first = _placement(root), dict(root["extras"]["grammarkit"]), file
-        elif _placement(root) != placement:
-            raise MergeError(f"{file}: its root transform differs from {first}'s; cannot merge them")
-        view0, acc0, mesh0, node0 = (len(out["bufferViews"]), len(out["accessors"]),
-                                     len(out["meshes"]), len(out["nodes"]))
-        label0 = len(labels)
-        labels.extend(str(x) for x in (root["extras"]["grammarkit"].get("labels") or []))
+        if self.placement is None:
+            self.placement, self.marker, self.first = (_placement(root),
+                                                       dict(root["extras"]["grammarkit"]), file)
+        elif _placement(root) != self.placement:
+            raise MergeError(f"{file}: its root transform differs from {self.first}'s; cannot merge them")
+        view0, acc0, mesh0 = len(out["bufferViews"]), len(out["accessors"]), len(out["meshes"])
+        label0 = len(self.labels)
+        self.labels.extend(str(x) for x in (root["extras"]["grammarkit"].get("labels") or []))
         for view in doc.get("bufferViews", []):
-            view = dict(view, buffer=0, byteOffset=view.get("byteOffset", 0) + size)
+            view = dict(view, buffer=0, byteOffset=view.get("byteOffset", 0) + self.size)
             out["bufferViews"].append(view)
         for acc in doc.get("accessors", []):
             acc = dict(acc)
             if "bufferView" in acc:
                 acc["bufferView"] += view0
             out["accessors"].append(acc)
+        self._add_meshes(doc, acc0)
+        self._add_nodes(doc, root, item_id, mesh0, label0)
+        self.chunks.append(binary)
+        self.size += len(binary)
+
+    def _add_meshes(self, doc: dict, acc0: int) -> None:
+        out = self.out
         mat_map = {}
         for i, mat in enumerate(doc.get("materials", [])):
             key = json.dumps(mat, sort_keys=True)
-            if key not in material_index:
-                material_index[key] = len(out["materials"])
+            if key not in self.material_index:
+                self.material_index[key] = len(out["materials"])
                 out["materials"].append(mat)
-            mat_map[i] = material_index[key]
+            mat_map[i] = self.material_index[key]
         for mesh in doc.get("meshes", []):
             prims = []
             for prim in mesh.get("primitives", []):
@@ -130,10 +151,14 @@ def merge_glb(items: Iterable[tuple[str, str | Path]], path: str | Path) -> Path
                     prim["material"] = mat_map[prim["material"]]
                 prims.append(prim)
             out["meshes"].append(dict(mesh, primitives=prims))
+
+    def _add_nodes(self, doc: dict, root: dict, item_id: str, mesh0: int, label0: int) -> None:
+        """Every node but the item's root (the merged file has one root for all items); the
+        item's solids are named after it and carry its extras."""
+        node0 = len(self.out["nodes"])
         root_index = doc["scenes"][doc.get("scene", 0)]["nodes"][0]
         item_extras = {k: v for k, v in (root.get("extras") or {}).items() if k != "grammarkit"}
         solids = root.get("children", [])
-        # every node but the item's root (the merged file has one root for all items)
         new_index = {i: node0 + i - (i > root_index) for i in range(len(doc["nodes"])) if i != root_index}
         for i, node in enumerate(doc["nodes"]):
             if i == root_index:
@@ -151,22 +176,22 @@ def merge_glb(items: Iterable[tuple[str, str | Path]], path: str | Path) -> Path
                 extras = {**item_extras, **extras, "item": item_id}
             if extras:
                 node["extras"] = extras
-            out["nodes"].append(node)
-        children.extend(new_index[c] for c in solids)
-        chunks.append(binary)
-        size += len(binary)
-    if not children:
-        raise MergeError(f"{path}: nothing to merge (no item was built)")
-    marker = dict(marker or {})
-    marker["labels"] = labels
-    out["nodes"].append({"name": path.stem, **(placement or {}), "children": children,
-                         "extras": {"grammarkit": marker}})
-    out["scenes"] = [{"name": path.stem, "nodes": [len(out["nodes"]) - 1]}]
-    out["buffers"] = [{"byteLength": size}]
-    js = json.dumps(out, separators=(",", ":"), allow_nan=False).encode("utf-8")
-    js += b" " * ((-len(js)) % 4)
-    total = 12 + 8 + len(js) + 8 + size
-    data = b"".join([struct.pack("<4sII", b"glTF", 2, total), struct.pack("<I4s", len(js), b"JSON"),
-                     js, struct.pack("<I4s", size, b"BIN\0"), *chunks])
-    write_files({path: data})
-    return path
+            self.out["nodes"].append(node)
+        self.children.extend(new_index[c] for c in solids)
+
+    def glb(self, path: Path) -> bytes:
+        """The merged GLB's bytes (its root and scene named after `path`)."""
+        out = self.out
+        if not self.children:
+            raise MergeError(f"{path}: nothing to merge (no item was built)")
+        marker = dict(self.marker or {})
+        marker["labels"] = self.labels
+        out["nodes"].append({"name": path.stem, **(self.placement or {}), "children": self.children,
+                             "extras": {"grammarkit": marker}})
+        out["scenes"] = [{"name": path.stem, "nodes": [len(out["nodes"]) - 1]}]
+        out["buffers"] = [{"byteLength": self.size}]
+        js = json.dumps(out, separators=(",", ":"), allow_nan=False).encode("utf-8")
+        js += b" " * ((-len(js)) % 4)
+        total = 12 + 8 + len(js) + 8 + self.size
+        return b"".join([struct.pack("<4sII", b"glTF", 2, total), struct.pack("<I4s", len(js), b"JSON"),
+                         js, struct.pack("<I4s", self.size, b"BIN\0"), *self.chunks])

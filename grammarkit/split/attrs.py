@@ -9,6 +9,7 @@ from dataclasses import dataclass, field
 from typing import Any, Callable
 
 from ..errors import GrammarError
+from ..ir import expr as E
 from ..ir import split as S
 
 
@@ -42,6 +43,105 @@ class ValueEnv:
 
     def rng(self) -> random.Random:
         return self._rng
+
+
+# The key, in a derivation's values, of the attrs and consts still to be evaluated on the initial
+# shape (not a name a grammar can spell): (keys in dependency order, run seed).
+LOT_PENDING = " lot-values"
+
+# names whose value depends on the shape an expression is evaluated on
+_SHAPE_PREFIXES = ("scope.", "geometry.", "split.", "comp.", "occlusion:")
+
+
+def _names(e: Any, refs: set, calls: set) -> None:
+    if isinstance(e, E.Ref):
+        refs.add(e.name)
+    elif isinstance(e, E.Call):
+        calls.add(e.func)
+        for a in e.args:
+            _names(a, refs, calls)
+    elif isinstance(e, E.Unary):
+        _names(e.operand, refs, calls)
+    elif isinstance(e, E.Binary):
+        _names(e.left, refs, calls)
+        _names(e.right, refs, calls)
+    elif isinstance(e, E.Vector):
+        for a in e.items:
+            _names(a, refs, calls)
+
+
+def lot_order(exprs: dict[str, tuple[Any, str | None]], user: frozenset = frozenset()) -> tuple[str, ...]:
+    """The attrs and consts (`exprs`: key -> (expression, anchor of its snippet copy or None))
+    whose value reads the shape, directly (scope, geometry, ...; a user function, whose body may)
+    or through another of them, in dependency order. CGA evaluates attrs and consts once, on
+    the initial shape, before any rule is applied: these are evaluated on the lot."""
+    deps: dict[str, set[str]] = {}
+    direct: set[str] = set()
+    for key, (e, anchor) in exprs.items():
+        refs: set[str] = set()
+        calls: set[str] = set()
+        _names(e, refs, calls)
+        if any(r.startswith(_SHAPE_PREFIXES) for r in refs) or calls & user:
+            direct.add(key)
+        found = set()
+        for r in refs:
+            local = f"{anchor}.{r}" if anchor else None
+            if local is not None and local in exprs:
+                found.add(local)
+            elif r in exprs:
+                found.add(r)
+        deps[key] = found
+    order: list[str] = []
+    state: dict[str, int] = {}
+
+    def visit(k: str) -> bool:  # True if k reads the shape
+        if k in state:
+            return state[k] == 2
+        state[k] = 1  # visiting (a cycle reads as shape-free here; _evaluate reports it)
+        reads = k in direct
+        for d in sorted(deps[k]):
+            reads = visit(d) or reads
+        state[k] = 2 if reads else 3
+        if reads:
+            order.append(k)
+        return reads
+
+    for k in exprs:
+        visit(k)
+    return tuple(order)
+
+
+class LotEnv:
+    """The initial shape as attr and const values see it: its scope and geometry, the
+    derivation's values, and a generator of its own (so the lot's own draws are unchanged)."""
+
+    __slots__ = ("_shape", "_rng")
+
+    def __init__(self, shape: Any, seed: int):
+        self._shape = shape
+        self._rng = random.Random(seed ^ 0x107)
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self._shape, name)
+
+    def rng(self) -> random.Random:
+        return self._rng
+
+
+def lot_values_step(fns: dict[str, Callable]) -> Callable:
+    """The first step of the start rule: on the derivation's first shape (the lot), evaluate
+    the attrs and consts that read the shape (LOT_PENDING) into the derivation's values."""
+
+    def lot_values(ctx: Any, s: Any) -> Any:
+        values = s.values
+        todo = values.pop(LOT_PENDING, None)
+        if todo is not None:
+            keys, seed = todo
+            env = LotEnv(s, seed)
+            for key in keys:
+                values[key] = fns[key](env)
+        return s
+    return lot_values
 
 
 def check_attr_value(info: AttrInfo, value: Any, env: Any = None) -> Any:

@@ -36,7 +36,7 @@ from ..ir.base import Span
 from ..ir.grammar import Grammar
 from .seeds import label_of
 from .lookup import asset_dirs_of, find_asset, resolving
-from .attrs import AttrInfo, ValueEnv, check_attr_value
+from .attrs import LOT_PENDING, AttrInfo, ValueEnv, check_attr_value, lot_order, lot_values_step
 from .static import set_targets, shape_free
 from .steps import case_step, choice_step, make_block, nil_step, op_step, terminal_step
 
@@ -91,6 +91,9 @@ class CompiledGrammar:
         self.base_dir = str(Path(grammar.source_path).parent) if grammar.source_path else None
         self.asset_dirs = asset_dirs_of(grammar, self.base_dir)  # `asset_dir` statements, absolute
         self._defaults: dict[str, Any] | None = None
+        # attrs and consts whose value reads the shape, in dependency order: evaluated on the
+        # lot by the start rule's first step (CGA evaluates them on the initial shape)
+        self.lot_keys: tuple[str, ...] = ()
         # whether an expression asks inside()/overlaps()/touches(): derivations then keep
         # their terminals as occluders (grammarkit/split/occlusion.py)
         self.uses_occlusion = False
@@ -145,6 +148,7 @@ class CompiledGrammar:
         for key, value in fixed.items():
             V[key] = value
             pending.pop(key, None)
+        todo = tuple(k for k in self.lot_keys if k not in fixed)
         # evaluate in dependency order: retry what needed a value not computed yet
         while pending:
             progress = False
@@ -161,6 +165,9 @@ class CompiledGrammar:
                 span = info.attr.span if info else None
                 raise GrammarError(f"cannot evaluate {key!r}: its value depends on itself "
                                    f"(a cycle among {', '.join(sorted(pending))})", span, code="cycle")
+        if todo:
+            # evaluated here without a shape (geometry and scope read 0), again on the lot
+            V[LOT_PENDING] = (todo, seed)
         return V
 
     def attr_values(self, values: Mapping[str, Any]) -> dict[str, Any]:
@@ -268,7 +275,20 @@ class _Compiler:
         while self.pending:
             crule, rule, scope = self.pending.pop()
             crule.steps = self._seq(rule.body, scope, rule.params, crule)
+        self._lot_values(axiom)
         return out
+
+    def _lot_values(self, axiom: CRule) -> None:
+        """Attrs and consts that read the shape are evaluated on the lot, before the start
+        rule's first operation (CGA's attrs are evaluated once, on the initial shape)."""
+        out = self.out
+        exprs: dict[str, tuple[Any, str | None]] = {k: (i.attr.value, i.scope) for k, i in out.attrs.items()}
+        for c in self.g.consts:
+            exprs.setdefault(c.name, (c.value, None))
+        out.lot_keys = lot_order(exprs, frozenset(self.user_names))
+        if out.lot_keys:
+            fns = {k: (out.attrs[k].default if k in out.attrs else out.consts[k]) for k in out.lot_keys}
+            axiom.steps = (lot_values_step(fns),) + axiom.steps
 
     def _attr_info(self, key: str, a: S.Attr, anchor: str | None, snippet: str | None,
                    scope: _Scope) -> AttrInfo:

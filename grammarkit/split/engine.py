@@ -40,6 +40,10 @@ WELD = 1e-3
 # Recess cuts are grown sideways by this much (see add_cut): less than any solid's growth
 # (WELD .. 1.5 WELD, see weld_of), so a cut's grown side never lies in a grown solid's face.
 CUT_WELD = 0.5 * WELD
+# The default mode: the reversed walls of a CGA opening are views of the solid's reveal
+# (Derivation.leaf); off, they are slabs as before issue 27's second step (kept so that
+# benchmarks/bench_prt.py --baseline measures that path in the same run).
+REVEAL_VIEWS = True
 
 
 # how a derivation treats faces and open meshes (Derivation(surfaces=...), derive(surfaces=...))
@@ -129,8 +133,17 @@ class Derivation:
         # of it alone (before the union), and the index of each closing solid by geometry id
         self.openings: dict[int, list] = {}
         self.add_of: dict[int, int] = {}
+        # the closing solids (add_closing): (geometry id, tree node, index in `adds`, scope);
+        # one that no surviving terminal spans is taken out again (drop_unspanned_closings)
+        self.closings: list[tuple] = []
         self.holes: set[int] = set()  # tags of face terminals covering an opening
+        self.reveal_tags: set[int] = set()  # tags of face terminals painting an opening's walls
         self.add_boxes: list[tuple] = []  # world bounding box of each of `adds`
+        # index in `adds` -> (solid in scope coordinates, origin, axes, size, its local box), and
+        # the box openings (index of the closing solid, corner, axes, size): parts lying inside
+        # an opening, clear of every other part, skip the union (grammarkit/split/union.py)
+        self.add_local: dict[int, tuple] = {}
+        self.opening_boxes: list[tuple] = []
         self.id_tag: dict[int, int] = {}  # manifold original ID -> tag index
         self.faces: list[tuple] = []  # face terminals: (tag, origin, axes, size, poly, on)
         # geometry id of every volume emitted as a solid -> (scope when emitted, tag): a face
@@ -226,11 +239,15 @@ class Derivation:
         gid = s.gid
         if s.on is not None and self._open_into(s):
             top = s.sz[2]  # the cap in the plane of the face it was extruded from: the hole
+            solid_on = (s.on[0], self.solid_of[s.on[0]][0])  # the solid it is cut out of
             for item in children:
                 c = item[0]
-                if c.kind == FACE and c.on is not None and c.on[0] == gid and c.ax[2] == s.ax[2] \
-                        and abs(sum((c.o[k] - s.o[k]) * s.ax[2][k] for k in range(3)) - top) < 1e-9:
+                if c.kind != FACE or c.on is None or c.on[0] != gid:
+                    continue
+                if c.ax[2] == s.ax[2] and abs(sum((c.o[k] - s.o[k]) * s.ax[2][k] for k in range(3)) - top) < 1e-9:
                     c.hole = True
+                else:  # a wall of the hole: the solid's reveal there (leaf)
+                    c.reveal = (solid_on, c.o, c.ax, c.sz)
             return
         faces = False
         for item in children:
@@ -266,6 +283,8 @@ class Derivation:
         x, y, z = s.ax
         o = tuple(s.o[k] + x[k] * d[0] + y[k] * d[1] + z[k] * d[2] for k in range(3))
         self.openings.setdefault(index, []).append(solid.transform(frame(o, s.ax)))
+        if s.poly is None:
+            self.opening_boxes.append((index, o, s.ax, (s.sz[0] + 2 * w, s.sz[1] + 2 * w, h)))
         self.est_tris += 12
         return True
 
@@ -391,6 +410,7 @@ class Derivation:
             # which would apply the transform now): the final boolean groups solids by them
             local = (0.0, 0.0, 0.0, *s.sz) if s.solid is None else solid.bounding_box()
             self.add_boxes.append(_box_of(frame_m, local))
+            self.add_local[len(self.adds) - 1] = (solid, s.o, s.ax, s.sz, local)
         self.est_tris += tris
         if self.est_tris > self.limits.max_triangles:  # stop now, not after building them all
             raise LimitError(
@@ -415,9 +435,14 @@ class Derivation:
         """`s` becomes a terminal named `name`."""
         if s.kind == FACE:
             tag = self._tag(s, name, "face")
-            if s.hole and self.surfaces_mode == "solid":
-                self.holes.add(tag)  # it covers an opening: no slab (compose)
-            self.faces.append((tag, s.o, s.ax, s.sz, s.poly, s.on))
+            on = s.on
+            if self.surfaces_mode == "solid":
+                if s.hole:
+                    self.holes.add(tag)  # it covers an opening: no slab (compose)
+                elif REVEAL_VIEWS and s.reveal is not None and on is None and _on_reveal(s):
+                    on = s.reveal[0]  # a view of the reveal cut into the solid: paints it
+                    self.reveal_tags.add(tag)
+            self.faces.append((tag, s.o, s.ax, s.sz, s.poly, on))
             if s.cut >= 0:  # the recess this face came from takes the terminal's tags
                 t = self.tags[s.cut]
                 if t[6] == "cut-pending":
@@ -443,6 +468,7 @@ class Derivation:
         self._add(s, self._tag(s, s.rule.name, "closing"))
         if len(self.adds) == n + 1:
             self.add_of[s.gid] = n  # openings are cut out of it (`_open_into`)
+            self.closings.append((s.gid, s.node, n, (s.o, s.ax, s.sz)))
 
     def add_slab(self, tag: int, o: tuple, ax: tuple, sz: tuple, poly: Any, where: Any) -> None:
         """A face terminal off every solid, as a closed part (`surfaces="solid"`): the face
@@ -617,7 +643,9 @@ def welded_frame(o: tuple, ax: tuple, sz: tuple, weld: float = WELD) -> list[lis
     shells in the union. Growing every added solid by a millimetre makes touching solids
     overlap, so the union is one connected solid; nobody sees a millimetre on a building.
     """
-    f = [(sz[i] + 2 * weld) / sz[i] if sz[i] > 1e-9 else 1.0 for i in range(3)]
+    # a size near zero (a flat insert's float noise, 1e-9 m) is not grown: scaled by
+    # (size + 2 WELD) / size, the solid closed about it (a slab 1 cm thick) would reach km away
+    f = [(sz[i] + 2 * weld) / sz[i] if sz[i] > 1e-6 else 1.0 for i in range(3)]
     (a0, a1, a2), (b0, b1, b2), (c0, c1, c2) = ax
     # world = o + R * (c + F * (p - c)),  c = scope centre  ->  o + R*(c - F*c) + (R*F) p
     sh = [sz[i] / 2 * (1 - f[i]) for i in range(3)]
@@ -626,3 +654,25 @@ def welded_frame(o: tuple, ax: tuple, sz: tuple, weld: float = WELD) -> list[lis
     oz = o[2] + a2 * sh[0] + b2 * sh[1] + c2 * sh[2]
     return [[a0 * f[0], b0 * f[1], c0 * f[2], ox], [a1 * f[0], b1 * f[1], c1 * f[2], oy],
             [a2 * f[0], b2 * f[1], c2 * f[2], oz]]
+
+
+def _on_reveal(s: Shape) -> bool:
+    """Whether face `s` (with `Shape.reveal`) still lies in the wall of the opening it was made
+    as (same plane, inside that face's rectangle) and faces into the opening (reversed, as
+    CGA's `comp(f) { side: reverseNormals() Reveal }` does): then it is a view of the solid's
+    reveal there. A face moved off it or facing into the wall stays a slab of its own."""
+    _solid_on, o0, (x0, y0, n0), (sx0, sy0, _sz0) = s.reveal  # type: ignore[misc]
+    ex, ey, ez = s.ax
+    if ez[0] * n0[0] + ez[1] * n0[1] + ez[2] * n0[2] > -0.999999:
+        return False
+    tol = 1e-6
+    sx, sy = s.sz[0], s.sz[1]
+    for u, v in ((0.0, 0.0), (sx, 0.0), (0.0, sy), (sx, sy)):
+        p = [s.o[k] + ex[k] * u + ey[k] * v - o0[k] for k in range(3)]
+        if abs(p[0] * n0[0] + p[1] * n0[1] + p[2] * n0[2]) > tol:
+            return False
+        a = p[0] * x0[0] + p[1] * x0[1] + p[2] * x0[2]
+        b = p[0] * y0[0] + p[1] * y0[1] + p[2] * y0[2]
+        if not (-tol <= a <= sx0 + tol and -tol <= b <= sy0 + tol):
+            return False
+    return True

@@ -12,8 +12,10 @@ import manifold3d
 import numpy as np
 
 from ..errors import DerivationError
+from .closings import drop_unspanned_closings
 from .engine import WELD, Derivation, Tag
 from .pinches import coincident_groups, separate
+from .union import SLIVER_VOLUME, LazySolid, free_parts, may_have_slivers, with_free_parts
 from .scene import CUT_COLOR, DEFAULT_COLOR, UNTAGGED, rgba_of, export_scene
 
 Manifold = manifold3d.Manifold
@@ -76,6 +78,8 @@ def compose(ctx: Derivation, where: Any) -> tuple[Any, Any]:
     """Unite the added solids, subtract the cuts (one batched boolean each); check the result.
     Also sorts the face terminals and recesses into views of the solid and the surface layer
     (`ctx.surface`, see `surface_layer`)."""
+    if ctx.surfaces_mode == "solid":
+        drop_unspanned_closings(ctx)  # before anything reads `adds` or `solid_of`
     on_solid = ctx.is_on_solid
     tags = ctx.tags
     cuts = []
@@ -92,8 +96,13 @@ def compose(ctx: Derivation, where: Any) -> tuple[Any, Any]:
             ctx.add_slab(f[0], f[1], f[2], f[3], f[4], where)
     if ctx.surfaces_mode == "solid":
         _close_reveals(ctx, where)
+    # parts inside an opening and clear of every other part leave the union (union.py)
+    free = free_parts(ctx) if ctx.surfaces_mode == "solid" else {}
     for index, holes in ctx.openings.items():  # openings cut out of their own solid only
         ctx.adds[index] = Manifold.batch_boolean([ctx.adds[index], *holes], manifold3d.OpType.Subtract)
+    if free:
+        ctx.adds = [a for i, a in enumerate(ctx.adds) if i not in free]
+        ctx.add_boxes = [b for i, b in enumerate(ctx.add_boxes) if i not in free]
     adds, post = ctx.adds, ctx.post_adds
     ctx.surface = surface_layer(ctx)
     if not adds and not post:
@@ -127,6 +136,8 @@ def compose(ctx: Derivation, where: Any) -> tuple[Any, Any]:
     status = body.status()
     if status != manifold3d.Error.NoError:
         raise DerivationError(f"the mesh boolean failed ({status.name})", where, code="boolean-failed")
+    if free:
+        body, mesh = with_free_parts(body, mesh, list(free.values()))
     n = len(mesh.tri_verts)
     if n == 0 and not len(ctx.surface[1]):
         raise DerivationError("the resulting mesh is empty (everything was cut away?)", where,
@@ -134,9 +145,10 @@ def compose(ctx: Derivation, where: Any) -> tuple[Any, Any]:
     # Solids touching exactly along an edge or at a point leave distinct vertices at one
     # position, which a reader welding by position turns into non-manifold edges: pull them
     # apart (sub-millimetre; see pinches.py). Costs ~0.1 ms when there is nothing to do.
-    groups = coincident_groups(mesh.vert_properties) if n else None
-    if groups:
-        body, mesh = separate(body, mesh, groups)
+    groups = coincident_groups(mesh.vert_properties) if n and not free else None  # (free: done)
+    if groups:  # the moved mesh's manifold is built when asked for (Model.manifold)
+        _none, moved = separate(body, mesh, groups, build=False)
+        body, mesh = LazySolid(moved, lambda solid=body: solid), moved
     ctx.check_triangles(n, where)
     return body, mesh
 
@@ -276,13 +288,9 @@ def _compose_groups(adds: list, cuts: list, groups: list[list[int]]) -> Any:
     return Manifold.compose(parts)
 
 
-# A shell of the union whose volume is below this (cubic model units) is a degenerate sliver
-# (two faces of the same zero-thickness wedge, e.g. where a recess cut grazes a roof's knife-edge
-# eave): it has no material, only pinched edges that break watertightness on reading back.
-SLIVER_VOLUME = 1e-9
-
-
 def _drop_slivers(body: Any) -> Any:
+    if not may_have_slivers(body.to_mesh()):
+        return body
     pieces = body.decompose()
     if len(pieces) < 2:
         return body
@@ -312,11 +320,22 @@ class Model:
         self.name = name
         self.seed = seed
         self.attrs = attrs
-        self.manifold = manifold
+        self._manifold = manifold
         self._mesh = mesh
         self._ctx = ctx
         self.warnings = warnings
         self.bindings = bindings
+
+    @property
+    def manifold(self) -> Any:
+        """The manifold3d solid (built from the mesh on first use where compose deferred it)."""
+        if isinstance(self._manifold, LazySolid):
+            self._manifold = self._manifold.build()
+        return self._manifold
+
+    @manifold.setter
+    def manifold(self, value: Any) -> None:
+        self._manifold = value
 
     @property
     def messages(self) -> list[str]:
@@ -431,9 +450,19 @@ class Model:
         # default mode's comp(f) volume) every face does: its region is what CGA shows
         faces = [f for f in self._ctx.painting if raw[f[0]][3] or raw[f[0]][4] or raw[f[0]][7] is not None
                  or raw[solid_of[f[5][0]][1]][6] == "closing"]
+        reveal = self._ctx.reveal_tags
+        if reveal:  # the walls of an opening paint the opening's triangles (tagged "cut") only
+            self._paint_region(out, [f for f in faces if f[0] not in reveal], ("body", "closing"))
+            self._paint_region(out, [f for f in faces if f[0] in reveal], ("cut",))
+        else:
+            self._paint_region(out, faces, ("body", "closing"))
+
+    def _paint_region(self, out: np.ndarray, faces: list, roles: tuple) -> None:
+        """Each face's tag onto the triangles of a tag with one of `roles` in its region."""
         if not faces:
             return
-        is_body = np.array([t[6] in ("body", "closing") for t in raw] + [False], dtype=bool)
+        raw = self._ctx.tags
+        is_body = np.array([t[6] in roles for t in raw] + [False], dtype=bool)
         idx = np.nonzero(is_body[out])[0]
         if len(idx) == 0:
             return

@@ -19,6 +19,19 @@ dependency); only those are built as solids (once) and tested exactly with manif
 
 A face is a slab (±T/10 shrunk, ±T grown) about its plane; edges and vertices (no area) are
 never inside, overlapping or touching anything.
+
+Open surfaces (a `SurfaceMesh`: an inserted asset whose mesh is not closed, a face turned out
+of its scope plane) follow CGA's reference ("inside / overlaps / touches": the tests are made
+only against geometry that forms a closed surface, a watertight mesh without border edges):
+
+- as an *occluder* an open surface is never seen (it has no inside), in either surfaces mode
+  (the default mode closes such a mesh for the written solid, but the query is about the
+  geometry CGA inserted, and a derivation must not depend on its output mode);
+- as the *queried* shape it is tested by its geometry, as a face is: each triangle a slab
+  (±T/10 thick, the mesh shrunk by T; ±T grown) about its plane.
+
+Anything a query still cannot evaluate is a located DerivationError naming the query and the
+rule, never an internal error.
 """
 from __future__ import annotations
 
@@ -29,7 +42,8 @@ import manifold3d
 
 from ..geometry.footprints import cross_section
 from ..geometry.solids import frame_matrix
-from .shape import FACE, Shape
+from ..geometry.surfaces import SurfaceMesh
+from .shape import FACE, Shape, fail
 
 __all__ = ["OCCLUSION_FUNCTIONS", "Occlusion", "TOLERANCE", "active", "query"]
 
@@ -62,6 +76,21 @@ def _solid(s: Shape, grow: float, thick: float) -> Any:
             return None
         base = Manifold.extrude(cross_section(s.contours()), 2 * thick).translate((0.0, 0.0, -thick))
         dims = (sx, sy, 0.0)
+    elif isinstance(s.solid, SurfaceMesh):
+        # an open surface, queried: by its geometry, as a face (see the module doc)
+        mesh = s.solid
+        if grow:
+            x0, y0, z0, x1, y1, z1 = mesh.bounding_box()
+            c = ((x0 + x1) / 2, (y0 + y1) / 2, (z0 + z1) / 2)
+            f = [max(d + 2 * grow, 0.0) / d if d > 1e-9 else 1.0 for d in (x1 - x0, y1 - y0, z1 - z0)]
+            if min(f) <= 0:
+                return None
+            mesh = mesh.translate(tuple(-v for v in c)).scale(tuple(f)).translate(c)
+        base = _mesh_slabs(mesh, thick if grow <= 0 else grow)
+        if base is None:
+            return None
+        solid = base.transform(frame_matrix(s.o, s.ax))
+        return None if solid.is_empty() else solid
     else:
         base, _oid, _n = local_solid(s)
         if base is None:
@@ -80,6 +109,29 @@ def _solid(s: Shape, grow: float, thick: float) -> Any:
     return None if solid.is_empty() else solid
 
 
+def _mesh_slabs(mesh: SurfaceMesh, thick: float) -> Any:
+    """The triangles of an open mesh, each a slab of half-thickness `thick` about its plane,
+    united; None without area."""
+    import numpy as np
+
+    from ..geometry.surfaces import unit_normals
+
+    keep, n, _ = unit_normals(mesh.V, mesh.F)
+    if not keep.any():
+        return None
+    n = n * thick
+    tris = mesh.V[mesh.F[keep]]  # (T, 3, 3)
+    pieces = []
+    for tri, d in zip(tris, n):
+        pts = np.vstack([tri + d, tri - d])
+        piece = Manifold.hull_points(np.ascontiguousarray(pts, dtype=np.float64))
+        if not piece.is_empty():
+            pieces.append(piece)
+    if not pieces:
+        return None
+    return pieces[0] if len(pieces) == 1 else Manifold.batch_boolean(pieces, manifold3d.OpType.Add)
+
+
 class Occlusion:
     """The occluders of one derivation: (tree node, label, world solid) with an R-tree of their
     bounding boxes."""
@@ -92,6 +144,8 @@ class Occlusion:
     def add(self, s: Shape, label: str | None) -> None:
         if s.kind == FACE and (s.sz[0] <= 1e-9 or s.sz[1] <= 1e-9):
             return  # an edge or a vertex: never an occluder
+        if isinstance(s.solid, SurfaceMesh):
+            return  # an open surface: CGA tests only against closed geometry (module doc)
         if self._index is None:
             from rtree import index
 
@@ -152,6 +206,19 @@ def query(kind: str, s: Shape, target: str = "intra", label: str | None = None) 
     derivation = active()
     if derivation is None or target == "inter":
         return False
+    try:
+        return _query(kind, s, derivation, label)
+    except Exception as exc:  # noqa: BLE001 - a located error, never an internal one
+        from ..errors import GrammarkitError
+
+        if isinstance(exc, GrammarkitError):
+            raise
+        raise fail(s, f"{kind}(): the occlusion query cannot be evaluated on this shape "
+                      f"({'a face' if s.kind == FACE else 'a volume'} of size "
+                      f"{' x '.join(f'{v:g}' for v in s.sz)}): {type(exc).__name__}: {exc}") from exc
+
+
+def _query(kind: str, s: Shape, derivation: Any, label: str | None) -> bool:
     occ = derivation.occlusion
     if occ is None or not occ.items:
         return False

@@ -40,7 +40,7 @@ class Shape:
     __slots__ = (
         "o", "ax", "sz", "kind", "poly", "solid", "color", "material", "rule", "params",
         "seed", "node", "depth", "si", "st", "entry", "cut", "values", "_rng", "gid", "on",
-        "trims", "trim_on", "tex", "csel", "hole",
+        "trims", "trim_on", "tex", "csel", "hole", "reveal",
     )
 
     def __init__(self, o: Vec, ax: tuple[Vec, Vec, Vec], sz: Vec, kind: str = FACE,
@@ -77,6 +77,11 @@ class Shape:
         # a face (or a piece of one) covering an opening cut into a solid, in the plane of the
         # face the opening was extruded from: in the default mode it is the hole, no geometry
         self.hole = False
+        # a side or back face of such an opening: (`on` of the solid the opening is cut out of,
+        # the face's origin, axes and size when comp(f) made it). In the default mode a leaf
+        # still in that rectangle and facing into the opening is a view of the solid's reveal
+        # (Derivation.leaf), not a slab of its own
+        self.reveal: tuple | None = None
 
     def copy(self) -> "Shape":
         c = Shape.__new__(Shape)
@@ -85,7 +90,7 @@ class Shape:
         c.seed, c.node, c.depth, c.si, c.st = self.seed, self.node, self.depth, self.si, self.st
         c.entry, c.cut, c.values, c._rng = self.entry, self.cut, self.values, None
         c.gid, c.on, c.trims, c.trim_on = self.gid, self.on, self.trims, self.trim_on
-        c.tex, c.csel, c.hole = self.tex, self.csel, self.hole
+        c.tex, c.csel, c.hole, c.reveal = self.tex, self.csel, self.hole, self.reveal
         return c
 
     def derived(self, o: Vec, sz: Vec, poly: Any = None, kind: str | None = None,
@@ -102,6 +107,7 @@ class Shape:
         c.on = self.on if c.kind == FACE else None
         c.trims, c.trim_on = self.trims, self.trim_on
         c.tex, c.csel, c.hole = self.tex, self.csel, self.hole and c.kind == FACE
+        c.reveal = self.reveal if c.kind == FACE else None
         return c
 
     def rng(self) -> random.Random:

@@ -10,6 +10,7 @@ from ..errors import GrammarkitError
 from ..expr_eval import is_constant
 from ..ir.base import Span
 from .shape import Shape, fail
+from .turned import TURNED_FACE_OPS, on_turned_faces
 
 
 def block_is_fixed(items: tuple) -> bool:
@@ -56,6 +57,8 @@ def op_step(apply: Callable, fns: tuple, block: tuple | None, span: Span | None,
              plugin: str = "") -> Callable:
     const = [f(None) for f in fns] if all(is_constant(f) for f in fns) else None
     who = f"{name}() of plugin {plugin!r}" if plugin else f"{name}()"
+    if name in TURNED_FACE_OPS and not plugin:
+        apply = on_turned_faces(apply)  # also on a face a scope turn turned over (turned.py)
 
     def step(ctx: Any, s: Any) -> Any:
         try:

@@ -61,6 +61,7 @@ def _support(graph: nx.Graph, args: dict[str, Any], context: dict | None):  # no
     support test of `grounded` (support.py) on the graph's parts."""
     import numpy as np
 
+    from .graph import node_arrays
     from .support import carry_directions, support_problems
 
     context = context or {}
@@ -70,8 +71,13 @@ def _support(graph: nx.Graph, args: dict[str, Any], context: dict | None):  # no
     data = dict(graph.nodes(data=True))  # one pass (NodeView lookups are slow on 100k parts)
     nodes = sorted(data, key=lambda n: data[n].get("index", 0))
     pos = {n: i for i, n in enumerate(nodes)}
-    lo = np.array([data[n]["lo"] for n in nodes], dtype=np.float64).reshape(-1, 3)
-    hi = np.array([data[n]["hi"] for n in nodes], dtype=np.float64).reshape(-1, 3)
+    arrays = node_arrays(graph)
+    if arrays is not None:  # a shape_graph's own (n, 3) rows: no per-node temporaries at 100k parts
+        rows = np.fromiter((data[n]["index"] for n in nodes), dtype=np.int64, count=len(nodes))
+        lo, hi = arrays["lo"][rows], arrays["hi"][rows]
+    else:
+        lo = np.array([data[n]["lo"] for n in nodes], dtype=np.float64).reshape(-1, 3)
+        hi = np.array([data[n]["hi"] for n in nodes], dtype=np.float64).reshape(-1, 3)
     edges = np.array([(pos[u], pos[v]) for u, v in graph.edges()], dtype=np.int64).reshape(-1, 2)
     carry = context.get("carry")
     if carry is None or len(carry) != len(edges):

@@ -153,6 +153,8 @@ def distance_matrix(points: np.ndarray) -> np.ndarray:
     return np.sqrt((diff * diff).sum(axis=-1))
 
 
+# long: one backtracking search (candidates per boundary node, pairwise-distance pruning,
+# step budget) whose loop state is shared; splitting it would pass that state around
 def match_boundary(src_types: Sequence[str], src_dist: np.ndarray, boundary: Sequence[int],
                    dst_by_type: dict[str, np.ndarray], dst_dist: np.ndarray, dst_sizes: np.ndarray,
                    tolerance: float, rng: np.random.Generator, *, max_steps: int = 2000,

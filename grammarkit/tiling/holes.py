@@ -5,8 +5,10 @@ mirrored images) opens *inside* the shape has a neighbour there. A site image op
 its probe point, a quarter of the part's diagonal beyond the site along its facing, lies
 
 - within the shape's **outline**: the footprint of all parts seen along the up axis (the union
-  of their bounding rectangles, each grown by the contact tolerance) with its enclosed holes
-  filled, rasterised on a grid of at most `MAX_CELLS` cells a side; and
+  of each part's convex outline, its vertices' 2D convex hull grown by the contact tolerance,
+  so the outline turns with the shape: a tiling turned by 30 degrees has the same outline,
+  turned) with its enclosed holes filled, rasterised on a grid of at most `MAX_CELLS` cells
+  a side; and
 - between the shape's lowest and highest points along the up axis.
 
 So a tile on the border of a tiling may leave its outer side open, while a tile next to a
@@ -16,7 +18,7 @@ the violation names the part and the site.
 """
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, Sequence
 
 import numpy as np
 
@@ -29,7 +31,10 @@ _PROBE = 0.25  # probe distance beyond a site, in part diagonals
 class Footprint:
     """The shape's outline along the up axis, holes filled, as a boolean raster."""
 
-    def __init__(self, lo: np.ndarray, hi: np.ndarray, up_axis: int, tolerance: float):
+    def __init__(self, lo: np.ndarray, hi: np.ndarray, up_axis: int, tolerance: float,
+                 meshes: Sequence[Any] | None = None):
+        """`lo`, `hi`: the parts' bounding boxes; `meshes` (one per part, world coordinates):
+        each part's convex outline is rasterised instead of its bounding rectangle."""
         from scipy.ndimage import binary_fill_holes
 
         self.k = up_axis
@@ -47,8 +52,18 @@ class Footprint:
         # cells whose centres lie in a part's (grown) rectangle
         a = np.clip(np.ceil((lo2 - self.origin) / self.cell - 0.5).astype(np.int64), 0, shape)
         b = np.clip(np.floor((hi2 - self.origin) / self.cell - 0.5).astype(np.int64) + 1, 0, shape)
-        for (x0, y0), (x1, y1) in zip(a.tolist(), b.tolist()):
-            grid[x0:x1, y0:y1] = True
+        outlines = _Outlines(self.h, tolerance) if meshes is not None else None
+        for i, ((x0, y0), (x1, y1)) in enumerate(zip(a.tolist(), b.tolist())):
+            eq = outlines.of(meshes[i]) if outlines is not None and meshes is not None else None
+            if eq is None:  # a rectangle along the axes: its bounding rectangle
+                grid[x0:x1, y0:y1] = True
+                continue
+            if x1 <= x0 or y1 <= y0:
+                continue
+            gx, gy = np.meshgrid(np.arange(x0, x1), np.arange(y0, y1), indexing="ij")
+            centres = self.origin + (np.stack([gx.ravel(), gy.ravel()], axis=1) + 0.5) * self.cell
+            keep = (centres @ eq[:, :2].T + eq[:, 2] <= tolerance).all(axis=1)
+            grid[gx.ravel()[keep], gy.ravel()[keep]] = True
         self.grid = binary_fill_holes(grid)
 
     def inside(self, points: np.ndarray) -> np.ndarray:
@@ -61,6 +76,46 @@ class Footprint:
         return out
 
 
+class _Outlines:
+    """Per part, its convex outline along the up axis as half-planes (rows a, b, c: a x + b y
+    + c <= 0 inside), computed once per distinct shape up to translation; None for a part
+    whose outline is its bounding rectangle (an axis-aligned box: the fast path)."""
+
+    def __init__(self, h: list[int], tolerance: float):
+        self.h = h
+        self.tolerance = tolerance
+        self.known: dict[bytes, np.ndarray | None] = {}
+
+    def of(self, mesh: Any) -> np.ndarray | None:
+        V = np.asarray(mesh.vertices, dtype=np.float64)[:, self.h]
+        if len(V) < 3:
+            return None
+        lo = V.min(axis=0)
+        span = float(np.abs(V.max(axis=0) - lo).max()) or 1.0
+        rel = V - lo
+        key = np.unique(np.round(rel / (1e-6 * span)).astype(np.int64), axis=0).tobytes()
+        if key not in self.known:
+            self.known[key] = self._hull(rel, span)
+        eq = self.known[key]
+        if eq is None:
+            return None
+        out = eq.copy()
+        out[:, 2] -= eq[:, :2] @ lo  # shifted back to where the part is
+        return out
+
+    def _hull(self, rel: np.ndarray, span: float) -> np.ndarray | None:
+        from scipy.spatial import ConvexHull, QhullError
+
+        try:
+            hull = ConvexHull(rel)
+        except (QhullError, ValueError):
+            return None  # flat or degenerate along the up axis: its rectangle
+        ext = rel.max(axis=0) - rel.min(axis=0)
+        if hull.volume >= float(np.prod(ext)) * (1 - 1e-6) or hull.volume <= 1e-12 * span * span:
+            return None  # fills its bounding rectangle (or has no area): the rectangle is exact
+        return np.asarray(hull.equations, dtype=np.float64)
+
+
 def open_sites(rules: Any, shape: Any, wanted: dict[str, list[str]], tolerance: float):  # noqa: ANN201
     """Per (part index, type, site): (inside mask, filled mask) over the site's images, for the
     sites in `wanted` (type -> names). Empty without an up axis (no outline to speak of)."""
@@ -70,7 +125,8 @@ def open_sites(rules: Any, shape: Any, wanted: dict[str, list[str]], tolerance: 
     if up is None or not len(shape.nodes):
         return
     k = int(np.argmax(np.abs(up)))
-    outline = Footprint(shape.lo, shape.hi, k, tolerance)
+    outline = Footprint(shape.lo, shape.hi, k, tolerance,
+                        [shape.part(i).mesh for i in range(len(shape.nodes))])
     for i, t, name, pos, facing, filled in site_occupancy(rules, shape, wanted):
         probe = pos + facing * (_PROBE * float(shape.diag[i]))
         yield i, t, name, outline.inside(probe), filled

@@ -343,6 +343,13 @@ def edit_violations(rule_set, types: Sequence[str], edges, meshes, centroids, to
         site_idx = None if sites_of is None else np.array(sorted({int(i) for i in sites_of}), dtype=np.int64)
         for v in required_site_violations(rule_set, shape, idx=site_idx):
             add(v)
+        # docking placements before the global constraints: they are local to the edited
+        # contacts and reject most broken edits for less (support and holes read the whole shape)
+        if (getattr(rule_set, "configs", None) or getattr(rule_set, "docks", None)) and len(shape.edges):
+            touched = np.flatnonzero(np.isin(shape.edges, new_idx).any(axis=1))
+            if len(touched):
+                for v in _dock_violations(rule_set, shape, touched):
+                    add(v)
         if getattr(rule_set, "constraints", ()):
             extra = {}
             if cache is not None and keys is not None:
@@ -358,11 +365,6 @@ def edit_violations(rule_set, types: Sequence[str], edges, meshes, centroids, to
                               constraint_context=extra)
             for v in report.violations:
                 add(v)
-        if (getattr(rule_set, "configs", None) or getattr(rule_set, "docks", None)) and len(shape.edges):
-            touched = np.flatnonzero(np.isin(shape.edges, new_idx).any(axis=1))
-            if len(touched):
-                for v in _dock_violations(rule_set, shape, touched):
-                    add(v)
     except _Full:
         pass
     return out

@@ -23,8 +23,11 @@ From the shape graphs of the examples (recomputed from geometry) `learn` writes:
   multisets: they reject any neighbourhood no example shows, e.g. most larger or smaller valid
   tilings) or `"ranges"` (per neighbour type the observed count range);
 - `count(T, lo, hi)`: the fewest and most T parts an example has (two or more examples;
-  `count_slack` widens the range), for the types no example has more than 2 of unless
+  `count_slack` widens the range), for the types every example has 1..2 of unless
   `counts="all"`, see learn_stats;
+- site docks beyond the observed ones where the sites' recovered sockets fit (learn_sockets;
+  `sockets=False`: observed pairs only); `required` sites only for types some part of which
+  has an empty site (stands on a border) in the examples, `filled` otherwise;
 - `connected`, and `grounded(ground=G)` (strict support) or `grounded(ground=G, sideways=true,
   max_span=K)` when every example satisfies it, G being the examples' lowest point along the
   up axis and K the examples' longest sideways run (learn_stats, support);
@@ -63,6 +66,7 @@ from .assembly import Assembly
 from .frames import local_frame
 from .graph import shape_graph
 from .learn_text import _dir_text, _identifier, _num, _part_def, _placement
+from .learn_sockets import add_corner_docks
 from .learn_stats import COUNT_MODES, SupportStats, count_statements, support_stats
 from .meanshift import mean_shift
 from .rules import PartSpec, Rules
@@ -196,19 +200,24 @@ class _Example:
                 R = np.einsum("nij,kj->nik", self.F[m, :3, :3], ti.frame[:3, :3])
                 self.d[m] = np.einsum("nji,j->ni", R, up)
         self.poses = None
+        self.rules: Rules | None = None
 
     def set_poses(self, rules: Rules) -> None:
         from .validate import _poses
 
+        self.rules = rules
         self.poses = _poses(rules, self.shape)
 
     def group(self, i: int, info: dict[str, _TypeInfo] | None = None) -> np.ndarray:
         g = int(self.poses.group[i])
         return self.poses.groups[g] if g >= 0 else np.eye(3)[None]
 
-    def contact_points(self) -> np.ndarray:
-        a, b = self.edges[:, 0], self.edges[:, 1]
-        return (np.maximum(self.lo[a], self.lo[b]) + np.minimum(self.hi[a], self.hi[b])) / 2
+    def contact_points(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Per contact its position, normal and corner flag (sitegeom: as validation reads them)."""
+        from .sitegeom import contact_geometry
+
+        assert self.rules is not None, "set_poses first"
+        return contact_geometry(self.rules, self.shape, np.arange(len(self.edges)))
 
 
 def docking_samples(assembly: Assembly, graph: nx.Graph, *, up: str | None = "+z") -> list[DockSample]:
@@ -309,38 +318,20 @@ def _samples(ex: _Example, info: dict[str, _TypeInfo], site_of: dict | None = No
 _SIDE_NAMES = {(0, 1): "east", (0, -1): "west", (1, 1): "north", (1, -1): "south", (2, 1): "top", (2, -1): "bottom"}
 
 
-def _contact_normals(ex: "_Example") -> np.ndarray:
-    """Per contact, the normal of its plane as seen from the first part (world axes): the
-    thinnest axis of the two bounding boxes' intersection (a face contact is flat along its
-    normal), pointing from the first part's centre towards the contact."""
-    a, b = ex.edges[:, 0], ex.edges[:, 1]
-    lo = np.maximum(ex.lo[a], ex.lo[b])
-    hi = np.minimum(ex.hi[a], ex.hi[b])
-    k = np.argmin(hi - lo, axis=1)
-    centre_a = (ex.lo[a] + ex.hi[a]) / 2
-    centre_b = (ex.lo[b] + ex.hi[b]) / 2
-    sign = np.sign((centre_b - centre_a)[np.arange(len(k)), k])
-    sign[sign == 0] = 1.0
-    n = np.zeros((len(k), 3))
-    n[np.arange(len(k)), k] = sign
-    return n
-
-
 def _learn_sites(examples: list["_Example"], info: dict[str, _TypeInfo], bandwidth: float
                  ) -> tuple[dict[str, list[dict]], dict]:
     """Per type the site clusters (position in modelling coordinates, name, facing), and per
     (example, edge, part) the site index its contact is at.
 
     A contact's features, per part: the contact point (the centre of the two bounding boxes'
-    intersection, Liu's boundary-frame origin) and its normal (`_contact_normals`), both in
+    intersection, Liu's boundary-frame origin) and its normal (sitegeom.contact_geometry), both in
     the part's modelling frame and reduced modulo its turn symmetry; the normal weighs two
     bandwidths, so a ledge's top and bottom (0.2 m apart) are different sites."""
-    feats: dict[str, list[tuple[np.ndarray, np.ndarray, float, tuple[int, int, int]]]] = defaultdict(list)
+    feats: dict[str, list[tuple[np.ndarray, np.ndarray, float, tuple[int, int, int], bool]]] = defaultdict(list)
     for ex in examples:
         if not len(ex.edges):
             continue
-        cs = ex.contact_points()
-        ns = _contact_normals(ex)
+        cs, ns, corner = ex.contact_points()
         for e, (u, v) in enumerate(ex.edges.tolist()):
             scale = float(min(ex.diag[u], ex.diag[v]))
             for a, sgn in ((u, 1.0), (v, -1.0)):
@@ -357,14 +348,14 @@ def _learn_sites(examples: list["_Example"], info: dict[str, _TypeInfo], bandwid
                 best = imgs[int(np.lexsort(keys.T[::-1])[0])] if len(S) > 1 else both
                 pm = ti.frame[:3, :3] @ best[:3] + ti.frame[:3, 3]  # to the modelling frame
                 nm = ti.frame[:3, :3] @ (best[3:] / ti.size)
-                feats[ex.types[a]].append((pm, nm, scale, (ex.k, e, a)))
+                feats[ex.types[a]].append((pm, nm, scale, (ex.k, e, a), bool(corner[e])))
     sites: dict[str, list[dict]] = {}
     site_of: dict = {}
     for t in sorted(feats):
         rows = feats[t]
-        bw = SITE_BANDWIDTH * bandwidth * float(np.median([sc for _, _, sc, _ in rows]))
+        bw = SITE_BANDWIDTH * bandwidth * float(np.median([r[2] for r in rows]))
         bw = max(bw, 1e-9)
-        X = np.array([np.concatenate([p, 2 * bw * n]) for p, n, _, _ in rows])
+        X = np.array([np.concatenate([r[0], 2 * bw * r[1]]) for r in rows])
         centres, labels = mean_shift(X, bw)
         found = []
         for c in range(len(centres)):
@@ -372,32 +363,36 @@ def _learn_sites(examples: list["_Example"], info: dict[str, _TypeInfo], bandwid
             normal = np.array([rows[i][1] for i in np.flatnonzero(labels == c)]).mean(axis=0)
             k = int(np.argmax(np.abs(normal)))
             sign = 1 if normal[k] >= 0 else -1
-            found.append((k, -sign, tuple(np.round(pos, 4)), c, pos, sign))
+            members = np.flatnonzero(labels == c)
+            found.append((k, -sign, tuple(np.round(pos, 4)), c, pos, sign, all(rows[i][4] for i in members)))
         found.sort()  # by facing, then position: stable names
         used: dict[str, int] = {}
         remap = {}
         out = []
-        for j, (k, _, _, c, pos, sign) in enumerate(found):
+        for j, (k, _, _, c, pos, sign, at_corner) in enumerate(found):
             base = _SIDE_NAMES[(k, sign)]
             used[base] = used.get(base, 0) + 1
             name = base if used[base] == 1 else f"{base}_{used[base]}"
             facing = ("+" if sign > 0 else "-") + "xyz"[k]
-            out.append({"name": name, "pos": np.array([float(_num(x).value) for x in pos]), "facing": facing})
+            out.append({"name": name, "pos": np.array([float(_num(x).value) for x in pos]), "facing": facing,
+                        "corner": at_corner})
             remap[c] = j
         sites[t] = out
-        for (_, _, _, key), lab in zip(rows, labels):
-            site_of[key] = remap[int(lab)]
+        for row, lab in zip(rows, labels):
+            site_of[row[3]] = remap[int(lab)]
     return sites, site_of
 
 
 # --------------------------------------------------------------------------------------------
 # learn
 # --------------------------------------------------------------------------------------------
+# long: one pass over the stages (graphs, sites, docks, sockets, counts, required and filled
+# sites, self-check) that share the examples' state; each stage's work is in its own helper
 def learn(assemblies: Sequence[Assembly | str | os.PathLike], name: str = "learned", *,
           example_paths: Sequence[str] | None = None, tolerance: float | None = None,
           bandwidth: float = 0.05, docks: bool = True, constraints: bool = True,
           neighbors: str = "none", sites: bool = True, counts: bool | str = True, count_slack: int = 0,
-          holes: bool = True,
+          holes: bool = True, sockets: bool = True,
           up: str = "+z", notes: list[str] | None = None,
           progress: Callable[[str], Any] | None = None) -> Grammar:
     """The tiling grammar the examples exhibit (see the module docstring).
@@ -410,7 +405,9 @@ def learn(assemblies: Sequence[Assembly | str | os.PathLike], name: str = "learn
     "none"; `counts` is True ("few": ranges for the types no example has more than
     learn_stats.FEW of), "all" (every type) or False; `count_slack` widens each learned
     count range by that many parts on each side (default 0: the examples' min..max); `up` is
-    the examples' up axis; `holes=False` writes no `filled` constraints (holes.py).
+    the examples' up axis; `holes=False` writes no `filled` constraints (holes.py);
+    `sockets=False` writes only the site pairs the examples show (learn_sockets: by default
+    every pair of sites whose recovered sockets fit).
     `notes` (a list) receives one line per inference (counts, symmetries, support, ...);
     `progress(stage)` is called as each stage starts."""
     from .contacts import check_tolerance
@@ -558,6 +555,11 @@ def learn(assemblies: Sequence[Assembly | str | os.PathLike], name: str = "learn
         return Grammar(name=_identifier(name, set()), statements=tuple(out + examples_st))
 
     grammar = build()
+    if sites and docks and sockets:
+        say("socket classes (site pairs that fit beyond the observed ones)")
+        _add_socket_docks(grammar, info, examples, samples, placements_of, dock_keys, up, bandwidth, notes)
+        add_corner_docks(site_defs, sorted(info), placements_of, dock_keys, notes)
+        grammar = build()
     # types whose example parts are not all rigid copies of the prototype (a longer ledge on a
     # wider facade): declared deformable, so the examples pass the rigid-copy check
     from .rigid import rigid_errors
@@ -573,7 +575,8 @@ def learn(assemblies: Sequence[Assembly | str | os.PathLike], name: str = "learn
     if sites and docks:
         # required sites: those every part of the type has filled in every example
         say("required sites")
-        required = _required_sites(grammar, info, examples, up)
+        corners = {(t, sd["name"]) for t, sds in site_defs.items() for sd in sds if sd["corner"]}
+        required = _required_sites(grammar, info, examples, up, corners)
         if required:
             statements[:] = [s.model_copy(update={"required": True})
                              if isinstance(s, SiteDef) and (s.part, s.name) in required else s for s in statements]
@@ -582,8 +585,11 @@ def learn(assemblies: Sequence[Assembly | str | os.PathLike], name: str = "learn
             from .holes import filled_sites
             from .validate import _Shape
 
+            # a site where parts only meet along an edge or at a point (diagonal neighbours of
+            # square tiles): no probe beyond it tells inside from outside, and a hole there
+            # also empties the face sites around it
             for t, site in filled_sites(_rules_for(grammar, info, up), [_Shape(e.asm, e.graph) for e in examples],
-                                        required):
+                                        required | corners):
                 notes.append(f"filled({t}, \"{site}\"): every example has a neighbour at {t}.{site} wherever "
                              "it opens inside the shape")
                 extra.append(ConstraintDef(name="filled", args=(Arg(value=Ref(name=t)), Arg(value=Str(value=site)))))
@@ -595,10 +601,25 @@ def learn(assemblies: Sequence[Assembly | str | os.PathLike], name: str = "learn
             missing = _uncovered(grammar, info, examples, samples, up)
             if not missing:
                 break
-            for key, extra in missing.items():
-                placements_of[key].extend(extra)
+            for key, more in missing.items():
+                placements_of[key].extend(more)
             grammar = build()
     return grammar
+
+
+def _add_socket_docks(grammar: Grammar, info: dict[str, _TypeInfo], examples: list[_Example],
+                      samples: dict[tuple, list[DockSample]], placements_of: dict[tuple, list], dock_keys: list,
+                      up: str, bandwidth: float, notes: list[str]) -> None:
+    """Extend the site docks by the socket classes (learn_sockets.extend_site_docks)."""
+    from .learn_sockets import extend_site_docks
+
+    rules = _rules_for(grammar, info, up)
+    sizes = {t: ti.size for t, ti in info.items() if not ti.free}
+    frames = {t: ti.frame for t, ti in info.items() if not ti.free}
+    added = extend_site_docks(rules.sites, frames, sizes, samples, examples, placements_of, dock_keys, bandwidth)
+    if added:
+        notes.append(f"{added} site dock(s) no example shows: their sites' sockets fit those of observed docks "
+                     "(learn_sockets; sockets=False: only observed pairs)")
 
 
 def _ranges(msets: set[tuple[str, ...]]) -> dict[str, tuple[int, int]]:
@@ -621,22 +642,41 @@ def _rules_for(grammar: Grammar, info: dict[str, _TypeInfo], up: str) -> Rules:
     return rules
 
 
-def _required_sites(grammar: Grammar, info: dict[str, _TypeInfo], examples: list[_Example], up: str
-                    ) -> set[tuple[str, str]]:
+REQUIRED_CHANCE = 0.01  # see _required_sites
+
+
+def _required_sites(grammar: Grammar, info: dict[str, _TypeInfo], examples: list[_Example], up: str,
+                    corners: frozenset[tuple[str, str]] | set[tuple[str, str]] = frozenset()) -> set[tuple[str, str]]:
     """(type, site) pairs filled on every part of the type in every example (the validator's
-    own occupancy test, so the examples pass their `required` rules)."""
+    own occupancy test, so the examples pass their `required` rules), for the types the
+    examples show on the shape's border often enough to tell: if all k sites of the type could
+    face outwards, n empty sightings would miss the m never-empty ones with chance
+    ((k - m) / k) ** n, which must be below REQUIRED_CHANCE (a coast's shores, empty ten
+    times at their ends, never at their grass or water side: required; a road bend empty eight
+    times over three of its four sides: not). Other types' sites get `filled` (holes inside)
+    instead. Corner sites (`corners`: meeting along an edge or at a point) are never required."""
     from .validate import _Shape, required_site_violations
 
     rules = _rules_for(grammar, info, up)
-    all_sites = {(t, s.name) for t, sts in rules.sites.items() for s in sts}
+    all_sites = {(t, s.name) for t, sts in rules.sites.items() for s in sts} - set(corners)
     rules.sites = {t: tuple(type(s)(s.part, s.name, s.frames, True) for s in sts) for t, sts in rules.sites.items()}
     empty: set[tuple[str, str]] = set()
+    sightings: dict[str, int] = defaultdict(int)
     for ex in examples:
         shape = _Shape(ex.asm, ex.graph)
         for v in required_site_violations(rules, shape):
             t, name = v.allowed.split(".", 1)
             empty.add((t, name))
-    return all_sites - empty
+            if (t, name) not in corners:
+                sightings[t] += 1
+    n_sites: dict[str, int] = defaultdict(int)
+    for t, _ in all_sites:
+        n_sites[t] += 1
+    never: dict[str, int] = defaultdict(int)
+    for t, _ in all_sites - empty:
+        never[t] += 1
+    told = {t for t, n in sightings.items() if ((n_sites[t] - never[t]) / n_sites[t]) ** n < REQUIRED_CHANCE}
+    return {(t, name) for t, name in all_sites - empty if t in told}
 
 
 def _uncovered(grammar: Grammar, info: dict[str, _TypeInfo], examples: list[_Example],

@@ -36,7 +36,7 @@ COUNT_MODES = ("few", "all", "none")
 def count_statements(types: Sequence[str], type_counts: list[dict[str, int]], slack: int,
                      notes: list[str], mode: str = "few") -> list[ConstraintDef]:
     """`constraint count(T, lo, hi)` from the per-example counts (two or more examples): for
-    every type with `mode="all"`, for the types no example has more than FEW of with "few"
+    every type with `mode="all"`, for the types every example has 1..FEW of with "few"
     (the default: a tiling's tile counts follow its size, and ranges of them would reject
     every larger or smaller valid tiling)."""
     if len(type_counts) < 2 or mode == "none":
@@ -45,8 +45,8 @@ def count_statements(types: Sequence[str], type_counts: list[dict[str, int]], sl
     seen_range = example_count_ranges(type_counts, types)
     for t in sorted(types):
         ns = [h.get(t, 0) for h in type_counts]
-        if mode == "few" and max(ns) > FEW:
-            continue
+        if mode == "few" and (max(ns) > FEW or min(ns) == 0):
+            continue  # many (grows with the shape), or absent from some example (a rare tile)
         lo, hi = max(0, seen_range[t][0] - slack), seen_range[t][1] + slack
         seen = f"{min(ns)}..{max(ns)}" if min(ns) != max(ns) else f"{min(ns)}"
         widened = f", widened by {slack}" if slack else ""

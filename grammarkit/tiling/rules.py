@@ -302,6 +302,8 @@ def known_types(grammar: "Grammar") -> frozenset[str]:
     return rules_from_grammar(grammar, resolve_constraints=False, site_placements=False).types
 
 
+# long: one pass over the grammar's statements (parts, neighbours, sites, docks, constraints)
+# filling one Rules object; each statement kind's details are in helpers
 def rules_from_grammar(grammar: "Grammar", *, resolve_constraints: bool = True,
                        site_placements: bool = True, registries: Any = None) -> Rules:
     """Compile a tiling grammar's statements into `Rules` (raises GrammarError with spans).

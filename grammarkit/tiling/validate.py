@@ -9,22 +9,22 @@ Checks, in report order (rule names as in reports):
 - `unknown-type`: a part type the grammar never mentions;
 - `pair`: two touching types no `dock` allows;
 - `neighbors` / `neighbor-count`: neighbourhood rules;
-- `orientation` / `mirrored`: a part not standing as its type may stand (turned over or on its
-  side: orientation.py), or a mirror image of a chiral part whose type does not allow it;
+- `orientation` / `mirrored`: a part not standing as its type may stand (orientation.py), or a
+  mirror image of a chiral part whose type does not allow it;
 - `dock`: a contact matching none of its type pair's docking configurations (placements, up to
   the parts' turn symmetries; one-sided site docks: the contact must be at that site);
 - `site`: a `required` site of a part with nothing touching it;
 - `constraint NAME`: a global constraint (connected, grounded, path, count, a plugin's).
 
-Large models: the contact-by-contact work runs on numpy arrays in chunks of `CHUNK` contacts
-(bounded temporaries), and neighbourhoods are checked once per distinct (type, neighbour
-counts) combination.
+Large models: contacts are checked on numpy arrays in chunks of `CHUNK` (bounded temporaries),
+neighbourhoods once per distinct (type, neighbour counts) combination.
 """
 from __future__ import annotations
 
 import json
 import math
 from dataclasses import asdict, dataclass, field
+from functools import cached_property
 from typing import TYPE_CHECKING, Any, Callable
 
 import networkx as nx
@@ -32,8 +32,9 @@ import numpy as np
 
 from ..jsonable import to_jsonable
 from .assembly import Assembly
+from .sitegeom import contact_geometry
 from .frames import local_frames, symmetry_classes
-from .graph import shape_graph
+from .graph import drop_views, node_arrays, shape_graph
 from .rules import DockConfig, Rules, format_multiset, rotation_matrix, rules_from_grammar
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -93,35 +94,59 @@ class _Full(Exception):
     """max_violations reached: stop checking."""
 
 
+FRAME_CHUNK = 1024  # parts per local_frames call (bounded temporaries)
+EDGE_CHUNK = 8192  # contacts per docking-placement pass (bounded temporaries)
+
+
 class _Shape:
     """The graph as arrays: nodes in part order, edges as index pairs (both built once)."""
 
     def __init__(self, assembly: Assembly, graph: nx.Graph):
         self.assembly = assembly
         self.graph = graph
-        # one pass over the node data (NodeView lookups cost ~1 us each: 10 per part on 100k parts)
-        data = dict(graph.nodes(data=True))
+        # one pass over the node data (NodeView lookups cost ~1 us each: 10 per part on 100k
+        # parts), read in place from `_node`, the node dict networkx documents for subclasses
+        data = graph._node if isinstance(getattr(graph, "_node", None), dict) else dict(graph.nodes(data=True))
         nodes = list(data)
         if all("index" in d for d in data.values()):
             nodes.sort(key=lambda n: data[n]["index"])
         self.nodes = nodes
-        self.pos = {n: i for i, n in enumerate(nodes)}
         self.types = [data[n]["type"] for n in nodes]
         # type codes: per-part loops over 100,000 parts become numpy operations
         self.type_names = sorted(set(self.types))
         code = {t: k for k, t in enumerate(self.type_names)}
-        self.tid = np.array([code[t] for t in self.types], dtype=np.int64)
-        self.part_index = np.array([data[n].get("index", i) for i, n in enumerate(nodes)], dtype=np.int64)
-        self.lo = np.array([data[n]["lo"] for n in nodes], dtype=np.float64).reshape(-1, 3)
-        self.hi = np.array([data[n]["hi"] for n in nodes], dtype=np.float64).reshape(-1, 3)
-        pos = self.pos
-        self.edges = np.array([(pos[u], pos[v]) for u, v in graph.edges()], dtype=np.int64).reshape(-1, 2)
-        self.diag = np.linalg.norm(self.hi - self.lo, axis=1)
         n = len(nodes)
+        self.tid = np.fromiter((code[t] for t in self.types), dtype=np.int64, count=n)
+        self.part_index = np.fromiter((data[m].get("index", i) for i, m in enumerate(nodes)), np.int64, n)
+        arrays = node_arrays(graph)
+        if arrays is not None:  # a shape_graph: its node arrays, rows by part index (read-only)
+            if len(arrays["lo"]) == n and (self.part_index == np.arange(n)).all():
+                self.lo, self.hi = arrays["lo"], arrays["hi"]  # nodes in part order: the rows as they are
+            else:
+                self.lo, self.hi = arrays["lo"][self.part_index], arrays["hi"][self.part_index]
+        else:
+            self.lo = np.array([data[m]["lo"] for m in nodes], dtype=np.float64).reshape(-1, 3)
+            self.hi = np.array([data[m]["hi"] for m in nodes], dtype=np.float64).reshape(-1, 3)
+        # edges as position pairs, without a tuple per contact (150,000 tuples were 18 MB)
+        pos = {m: i for i, m in enumerate(nodes)}  # not kept (8 MB at 100k parts): `pos` makes it on use
+        self.edges = np.fromiter((pos[x] for e in graph.edges() for x in e), dtype=np.int64,
+                                 count=2 * graph.number_of_edges()).reshape(-1, 2)
+        del pos
+        self.diag = np.linalg.norm(self.hi - self.lo, axis=1)
         self._frames = np.tile(np.eye(4), (n, 1, 1))
         self._have = np.zeros(n, dtype=bool)
         self.frame_keys: Any = None  # optional: a key per part and a dict of known frames
         self.frame_cache: dict | None = None
+
+    @cached_property
+    def pos(self) -> dict | None:
+        """Node -> its position in `nodes` (made on first use; None after `release`)."""
+        return {m: i for i, m in enumerate(self.nodes)}
+
+    def release(self) -> None:
+        """Drop the per-part arrays; only `graph` and `assembly` stay usable."""
+        for name in ("pos", "types", "tid", "lo", "hi", "edges", "diag", "_frames", "_have", "nodes"):
+            setattr(self, name, None)
 
     def part(self, i: int):  # noqa: ANN201
         return self.assembly.parts[int(self.part_index[i])]
@@ -136,19 +161,26 @@ class _Shape:
         missing = idx[~self._have[idx]]
         if len(missing):
             missing = np.unique(missing)
-            todo = []
-            for i in missing.tolist():
-                key = self.frame_keys[int(self.part_index[i])] if self.frame_keys is not None else None
-                known = self.frame_cache.get(key) if key is not None and self.frame_cache is not None else None
-                if known is not None:
-                    self._frames[i] = known
-                else:
-                    todo.append(i)
-            if todo:
-                self._frames[todo] = local_frames([self.mesh(i) for i in todo])
-                if self.frame_keys is not None and self.frame_cache is not None:
-                    for i in todo:
-                        self.frame_cache[self.frame_keys[int(self.part_index[i])]] = self._frames[i].copy()
+            if self.frame_keys is not None and self.frame_cache is not None:
+                todo_list = []
+                for i in missing.tolist():
+                    key = self.frame_keys[int(self.part_index[i])]
+                    known = self.frame_cache.get(key) if key is not None else None
+                    if known is not None:
+                        self._frames[i] = known
+                    else:
+                        todo_list.append(i)
+                todo = np.array(todo_list, dtype=np.int64)
+            else:  # no cache: every missing frame is computed (no Python int per part)
+                todo = missing
+            # in chunks: local_frames' per-vertex temporaries over 100,000 parts at once were
+            # the peak of a validate (issue 33: <= 600 MB)
+            for k in range(0, len(todo), FRAME_CHUNK):
+                chunk = todo[k:k + FRAME_CHUNK]
+                self._frames[chunk] = local_frames([self.mesh(i) for i in chunk.tolist()])
+            if len(todo) and self.frame_keys is not None and self.frame_cache is not None:
+                for i in todo.tolist():
+                    self.frame_cache[self.frame_keys[int(self.part_index[i])]] = self._frames[i].copy()
             self._have[missing] = True
         return self._frames
 
@@ -186,7 +218,8 @@ def validate(grammar_or_rules: "Grammar | Rules", assembly: Assembly, *, toleran
         assembly = Assembly([normalize_mirrored(p) for p in assembly.parts], assembly.name, assembly.meta)
     rules = grammar_or_rules if isinstance(grammar_or_rules, Rules) else rules_from_grammar(
         grammar_or_rules, registries=registries)
-    if graph is None:
+    own_graph = graph is None
+    if own_graph:
         say("shape graph")
         graph = shape_graph(assembly, tolerance)
     report = Report(assembly.name, graph.number_of_nodes(), graph.number_of_edges(),
@@ -212,16 +245,25 @@ def validate(grammar_or_rules: "Grammar | Rules", assembly: Assembly, *, toleran
                 add(v)
         if docks and (rules.configs or rules.docks):
             say("docking placements")
-            for v in _dock_violations(rules, shape, np.arange(len(shape.edges))):
-                add(v)
+            # in chunks of contacts: the per-contact temporaries of 100k parts at once were the
+            # peak of a validate (issue 33)
+            for start in range(0, len(shape.edges), EDGE_CHUNK):
+                for v in _dock_violations(rules, shape, np.arange(start, min(len(shape.edges), start + EDGE_CHUNK))):
+                    add(v)
         say("required sites")
         for v in required_site_violations(rules, shape):
             add(v)
         if rules.constraints:
             say("global constraints")
+            # the constraints read the graph and the assembly only: the per-part arrays (frames,
+            # positions) go first, as the constraints build their own (peak memory on 100k parts)
+            shape.release()
             _constraint_violations(rules, shape, registries, add, dict(constraint_context or {}))
     except _Full:
         pass
+    finally:
+        if own_graph:  # nobody else holds it: freed as validate returns, not at the next full gc
+            drop_views(graph)
     return report
 
 
@@ -302,22 +344,28 @@ def _poses(rules: Rules, shape: _Shape, idx: np.ndarray | None = None) -> _Poses
     skip = np.zeros(n, dtype=bool)
     groups: list[np.ndarray] = []
     gid: dict[tuple, int] = {}
-    by_type: dict[str, list[int]] = {}
-    for i in idx.tolist():
-        by_type.setdefault(shape.types[i], []).append(i)
-        if shape.part(i).meta.get("mirrored") is True:
-            skip[i] = True
+    # the parts of each type (types in order of first appearance in idx), as index arrays: a
+    # list of Python ints per type was 4 MB at 100k parts
+    tids = shape.tid[idx]
+    present, first = np.unique(tids, return_index=True)
+    by_type = {shape.type_names[c]: idx[tids == c] for c in present[np.argsort(first)].tolist()}
+    parts, pi = shape.assembly.parts, shape.part_index
+    for start in range(0, len(idx), FRAME_CHUNK):  # a Python int per part, a chunk at a time
+        chunk = idx[start:start + FRAME_CHUNK]
+        skip[chunk] = [parts[p].meta.get("mirrored") is True for p in pi[chunk].tolist()]
     no_spec: list[int] = []
-    for t, members in by_type.items():
+    for t, m in by_type.items():
         spec = rules.parts.get(t)
         if spec is None or up is None:
-            no_spec.extend(members)
+            no_spec.extend(m.tolist())
             continue
-        m = np.array(members)
-        # d = M^-1 up: the direction of the modelling frame that points up; M = F inv(F_proto)
-        R = np.einsum("nij,kj->nik", F[m, :3, :3], spec.frame[:3, :3])  # (m, 3, 3) = R_F R_P^T
-        d = np.einsum("nji,j->ni", R, up)
-        k = np.argmax(d @ spec.ups.T, axis=1)
+        k = np.empty(len(m), dtype=np.int64)
+        for start in range(0, len(m), FRAME_CHUNK):  # bounded temporaries on 100k parts
+            c = m[start:start + FRAME_CHUNK]
+            # d = M^-1 up: the direction of the modelling frame that points up; M = F inv(F_proto)
+            R = np.einsum("nij,kj->nik", F[c, :3, :3], spec.frame[:3, :3])  # (m, 3, 3) = R_F R_P^T
+            d = np.einsum("nji,j->ni", R, up)
+            k[start:start + len(c)] = np.argmax(d @ spec.ups.T, axis=1)
         up_index[m] = k
         for j in np.unique(k).tolist():
             key = (t, j)
@@ -378,18 +426,29 @@ def orientation_violations(rules: Rules, shape: _Shape, idx) -> list[Violation]:
     for code in np.unique(shape.tid[typed]).tolist():
         t = shape.type_names[code]
         spec = rules.parts[t]
-        m = typed[shape.tid[typed] == code]
-        R = np.einsum("nij,kj->nik", F[m, :3, :3], spec.frame[:3, :3])
-        d = np.einsum("nji,j->ni", R, up)
-        best = (d @ spec.ups.T).max(axis=1)
-        for j in np.flatnonzero(best < cos_tol).tolist():
-            i = int(m[j])
-            obs = tuple(round(float(x), 3) + 0.0 for x in d[j])
-            allowed = [_direction_text(u) for u in spec.ups]
-            what = "is upside down" if best[j] < -cos_tol else "is turned over"
-            out.append(Violation("orientation", f"{what}: the direction {_direction_text(d[j])} of its "
-                                 f"part frame points up (allowed: {', '.join(allowed)}; "
-                                 f"{rules.angle_tolerance:g} degrees)", shape.nodes[i], t, obs, allowed))
+        members = typed[shape.tid[typed] == code]
+        for start in range(0, len(members), FRAME_CHUNK):  # bounded temporaries on 100k parts
+            m = members[start:start + FRAME_CHUNK]
+            R = np.einsum("nij,kj->nik", F[m, :3, :3], spec.frame[:3, :3])
+            d = np.einsum("nji,j->ni", R, up)
+            best = (d @ spec.ups.T).max(axis=1)
+            out.extend(_orientation_problems(rules, shape, spec, t, m, d, best, cos_tol))
+    return out
+
+
+def _orientation_problems(rules: Rules, shape: _Shape, spec, t: str, m: np.ndarray, d: np.ndarray,  # noqa: ANN001
+                          best: np.ndarray, cos_tol: float) -> list[Violation]:
+    """Orientation violations of the parts `m` of type `t` (d: their up directions in the
+    part frame, best: the best cosine with an allowed one)."""
+    out = []
+    for j in np.flatnonzero(best < cos_tol).tolist():
+        i = int(m[j])
+        obs = tuple(round(float(x), 3) + 0.0 for x in d[j])
+        allowed = [_direction_text(u) for u in spec.ups]
+        what = "is upside down" if best[j] < -cos_tol else "is turned over"
+        out.append(Violation("orientation", f"{what}: the direction {_direction_text(d[j])} of its "
+                             f"part frame points up (allowed: {', '.join(allowed)}; "
+                             f"{rules.angle_tolerance:g} degrees)", shape.nodes[i], t, obs, allowed))
     return out
 
 
@@ -436,18 +495,14 @@ def _site_points(rules: Rules, t: str, name: str) -> np.ndarray:
     return site.frames[:, :3, 3] @ inv[:3, :3].T + inv[:3, 3]
 
 
-def _contact_points(shape: _Shape, e: np.ndarray) -> np.ndarray:
-    """The centre of the intersection of the two parts' bounding boxes (Liu's boundary frame
-    origin): where the contact is, for site checks."""
-    a, b = shape.edges[e, 0], shape.edges[e, 1]
-    return (np.maximum(shape.lo[a], shape.lo[b]) + np.minimum(shape.hi[a], shape.hi[b])) / 2
-
-
 def _local(F: np.ndarray, points: np.ndarray) -> np.ndarray:
     """World points (m, 3) in the frames F (m, 4, 4)."""
     return np.einsum("mji,mj->mi", F[:, :3, :3], points - F[:, :3, 3])
 
 
+# one vectorised pass over all contacts (frames, site points, every dock configuration of the
+# pair's types, the best match per contact); split, its arrays would travel through many signatures
+# long: one vectorised pass over all contacts
 def _dock_violations(rules: Rules, shape: _Shape, edge_idx: np.ndarray, poses: _Poses | None = None):  # noqa: ANN202
     """Contacts (of `edge_idx`) that match none of their type pair's docking configurations.
 
@@ -464,9 +519,7 @@ def _dock_violations(rules: Rules, shape: _Shape, edge_idx: np.ndarray, poses: _
     edge_idx = np.asarray(edge_idx, dtype=np.int64)
     if len(edge_idx) == 0:
         return
-    tnames = sorted(set(types))
-    tcode = {t: k for k, t in enumerate(tnames)}
-    tid = np.array([tcode[t] for t in types], dtype=np.int64)
+    tnames, tid = shape.type_names, shape.tid  # codes of the sorted type names
     E = shape.edges[edge_idx]
     wanted = np.array([(tnames[x], tnames[y]) in configs or (tnames[y], tnames[x]) in configs
                        for x, y in zip(tid[E[:, 0]].tolist(), tid[E[:, 1]].tolist())], dtype=bool) \
@@ -527,7 +580,7 @@ def _dock_violations(rules: Rules, shape: _Shape, edge_idx: np.ndarray, poses: _
                 cos = (np.einsum("eij,mij->em", rel_R, Q_all) - 1.0) / 2.0
                 ok |= ((d2 <= (pos_tol ** 2)[:, None]) & (cos >= cos_tol)).any(axis=1)
             if one_sided:
-                c_world = _contact_points(shape, edge_idx[chunk])
+                c_world = contact_geometry(rules, shape, edge_idx[chunk])[0]
                 tol = rules.position_tolerance * np.minimum(shape.diag[u], shape.diag[v])
                 for c in one_sided:
                     side, frames, tname, grp = ((u, Fu, tu, Sk) if c.a_site else (v, Fv, tv, Sl))
@@ -594,7 +647,7 @@ def site_occupancy(rules: Rules, shape: _Shape, wanted: dict[str, list[str]], po
     E = shape.edges
     ends = np.concatenate([E[:, 0], E[:, 1]]) if len(E) else np.zeros(0, dtype=np.int64)
     others = np.concatenate([E[:, 1], E[:, 0]]) if len(E) else np.zeros(0, dtype=np.int64)
-    points = np.concatenate([_contact_points(shape, np.arange(len(E)))] * 2) if len(E) else np.zeros((0, 3))
+    points = np.concatenate([contact_geometry(rules, shape, np.arange(len(E)))[0]] * 2) if len(E) else np.zeros((0, 3))
     tol = rules.position_tolerance * np.minimum(shape.diag[ends], shape.diag[others]) if len(E) else np.zeros(0)
     order = np.argsort(ends, kind="stable")
     ends, others, points, tol = ends[order], others[order], points[order], tol[order]

@@ -41,10 +41,14 @@ def uninterrupted(tmp_path_factory, lots24):
     return out
 
 
-def test_a_batch_killed_on_a_dask_cluster_resumes_to_the_same_bytes(tmp_path, lots24, uninterrupted):
+def test_a_batch_killed_on_a_dask_cluster_resumes_to_the_same_bytes(tmp_path, lots24, uninterrupted,
+                                                                   dask_executor):
+    """Killed with the LocalCluster of its own `--executor dask`; resumed on a running cluster
+    through its address (the session's: one cluster start fewer), to the same bytes."""
     out = tmp_path / "city"
-    args = ["batch", BLOCK, "--lots", lots24, "-o", out, "--seed", "3", "--render", "sketch",
-            "--render-size", "48", "--executor", "dask", "--workers", "2"]
+    common = ["batch", BLOCK, "--lots", lots24, "-o", out, "--seed", "3", "--render", "sketch",
+              "--render-size", "48"]
+    args = [*common, "--executor", "dask", "--workers", "2"]
     proc = subprocess.Popen([*CLI, *map(str, args)], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                             text=True)
     deadline = time.time() + 300
@@ -57,7 +61,8 @@ def test_a_batch_killed_on_a_dask_cluster_resumes_to_the_same_bytes(tmp_path, lo
     consistent(out)
     # the cluster's worker processes end with their parent
     time.sleep(1)
-    again = run_cli(*args, "--json")
+    address = dask_executor.client.scheduler.address.replace("tcp://", "dask://")
+    again = run_cli(*common, "--executor", address, "--json")
     assert again.returncode == 0, again.stderr
     summary = json.loads(again.stdout)
     assert summary["executor"] == "dask" and summary["resumed"] >= 3

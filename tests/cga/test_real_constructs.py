@@ -46,14 +46,14 @@ def test_rotate_is_a_located_warning_until_the_engine_has_it(monkeypatch):
 
 @pytest.mark.parametrize("frame_rule, expected", [
     # on the lot's volume (CGA y up): about CGA's y is about grammarkit's z
-    ("Lot --> extrude(10) rotate(rel, scope, 0, 45, 0) X\n", 'rotate("rel", "scope", 0, 0, 45)'),
+    ("Lot --> extrude(10) rotate(rel, scope, 0, 45, 0) X\n", 'rotate(rel, scope, 0, 0, 45)'),
     # about CGA's z (towards the street) is about grammarkit's -y
-    ("Lot --> extrude(10) rotate(rel, scope, 0, 0, 30) X\n", 'rotate("rel", "scope", 0, -30, 0)'),
+    ("Lot --> extrude(10) rotate(rel, scope, 0, 0, 30) X\n", 'rotate(rel, scope, 0, -30, 0)'),
     # absolute angles about two axes: the first set, the second turned on by
     ("Lot --> extrude(10) rotate(abs, world, 10, 20, 0) X\n",
-     'rotate("abs", "world", 10, 0, 0) rotate("rel", "world", 0, 0, 20)'),
+     'rotate(abs, world, 10, 0, 0) rotate(rel, world, 0, 0, 20)'),
     # on a face (frame Z) the scope's axes are the same
-    ("Lot --> extrude(10) comp(f) { front: F }\nF --> rotate(rel, scope, 5, 0, 0) X\n", 'rotate("rel", "scope", 5, 0, 0)'),
+    ("Lot --> extrude(10) comp(f) { front: F }\nF --> rotate(rel, scope, 5, 0, 0) X\n", 'rotate(rel, scope, 5, 0, 0)'),
 ])
 def test_rotate_maps_cga_axes(monkeypatch, frame_rule, expected):
     names = importer._operation_names() | {"rotate"}

@@ -8,6 +8,9 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[2]
 DOC_FILES = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
 ILLUSTRATIVE = "<!-- illustrative -->"
+# marks a block that shows what the nearest runnable block above it prints (some of its lines,
+# in order): tests/docs/test_docs_run.py runs that block and compares
+OUTPUT = "<!-- output -->"
 SHELL_LANGS = {"bash", "sh", "shell", "console"}
 PYTHON_LANGS = {"python", "py"}
 # an untagged block is a shell block when every command line starts with one of these
@@ -67,3 +70,42 @@ def blocks(path: Path) -> list[Block]:
 
 def all_blocks() -> list[Block]:
     return [b for f in DOC_FILES for b in blocks(f)]
+
+
+def outputs_of(block: Block, every: list[Block]) -> list[Block]:
+    """The `<!-- output -->` blocks that show what `block` prints: those of its file whose
+    nearest shell or Python block above them is `block`."""
+    shown, current = [], None
+    for b in every:
+        if b.file != block.file:
+            continue
+        if b.kind in ("shell", "python"):
+            current = b
+        elif b.marker == OUTPUT and current is block:
+            shown.append(b)
+    return shown
+
+
+# a duration is the one part of a shown output that differs from run to run and machine to machine
+DURATION = re.compile(r"\d+(?:\.\d+)?(?= ?(?:s|ms|min)\b)")
+
+
+def missing_lines(shown: str, printed: str) -> list[str]:
+    """The lines of `shown` that `printed` does not contain in the same order (the lines between
+    them are free). Durations are compared as any number, and `...` in a shown line stands for
+    any text."""
+    def pattern(line: str) -> re.Pattern:
+        parts = [re.escape(DURATION.sub("\x00", p)).replace("\x00", r"\d+(?:\.\d+)?")
+                 for p in line.strip().split("...")]
+        return re.compile(".*".join(parts))
+
+    lines = [ln.rstrip() for ln in printed.splitlines()]
+    missing, at = [], 0
+    for want in (ln for ln in shown.splitlines() if ln.strip()):
+        rx = pattern(want)
+        hit = next((i for i in range(at, len(lines)) if rx.fullmatch(lines[i].strip())), None)
+        if hit is None:
+            missing.append(want)
+        else:
+            at = hit + 1
+    return missing

@@ -18,7 +18,7 @@ def cli(*args, cwd=None):
 def derived(tmp_path_factory):
     out = tmp_path_factory.mktemp("cli") / "variants"
     r = cli("derive", GRAMMAR, "-o", out, "-n", 6, "--iterations", 4, "--seed", 7, "--workers", 2, "--json",
-            "--option", "attempts_per_shape=64", "--option", "min_attempts=256")
+            "--option", "attempts_per_shape=64", "--option", "min_attempts=256", "--option", "counts=grammar")
     assert r.returncode == 0, r.stderr
     return out, json.loads(r.stdout)
 
@@ -52,7 +52,8 @@ def test_grammarkit_learn_reads_the_variants(derived, tmp_path):
 def test_same_seed_same_files_with_one_worker(derived, tmp_path):
     out, _ = derived
     r = cli("derive", GRAMMAR, "-o", tmp_path / "one", "-n", 6, "--iterations", 4, "--seed", 7,
-            "--workers", 1, "--option", "attempts_per_shape=64", "--option", "min_attempts=256")
+            "--workers", 1, "--option", "attempts_per_shape=64", "--option", "min_attempts=256",
+            "--option", "counts=grammar")
     assert r.returncode == 0, r.stderr
     assert (tmp_path / "one" / "manifest.jsonl").read_text() == (out / "manifest.jsonl").read_text()
     for f in sorted(out.glob("variant_*.glb")):

@@ -58,7 +58,7 @@ def test_isomorphism_dedupe_with_and_without_geometric_keys_keeps_the_same_varia
     runs = {}
     for geometric in (True, False):
         opts = SamplerOptions(attempts_per_shape=16, min_attempts=128, max_attempts=256, batch_size=16,
-                              geometric_keys=geometric)
+                              geometric_keys=geometric, counts="grammar")
         s = GraphSampler(rules=kit.rules(), examples=kit.examples(), seed=3, options=opts, workers=1)
         shapes = list(s.run(12, 3))
         runs[geometric] = (s, [(sh.protos, sh.transforms.round(9).tobytes(), sh.edges) for sh in shapes])

@@ -4,7 +4,7 @@ from pathlib import Path
 import pytest
 
 from grammarkit.dsl import load
-from grammarkit.tiling import shape_graph, validate
+from grammarkit.tiling import example_count_ranges, shape_graph, validate
 from grammarkit_graph_sampler.sampler import GraphSampler, SamplerOptions
 
 ROOT = Path(__file__).resolve().parents[2] / "grammars" / "tiling"
@@ -23,8 +23,11 @@ def test_variants_of_each_example_validate_in_full(path):
     shapes = list(sampler.run(3, 2))
     if path.parent.name == "castle":
         assert shapes, "the castle always yields variants with this seed and budget"
+    ranges = example_count_ranges(sampler.examples and [e.types for e in sampler.examples])
     for shape in shapes:
         asm = sampler.to_assembly(shape)
+        have = asm.type_histogram()  # the default counts="examples": within the examples' range
+        assert all(lo <= have.get(t, 0) <= hi for t, (lo, hi) in ranges.items()), have
         report = validate(grammar, asm)  # graph recomputed at the default tolerance, docks checked
         assert report.ok, report.format()
         assert all(p.mesh.is_watertight for p in asm.parts)

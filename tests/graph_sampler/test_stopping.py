@@ -5,7 +5,7 @@ import pytest
 from grammarkit_graph_sampler.sampler import GraphSampler, SamplerOptions
 
 # small budgets: the stopping rules do not depend on how many attempts an iteration has
-OPTS = SamplerOptions(attempts_per_shape=16, min_attempts=128, max_attempts=256, batch_size=16)
+OPTS = SamplerOptions(attempts_per_shape=16, min_attempts=128, max_attempts=256, batch_size=16, counts="grammar")
 
 
 @pytest.fixture(scope="module")

@@ -96,7 +96,7 @@ def test_huge_counts_are_refused_up_front(cli, small_grammar, tmp_path, argv):
 @pytest.mark.parametrize("value,words", [("h=100", "outside its range"), ("h=abc", "is a number"),
                                          ("h=nan", "finite"), ("h=1e999", "finite"),
                                          ("style=round", "not one of"), ("win=maybe", "boolean"),
-                                         ("nope=1", "unknown attr")])
+                                         ("nope=1", "has no attr 'nope'")])
 def test_set_errors_point_at_the_attr(cli, small_grammar, tmp_path, value, words):
     code, out = cli("derive", small_grammar, "-o", tmp_path / "m.glb", "--set", value)
     _no_traceback(code, out)

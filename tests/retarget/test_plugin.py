@@ -6,7 +6,6 @@ import subprocess
 import sys
 
 import numpy as np
-import pytest
 import trimesh
 
 from grammarkit.plugins import get_plugin_manager

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-import trimesh
 
 from grammarkit.geometry.convert import mesh_report
 from grammarkit_retarget import principal_offsets, retarget_report, testmodels

@@ -11,17 +11,6 @@ from grammarkit.registry import Registries
 from grammarkit.run import BackendSpec, Result, iter_results, run_backend
 
 ROOT = Path(__file__).resolve().parents[2]
-SMALL = """grammar small
-attr h = 6 @range(3, 12)
-Lot --> footprint(rect(8, 6)) extrude(h) Mass.
-"""
-
-
-@pytest.fixture
-def small(tmp_path):
-    p = tmp_path / "small.grammar"
-    p.write_text(SMALL)
-    return p
 
 
 def test_iter_results_yields_models_in_memory(small):
@@ -50,7 +39,10 @@ def _registries(*backends):
     from grammarkit.plugins import get_plugin_manager
 
     real = get_plugin_manager().registries()
-    return Registries(exporters=real.exporters, backends={b.name: b for b in backends})
+    # every kind as installed (the grammar is checked against these registries too), with
+    # only the given back ends
+    kinds = {k: getattr(real, k) for k in Registries.KINDS}
+    return Registries(**{**kinds, "backends": {b.name: b for b in backends}})
 
 
 def _spec(run, families=("split",)):

@@ -89,3 +89,19 @@ def test_time_limit_must_be_positive(tmp_path):
     r = CliRunner().invoke(main, ["derive", str(box(tmp_path)), "-n", "2", "-o", str(tmp_path / "a"),
                                   "--time-limit", "0"])
     assert r.exit_code == 2 and "--time-limit" in r.output
+
+
+def test_a_time_limit_shortfall_keeps_the_back_ends_own_account():
+    # a back end that says where its candidates went (stats["shortfall"], e.g. the substructure
+    # search's "n embeddings tried, k outside the examples' counts") keeps saying it when the
+    # clock stopped the run; without one the time limit alone is the reason
+    from grammarkit.ir import Grammar
+    from grammarkit.run import Request
+    from grammarkit.run.api import shortfall_reason
+
+    spent = Request(grammar=Grammar.model_construct(), soft_deadline=0.0)
+    account = {"shortfall": "12 embeddings tried, 3 outside the examples' counts"}
+    assert shortfall_reason(spent, account, 90) == (
+        "the time limit (90 s) was reached; 12 embeddings tried, 3 outside the examples' counts")
+    assert shortfall_reason(spent, {}, 90) == "the time limit (90 s) was reached"
+    assert shortfall_reason(Request(grammar=Grammar.model_construct()), account, None) == account["shortfall"]

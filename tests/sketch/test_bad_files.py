@@ -157,11 +157,26 @@ def test_train_shipped_quick_settings_and_overrides(tmp_path):
     script = _script()
     quick = script.settings_of(script.parse(["-o", str(tmp_path / "m.pt"), "--quick"]))
     assert quick == script.QUICK and quick["samples"] < script.SAMPLES
-    full = script.settings_of(script.parse(["-o", str(tmp_path / "m.pt"), "--samples", "300"]))
+    full = script.settings_of(script.parse(["-o", str(tmp_path / "m.pt"), "--samples", "300",
+                                            "--cls-epochs", "5"]))
     assert full == {"samples": 300, "classifier_epochs": script.CLASSIFIER_EPOCHS,
-                    "regressor_epochs": script.REGRESSOR_EPOCHS}
+                    "regressor_epochs": script.REGRESSOR_EPOCHS, "cls_samples": script.CLS_SAMPLES,
+                    "cls_epochs": 5}
     cmd = script.train_args(tmp_path / "m.pt", 1, 1, quick, "Roof")
     assert cmd[cmd.index("--samples") + 1] == "200" and cmd[-2:] == ["--types", "Roof"]
+    assert "--classifiers-only" not in cmd
+    # step 2: the classifiers alone, on augmented drawings, reading what CLS_INPUT says
+    cmd = script.train_args(tmp_path / "m.pt", 1, 1, quick, "Roof", classifiers=True)
+    assert cmd[cmd.index("--samples") + 1] == str(script.QUICK["cls_samples"])
+    assert cmd[cmd.index("--style") + 1] == "augmented" and "--classifiers-only" in cmd
+    assert cmd[cmd.index("--classifier-input") + 1] == script.CLS_INPUT
+
+
+def test_train_shipped_regressors_from_must_exist(tmp_path, capsys):
+    script = _script()
+    with pytest.raises(SystemExit):
+        script.parse(["-o", str(tmp_path / "m.pt"), "--regressors-from", str(tmp_path / "none.pt")])
+    assert "no such models file" in capsys.readouterr().err
 
 
 def test_train_shipped_streams_progress_lines(capsys):

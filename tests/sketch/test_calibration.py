@@ -73,9 +73,12 @@ def test_test_styles_combine_a_pen_with_a_perturbation():
     assert 3 <= abs(s.pitch_offset) <= 6
     with pytest.raises(ValueError, match="PEN\\+PERTURBATION"):
         test_style("thick+upside-down", rng)
+    from grammarkit_sketch.augment import MAX_PARTIAL, MAX_PERSPECTIVE, MAX_ROTATION
+
     for _ in range(20):
         a = training_style(rng, "augmented")
-        assert abs(a.rotation) <= 5 and abs(a.pitch_offset) <= 5 and 0 <= a.partial <= 0.25
+        assert abs(a.rotation) <= MAX_ROTATION and abs(a.pitch_offset) <= MAX_PERSPECTIVE
+        assert 0 <= a.partial <= MAX_PARTIAL
 
 
 def test_a_rotated_style_draws_a_turned_sketch(library, stages):
@@ -160,6 +163,29 @@ def test_fine_tune_starts_from_the_trained_weights_and_keeps_the_regressors(rec)
     assert tm.metrics == before  # the original is not modified
     again = fine_tune_classifier(rec.library, tm, cfg)  # same settings and seed, same weights
     assert all((again.classifier[k].float() == tuned.classifier[k].float()).all() for k in tuned.classifier)
+
+
+def test_regressor_fine_tune_keeps_a_regressor_unless_it_improves(rec):
+    from grammarkit_sketch.training import TrainConfig, fine_tune_regressors
+
+    tm = rec.models.types["Ledge"]
+    before = {k: {n: v.clone() for n, v in r.state.items()} for k, r in tm.regressors.items()}
+    cfg = TrainConfig(samples=4, regressor_epochs=2, lr=3e-4, batch=4, style="augmented", seed=7,
+                      cache=None, val_share=0.5)
+    tuned = fine_tune_regressors(rec.library, tm, cfg)
+    ft = tuned.metrics["fine_tune_regressors"]
+    assert ft["style"] == "augmented" and ft["epochs"] == 2
+    assert tuned.classifier is tm.classifier and tuned.classes == tm.classes
+    for name, reg in tuned.regressors.items():
+        same = all((reg.state[k].float() == before[name][k].float()).all() for k in reg.state)
+        assert same == (name not in ft["changed"]), name  # replaced exactly when it improved
+        if reg.params:
+            start, after = tuned.metrics[f"fine_tune_rmse.{name}"]
+            assert after <= start
+    assert all((tm.regressors[n].state[k] == before[n][k]).all() for n in before for k in before[n])
+    again = fine_tune_regressors(rec.library, tm, cfg)  # same settings and seed, same weights
+    for name, reg in tuned.regressors.items():
+        assert all((again.regressors[name].state[k].float() == reg.state[k].float()).all() for k in reg.state)
 
 
 def test_calibration_script_reads_held_out_logits_with_their_classes(rec):

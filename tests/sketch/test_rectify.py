@@ -63,7 +63,8 @@ def test_recognition_reads_a_turned_storey_as_an_upright_one(library, stages):
     paper = rec.recognize_ink(turned, "Floor", snippet="floor_ribbon", rectify=False)
     assert fixed.page_turn == pytest.approx(-4.0, abs=0.8) and paper.page_turn == 0.0
     assert fixed.to_dict()["page_turn"] == round(fixed.page_turn, 2)
-    err = lambda r: max(abs(r.normalized[k] - upright.normalized[k]) for k in upright.estimated)
+    def err(r):
+        return max(abs(r.normalized[k] - upright.normalized[k]) for k in upright.estimated)
     assert err(fixed) < err(paper)
     assert fixed.network_score > paper.network_score  # the turned-back lines match the drawing
 

@@ -3,7 +3,6 @@ taper, surface-only models, extrude/offset on volumes, rotate(), texture operati
 inserted assets. Each checked against closed forms or CGA's documented behaviour."""
 from __future__ import annotations
 
-import math
 from pathlib import Path
 
 import numpy as np

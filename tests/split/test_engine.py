@@ -1,7 +1,6 @@
 """The split engine end to end: semantics, seeds, snippets, limits, errors, tags, tree."""
 from __future__ import annotations
 
-import math
 
 import numpy as np
 import pytest
@@ -467,10 +466,11 @@ def test_geometry_queries(G):
     assert m.reports["v"]["sum"] == pytest.approx(4 * 4 * 2 / 3, rel=0.02)
 
 
-def test_geometry_in_attr_values_reads_zero(G):
-    # attrs and consts are evaluated without a shape (as scope.sx is 0 there)
+def test_geometry_in_attr_values_reads_the_lot(G):
+    # as CGA, attrs and consts that read the shape are evaluated on the initial shape (the lot,
+    # 10 x 10 by default), once, before the start rule's first operation
     m = derive(G("const a = geometry.area\nLot --> footprint(rect(4, 4)) extrude(1 + a) X."))
-    assert m.mesh.bounds[1][2] == pytest.approx(1, abs=0.01)
+    assert m.mesh.bounds[1][2] == pytest.approx(101, abs=0.01)
 
 
 def test_reverse_normals_turns_a_face_around(G):

@@ -1,19 +1,19 @@
 """`i()` of open meshes (surface parts), built-in primitives, and CGA's trim planes."""
 from __future__ import annotations
 
+from functools import partial
+
 import numpy as np
 import pytest
 import trimesh
 
 from grammarkit.geometry.convert import mesh_report
-from functools import partial
-
 from grammarkit.split import derive as _derive
+from grammarkit.split.assets import BUILTINS
 
 # These tests pin CGA's open-face semantics (`surfaces="cga"`); the default, one watertight
 # solid, is tested in test_cga_solid.py.
 derive = partial(_derive, surfaces="cga")
-from grammarkit.split.assets import BUILTINS
 
 
 @pytest.fixture

@@ -105,6 +105,31 @@ def test_sampling_modes_and_latent_path(tiny_vae):
     assert s.decoded_points > 0
 
 
+def test_perturbation_grows_its_offset_past_known_graphs(tiny_vae):
+    from grammarkit_string_vae.graphs import GraphSet
+    from grammarkit_string_vae.sampling import Sampler, SamplingSettings
+
+    settings = SamplingSettings(batch=6, steps=3)
+    plain = Sampler(tiny_vae, settings, seed=5)
+    first = [x for x in plain.run("perturb", 1)]
+    assert first
+    known = GraphSet()
+    for x in first:
+        known.add(x.decoded.graph)
+    # the same seeds again, now moving past every graph the first run found
+    past = Sampler(tiny_vae, settings, seed=5)
+    past.known = lambda g: g in known
+    again = list(past.run("perturb", 1))
+    assert all(x.decoded.graph not in known for x in again)
+    assert past.lost.get("novelty", 0) >= len(first)  # every point that hit a known graph is counted
+    assert past.decoded_points > plain.decoded_points  # and the search went on past it
+    # everything known: no sample, every valid decode counted as lost to novelty
+    none = Sampler(tiny_vae, settings, seed=5)
+    none.known = lambda g: True
+    assert list(none.run("perturb", 1)) == []
+    assert none.lost["novelty"] == none.valid_points
+
+
 def _set(g):
     from grammarkit_string_vae.graphs import GraphSet
 

@@ -116,8 +116,8 @@ def test_no_model_option_uses_the_shipped_models_or_says_what_ships():
     from grammarkit_string_vae.options import StringVAEOptions
 
     opts = shipped_defaults(StringVAEOptions(), "castle")
-    assert (opts.model, opts.categories, opts.decoding, opts.max_length) == \
-        ("builtin:castle", "builtin:castle", "placed", 40)
+    assert (opts.model, opts.categories, opts.decoding, opts.min_length, opts.max_length, opts.max_open_rings) == \
+        ("builtin:castle", "builtin:castle", "placed", 41, 56, 2)
     given = shipped_defaults(StringVAEOptions(model="m.vae"), "castle")
     assert (given.categories, given.decoding, given.max_length) == (None, "masked", None)
     with pytest.raises(GrammarkitError, match="no model ships for grammar 'balltrack'.*shipped: castle"):

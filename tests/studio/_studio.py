@@ -57,8 +57,11 @@ def studio(paris_copy):
         yield s
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def browser():
+    """One headless Chromium for all the studio tests of this test process (each test opens
+    its own context: no cookies, storage or pages are shared); a launch per module cost
+    seconds each (issue 32)."""
     try:
         from playwright.sync_api import sync_playwright
     except ImportError:

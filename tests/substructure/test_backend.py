@@ -215,10 +215,15 @@ def test_derive_from_examples_without_substructure_is_a_clear_error(tmp_path):
 def test_results_do_not_depend_on_the_number_of_workers(tmp_path):
     from grammarkit.run.executor import LocalExecutor
 
+    # tries=16: the same 16 candidates (a batch, split over both workers) and 3 variants as
+    # with the default 64, for a fifth of the embeddings
     g = load(ROOT / "grammars" / "tiling" / "balltrack" / "balltrack.grammar")
-    one = run_backend(g, out=tmp_path / "one", backend="substructure", n=3, seed=3, workers=1)
+    opts = {"tries": 16}
+    one = run_backend(g, out=tmp_path / "one", backend="substructure", n=3, seed=3, workers=1, options=opts)
     with LocalExecutor(2, parallel="always") as ex:
-        two = run_backend(g, out=tmp_path / "two", backend="substructure", n=3, seed=3, executor=ex)
+        two = run_backend(g, out=tmp_path / "two", backend="substructure", n=3, seed=3, executor=ex, options=opts)
+    assert one.stats["candidates"] == two.stats["candidates"] > 3
+    assert one.stats["embeddings_tried"] == two.stats["embeddings_tried"]
     files = sorted((tmp_path / "one").glob("variant_*.glb"))
     assert len(files) == 3
     for f in files:
@@ -233,3 +238,15 @@ def test_dummy_edges_option_on_an_example():
     assert len(ops1) >= len(ops0) // 2
     with pytest.raises(ValueError):
         substructure.enumerate(track, q=5)
+
+
+def test_a_short_run_says_where_its_shapes_went(tmp_path):
+    # coast tilings within the examples' counts are the examples themselves or their turns:
+    # the run writes nothing, and its shortfall says why (valid shapes outside the counts)
+    g = load(ROOT / "grammars" / "tiling" / "wfc" / "coast.grammar")
+    summary = run_backend(g, out=tmp_path / "v", backend="substructure", n=2, seed=0, workers=1,
+                          options={"max_candidates": 4, "operations": 2, "tries": 8})
+    assert summary.total == 0
+    text = summary.shortfall
+    assert "max_candidates (4) reached after 4 candidates" in text, text
+    assert "embeddings tried" in text and "outside the examples'" in text and "counts=grammar" in text, text

@@ -11,7 +11,7 @@ import pytest
 import trimesh
 
 from grammarkit.tiling import (
-    Assembly, ForbiddenContact, Part, PartCache, Rules, bounds_of, contacts, contacts_involving,
+    ForbiddenContact, Part, PartCache, Rules, bounds_of, contacts, contacts_involving,
     edit_violations, full_check, moved_mesh, part_key, prepare,
 )
 

@@ -75,7 +75,7 @@ def test_learn_print_parse_round_trip(tmp_path):
 
 def test_learned_multisets_and_pairs_are_what_the_examples_show():
     a = MK.castle("c", 3, 2, {(0, 0, 1)})
-    g = learn([a], name="c", neighbors="multisets")
+    g = learn([a], name="c", neighbors="multisets", sockets=False)
     rules = rules_from_grammar(g)
     assert rules.neighbor_multisets["Gate"] == {("Tower", "Wall")}
     graph = shape_graph(a)
@@ -85,6 +85,10 @@ def test_learned_multisets_and_pairs_are_what_the_examples_show():
     assert rules.pairs == {("Gate", "Tower"), ("Gate", "Wall"), ("Tower", "Wall"), ("Wall", "Wall")}
     # one docking configuration per pair: symmetric towers and walls collapse to one cluster
     assert [len(d.placements) for d in g.docks] == [1, 1, 1, 1]
+    # by default the sites' sockets generalise: a gate's end fits where a wall's end does
+    # (walls meet walls), so two gates may meet end to end, though no example shows it
+    g2 = learn([a], name="c", neighbors="multisets")
+    assert rules_from_grammar(g2).pairs == rules.pairs | {("Gate", "Gate")}
 
 
 def test_moved_tower_is_reported_with_its_id(castle_grammar):

@@ -38,6 +38,9 @@ from .model import (
 )
 
 
+# operations that make a volume of a horizontal face, scoped y up in CGA (as a lot's volume)
+_VOLUME_OPS = frozenset({"extrude", "roofGable", "roofHip", "roofPyramid", "roofShed"})
+
 class BodyMixin:
     """Translates rule bodies."""
 
@@ -82,12 +85,24 @@ class BodyMixin:
                     return out
                 i += 1
                 continue
+            if (node.data == "name" and node.children[0].value == "innerRect"
+                    and "innerRect" not in self.rule_arities):
+                # CGA's old `innerRect` (no parentheses): the shape becomes its largest inner
+                # rectangle and the rest of the body goes on with it, which is
+                # innerRectangle(scope) { shape: rest } (the remainder is dropped, as there)
+                rest = self._body(nodes[i + 1:], frame, rctx) or [Terminal(name=rctx.gk, span=self._span(node))]
+                self._record("op", "innerRect", "translated", self._span(node), counting=rctx.counting)
+                out.append(OpCall(name="innerRectangle", args=(Arg(value=Ref(name="scope")),),
+                                  block=(Branch(key=Ref(name="shape"), body=Seq(items=tuple(rest)),
+                                                span=self._span(node)),), span=self._span(node)))
+                return out
             items = self._item(node, frame, rctx, out)
             if self.frame_change is not None:  # alignScopeToGeometry(yUp | zUp, ...)
                 frame, self.frame_change = self.frame_change, None
-            if rctx.horizontal and frame == "Z" and any(isinstance(it, OpCall) and it.name == "extrude"
+            if rctx.horizontal and frame == "Z" and any(isinstance(it, OpCall) and it.name in _VOLUME_OPS
                                                         for it in items):
-                # CGA scopes a volume extruded from a horizontal face as a lot's: y up (frame Y)
+                # CGA scopes a volume extruded from a horizontal face as a lot's: y up (frame Y);
+                # so is a roof built on one (Esri's rules scale roofs with s('1, h, '1))
                 frame, rctx = "Y", dataclasses.replace(rctx, horizontal=False)
             is_last = i == len(nodes) - 1
             for it in items:
@@ -112,7 +127,7 @@ class BodyMixin:
                 if key[0] != name or not isinstance(r.body, Tree):
                     continue
                 toks = [t.value for t in r.body.scan_values(lambda v: isinstance(v, Token))]
-                if "extrude" in toks or any(t in names and t != name and self._may_extrude(t) for t in toks):
+                if _VOLUME_OPS.intersection(toks) or any(t in names and t != name and self._may_extrude(t) for t in toks):
                     found = True
             memo[name] = found
         return memo[name]

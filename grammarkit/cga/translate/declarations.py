@@ -50,6 +50,12 @@ class DeclarationsMixin:
             if decl.data == "import_stmt":
                 self._collect_import(decl, annotations)
                 continue
+            if decl.data == "import_unquoted":
+                # `import lib.cga`: CGA's import names its file in quotes; said where, not guessed
+                self.diagnostics.append(Diagnostic(
+                    "error", f"import {decl.children[0].value}: the file name must be in quotes "
+                    f"(import alias : \"file.cga\")", self._span(decl), code="cga-syntax"))
+                continue
             kind = decl.data
             head_tok = decl.children[1] if kind in ("attr_decl", "const_decl") else decl.children[0]
             m = HEAD.match(head_tok.value)

@@ -72,6 +72,55 @@ class EntriesMixin:
                 "attr does not move it") if "attr" in kinds else None
         return Tree("number", [Token("NUMBER", str(int(value)))]), note
 
+    def _comp_mapping(self, sel: Any, key_tree: Any, frame: str, mode: str,
+                      approx_sel: str | None) -> tuple[Any, str | None, str]:
+        """CGA comp selector `sel` (in `mode`, on a shape in `frame`) -> (grammarkit
+        selectors or None when there is none, the approximation note, the frame of the
+        selected parts' bodies)."""
+        if mode == "offset-parts":
+            mapped = (sel,) if sel in ("inside", "border") else None
+            body_frame = frame
+        elif mode == "shape-parts":
+            mapped = (sel,) if sel in ("shape", "remainder") else None
+            body_frame = frame
+        elif mode == "components":
+            # edges and vertices: their scope is x along, y the normal, as CGA's faces (frame Z)
+            body_frame = "Z"
+            if sel is not None and key_tree.data == "number":
+                mapped = (int(float(sel)),) if float(sel).is_integer() and float(sel) >= 0 else None
+            elif sel in ("all", "border", "inside", "eave", "ridge", "hip", "valley"):
+                mapped = (sel,)
+            elif frame == "Y" and sel in ("front", "back", "left", "right", "top", "bottom", "side",
+                                          "vertical", "horizontal", "aslant", "nutant"):
+                mapped = (sel,)  # classified about the up axis: CGA's y is grammarkit's z here
+            else:
+                mapped = None
+        elif mode == "edges":
+            if sel is not None and key_tree.data == "number":
+                mapped = (int(float(sel)),) if float(sel).is_integer() else None
+            else:
+                mapped, approx_sel = frames.edge_selectors(frame, sel) if sel else (None, None)
+            body_frame = frame  # setback faces and the remainder lie in the face's plane
+        elif sel is not None and key_tree.data == "number":
+            # an index: CGA's and grammarkit's face orders agree (bottom 0, top 1, sides)
+            mapped = (int(float(sel)),) if float(sel).is_integer() and float(sel) >= 0 else None
+            # faces 0 and 1 of a lot-like volume are its bottom and top: horizontal
+            body_frame = "H" if frame == "Y" and mode == "faces" and mapped in ((0,), (1,)) else "Z"
+        else:
+            mapped = frames.comp_selectors(frame, sel) if sel else None
+            prefix, _, rest = (sel or "").rpartition(".")
+            if mapped is None and frame == "Y" and prefix in ("object", "street"):
+                # CGA's street.* fall back to object.* without street attributes, and a lot's
+                # object frame is its scope's (as setback's selectors, frames.edge_selectors)
+                mapped = frames.comp_selectors(frame, rest)
+                if mapped is not None:
+                    approx_sel = (f"{sel} is taken as the scope's {rest} (grammarkit lots have no "
+                                  f"{prefix} frame)")
+                    sel = rest
+            # a lot-like volume's top and bottom are horizontal faces (RuleCtx.horizontal)
+            body_frame = "H" if frame == "Y" and sel in ("top", "bottom", "horizontal") else "Z"
+        return mapped, approx_sel, body_frame
+
     def comp_entries(self, block: Tree, frame: str, rctx: RuleCtx, mode: str) -> list:
         out: list = []
         for entry in block.children:
@@ -92,39 +141,7 @@ class EntriesMixin:
                 computed = approx_sel is not None
                 sel = key_tree.children[0].value if key_tree is not None else None
                 key_tree = key_tree if key_tree is not None else entry.children[0].children[0]
-            if mode == "offset-parts":
-                mapped = (sel,) if sel in ("inside", "border") else None
-                body_frame = frame
-            elif mode == "shape-parts":
-                mapped = (sel,) if sel in ("shape", "remainder") else None
-                body_frame = frame
-            elif mode == "components":
-                # edges and vertices: their scope is x along, y the normal, as CGA's faces (frame Z)
-                body_frame = "Z"
-                if sel is not None and key_tree.data == "number":
-                    mapped = (int(float(sel)),) if float(sel).is_integer() and float(sel) >= 0 else None
-                elif sel in ("all", "border", "inside", "eave", "ridge", "hip", "valley"):
-                    mapped = (sel,)
-                elif frame == "Y" and sel in ("front", "back", "left", "right", "top", "bottom", "side",
-                                              "vertical", "horizontal", "aslant", "nutant"):
-                    mapped = (sel,)  # classified about the up axis: CGA's y is grammarkit's z here
-                else:
-                    mapped = None
-            elif mode == "edges":
-                if sel is not None and key_tree.data == "number":
-                    mapped = (int(float(sel)),) if float(sel).is_integer() else None
-                else:
-                    mapped, approx_sel = frames.edge_selectors(frame, sel) if sel else (None, None)
-                body_frame = frame  # setback faces and the remainder lie in the face's plane
-            elif sel is not None and key_tree.data == "number":
-                # an index: CGA's and grammarkit's face orders agree (bottom 0, top 1, sides)
-                mapped = (int(float(sel)),) if float(sel).is_integer() and float(sel) >= 0 else None
-                # faces 0 and 1 of a lot-like volume are its bottom and top: horizontal
-                body_frame = "H" if frame == "Y" and mode == "faces" and mapped in ((0,), (1,)) else "Z"
-            else:
-                mapped = frames.comp_selectors(frame, sel) if sel else None
-                # a lot-like volume's top and bottom are horizontal faces (RuleCtx.horizontal)
-                body_frame = "H" if frame == "Y" and sel in ("top", "bottom", "horizontal") else "Z"
+            mapped, approx_sel, body_frame = self._comp_mapping(sel, key_tree, frame, mode, approx_sel)
             body = self._body(entry.children[-1].children, body_frame, rctx) or [
                 Terminal(name=rctx.gk, span=span)]
             if mapped is None:
@@ -137,7 +154,8 @@ class EntriesMixin:
                              message=f"'{sel} =' (the selected faces as one shape) sends each face "
                              "on its own", counting=rctx.counting)
             elif approx_sel is not None:
-                self._record("selector", sel, "approximated", span, feature="comp-selector:computed" if computed else f"setback-selector:{sel}",
+                self._record("selector", sel, "approximated", span, feature="comp-selector:computed" if computed
+                             else f"{'setback' if mode == 'edges' else 'comp'}-selector:{sel}",
                              message=approx_sel, counting=rctx.counting)
             else:
                 self._record("selector", sel, "translated", span, counting=rctx.counting)

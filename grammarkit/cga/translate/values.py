@@ -50,6 +50,8 @@ class ValuesMixin:
                 value = Num(value=0) if not looks_like_string(v.value) else Str(value="")
                 message = (f"{v.kind} {v.name}: {exc.message}; defined as "
                            f"{'0' if isinstance(value, Num) else chr(34) * 2} instead")
+        # a value that reads the shape (geometry.area, scope.sx) is exact: CGA evaluates attrs
+        # and consts on the initial shape, and so does the engine (grammarkit/split/attrs.py)
         self._record(v.kind, v.name, status, v.span, feature=feature, message=message,
                      counting=not v.imported)
         if v.kind == "const":

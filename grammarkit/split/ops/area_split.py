@@ -21,7 +21,7 @@ from typing import Any
 
 from ...registry import Param
 from ..shape import FACE, Shape
-from .helpers import axis_index, fp, manifold3d, operation
+from .helpers import axis_index, fp, manifold3d, not_a_face, operation
 from .layout import layout, split_geometry
 
 __all__ = ["op_split_area", "AreaProfile"]
@@ -95,7 +95,7 @@ def op_split_area(ctx: Any, s: Shape, args: Any, block: Any) -> list:
     if mode not in ("adjust", "noAdjust"):
         raise ValueError(f"splitArea adjust mode must be adjust or noAdjust, got {mode!r}")
     if s.kind != FACE:
-        raise ValueError("splitArea() needs a face (a lot, or a face from comp(f)), got a volume")
+        raise ValueError(not_a_face(s, "splitArea"))
     if a == 2:
         raise ValueError("splitArea(z) on a face: faces are flat, split them along x or y")
     length = s.sz[a]

@@ -75,9 +75,22 @@ def number(value: Any, what: str) -> float:
     return v
 
 
+def not_a_face(s: Shape, op: str, example: str = "a lot, or a face from comp(f)") -> str:
+    """The message of a face operation given something else: a volume, or an open surface (a
+    face a scope turn took out of its scope's xy plane, or an inserted open mesh)."""
+    from ...geometry.surfaces import SurfaceMesh  # on the error path only: loading specs stays light
+
+    if isinstance(s.solid, SurfaceMesh):
+        return (f"{op}() needs a face ({example}), got an open surface: a face turned out of its "
+                "scope's xy plane (rotateScope/r about an axis in its plane by other than a half "
+                "turn; grammarkit's faces lie in that plane: turn it back, or align the scope "
+                "with alignScopeToAxes/alignScopeToGeometry first) or an inserted open mesh")
+    return f"{op}() needs a face ({example}), got a volume"
+
+
 def face_only(s: Shape, op: str) -> None:
     if s.kind != FACE:
-        raise ValueError(f"{op}() needs a face (e.g. from footprint() or comp(f)), got a volume")
+        raise ValueError(not_a_face(s, op, "e.g. from footprint() or comp(f)"))
 
 
 def rect_or_poly(poly: Any, sx: float, sy: float) -> Any:

@@ -44,6 +44,23 @@ def _trimmed(solid: Any, s: Shape) -> Any:
     return solid
 
 
+_FOUND: dict[tuple[str, str], Path] = {}
+
+
+def _mesh_path(rel: str, base: str) -> tuple[Path, bool]:
+    """The file an i() path names and whether it exists; a file found is remembered (a facade
+    inserts the same window hundreds of times), a missing one is looked for again next time."""
+    hit = _FOUND.get((rel, base))
+    if hit is not None:
+        return hit, True
+    path = Path(rel) if Path(rel).is_absolute() else (Path(base) / rel).resolve()
+    if not path.is_file():
+        return path, False
+    if len(_FOUND) < 4096:
+        _FOUND[(rel, base)] = path
+    return path, True
+
+
 @operation("i", (Param("path", "string"),
                  Param("fit", "name", required=False, default="scale", names="fits",
                        doc="how the asset is fitted to the scope (a fit from the registry)")),
@@ -57,9 +74,9 @@ def op_insert(ctx: Any, s: Shape, args: Any, block: Any) -> Shape | None:
         asset = builtin_asset(rel)
         path = Path(rel)
     else:
-        path = Path(rel) if Path(rel).is_absolute() else (Path(ctx.base_dir or ".") / rel).resolve()
         confine.check(rel, base=ctx.base_dir or ".", what="mesh file")  # before is_file: tells no existence
-        if not path.is_file():
+        path, found = _mesh_path(rel, ctx.base_dir or ".")
+        if not found:
             raise ValueError(f"i(): mesh file not found: {path}")
         asset = load_asset(str(path)) if fit == "scale" else None
     if fit == "scale":  # the built-in fit, on the manifold directly (no mesh round trip)

@@ -27,7 +27,8 @@ from typing import TYPE_CHECKING, Any, Callable
 
 from ...registry import Param
 from ..shape import FACE, Shape
-from .helpers import fp, manifold3d, operation, piece
+from ..turned import naming_axes
+from .helpers import fp, manifold3d, not_a_face, operation, piece
 
 if TYPE_CHECKING:  # pragma: no cover
     from manifold3d import CrossSection
@@ -63,12 +64,22 @@ def edge_names(s: Shape, p: tuple, q: tuple) -> set[str]:
     """The selector names of edge p -> q of face `s`."""
     nx, ny = _outward(p, q)
     names = {"all"}
+    ax, ay = s.ax[0], s.ax[1]
+    w = [nx * ax[k] + ny * ay[k] for k in range(3)]  # the outward normal in the world
+    turned = naming_axes()  # a face turned out of its scope's xy plane (grammarkit/split/turned.py)
+    if turned is not None:  # classified in the turned scope's quadrants, as CGA's selectors
+        nx, ny, nz = (sum(w[k] * a[k] for k in range(3)) for a in turned)
+        if abs(nz) > abs(nx) and abs(nz) > abs(ny):
+            return names | {"top" if nz > 0 else "bottom"} | _world_names(w)
     if abs(ny) >= abs(nx):
         names |= {"front", "bottom"} if ny < 0 else {"back", "top"}
     else:
         names |= {"side", "right" if nx > 0 else "left"}
-    ax, ay = s.ax[0], s.ax[1]
-    w = [nx * ax[k] + ny * ay[k] for k in range(3)]  # the outward normal in the world
+    return names | _world_names(w)
+
+
+def _world_names(w: list) -> set[str]:
+    names = set()
     if abs(w[1]) >= abs(w[0]) and abs(w[1]) >= abs(w[2]):
         names.add("north" if w[1] > 0 else "south")
     elif abs(w[0]) >= abs(w[2]):
@@ -192,7 +203,7 @@ def _distance(v: Any, what: str) -> float:
 
 def _face_only(s: Shape, op: str) -> None:
     if s.kind != FACE:
-        raise ValueError(f"{op}() needs a face (a lot, or a face from comp(f)), got a volume")
+        raise ValueError(not_a_face(s, op))
 
 
 def _setback(s: Shape, block: Any, dist_of: Callable[[int, tuple, tuple], float], op: str) -> list:

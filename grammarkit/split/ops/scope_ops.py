@@ -15,7 +15,11 @@ them. grammarkit's geometry kinds constrain how the result is carried:
 - a face keeps its outline in the scope's xy plane with z its normal. A turn that takes the
   face out of that plane (or turns its normal to -z) makes it an open surface mesh in the new
   scope (as an inserted open asset: it can be moved, split, comp'd back into faces, textured
-  and emitted in the surface layer, but not extruded or offset).
+  and emitted in the surface layer). One still lying in a plane of the new scope (turned
+  over by a half turn about an axis in its plane, or into the xz/yz plane by a quarter turn)
+  is still a face for the operations that work in its plane (setbacks, shapeL/U/O,
+  innerRectangle, offset, splitArea: grammarkit/split/turned.py), and `extrude` follows its
+  geometry's normal, as CGA's does.
 
 grammarkit's scopes are right-handed (z = x cross y, which faces and comp rely on), so
 `mirrorScope` flips an even number of axes (a half turn); flipping one or three is an error.

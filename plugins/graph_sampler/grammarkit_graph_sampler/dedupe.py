@@ -2,8 +2,9 @@
 
 `histogram` (default, as Kalojanov et al. 2019): a variant is new when its multiset of part
 types has not been seen. It is conservative: different graphs with the same type counts are
-dropped. `isomorphism`: new when no kept shape's typed graph is isomorphic to it; the
-Weisfeiler-Lehman hash buckets candidates and networkx's VF2 decides within a bucket.
+dropped. `isomorphism`: new when no kept shape's typed graph is isomorphic to it; the stable
+colours of colour refinement (Weisfeiler-Lehman run to the end) bucket candidates and
+networkx's VF2, nodes matched within their colour, decides within a bucket.
 
 Before either: a *geometric key* (`geometric_key`), a hash of the shape's parts as (source
 geometry, placement) rows, translation removed, rounded and sorted. Equal keys mean the same
@@ -103,6 +104,38 @@ def typed_graph(types: Sequence[str], edges) -> nx.Graph:
     return g
 
 
+def _digest(data: bytes) -> int:
+    return int.from_bytes(hashlib.blake2b(data, digest_size=8).digest(), "little", signed=True)
+
+
+def stable_colours(types: Sequence[str], edges) -> tuple[list[int], int]:
+    """Colour refinement (1-dimensional Weisfeiler-Lehman) of the typed graph run until the
+    colour classes stop splitting: per node a colour (a hash of its type and, round after round,
+    of its neighbours' colours; the same in every graph and process, so isomorphic graphs get
+    equal colours on matching nodes) and a hash of the multiset of final colours.
+
+    An isomorphism maps nodes to nodes of the same colour, so the colours both bucket the
+    graphs (a stricter key than networkx's three-round WL hash: castles whose gates sit
+    elsewhere on the ring are told apart) and prune VF2 (`node_match` on the colour)."""
+    n = len(types)
+    names: dict[str, int] = {}
+    colour = [names.setdefault(str(t), _digest(str(t).encode())) for t in types]
+    nbrs: list[list[int]] = [[] for _ in range(n)]
+    for u, v in edges:
+        nbrs[u].append(v)
+        nbrs[v].append(u)
+    classes = len(set(colour))
+    while True:
+        new = [_digest(np.array([colour[i], *sorted(colour[j] for j in nbrs[i])], dtype=np.int64).tobytes())
+               for i in range(n)]
+        count = len(set(new))
+        colour = new
+        if count <= classes:
+            break
+        classes = count
+    return colour, _digest(np.sort(np.array(colour, dtype=np.int64)).tobytes())
+
+
 class Deduper:
     """Remembers the shapes kept so far; `add` returns True for a new one."""
 
@@ -114,6 +147,9 @@ class Deduper:
         self.geometric: set = set()  # geometric keys of every shape seen (kept or duplicate)
         self._buckets: dict[tuple, list[nx.Graph]] = {}
         self.graph_tests = 0  # isomorphism tests run (VF2), for the statistics
+        # typed graph and WL key of the shapes tested lately: `is_new` then `add` of the same
+        # candidate (the sampler's merge, then its keep) built and hashed it twice
+        self._recent: dict[tuple, tuple] = {}
 
     def known(self) -> set:
         """What an attempt can test before it measures contacts: the known histograms
@@ -123,8 +159,21 @@ class Deduper:
     def key(self, types: Sequence[str], edges) -> tuple:
         if self.mode == "histogram":
             return histogram_key(types)
-        g = typed_graph(types, edges)
-        return (histogram_key(types), nx.weisfeiler_lehman_graph_hash(g, node_attr="type"))
+        return self._graph_and_key(types, edges)[1]
+
+    def _graph_and_key(self, types: Sequence[str], edges) -> tuple:
+        """The typed graph (its nodes carry their stable colour as `colour`) and its bucket key
+        (histogram, hash of the stable colours)."""
+        memo = (tuple(types), tuple(map(tuple, edges)))
+        found = self._recent.get(memo)
+        if found is None:
+            if len(self._recent) >= 512:
+                self._recent.clear()
+            g = typed_graph(types, edges)
+            colour, digest = stable_colours(types, edges)
+            nx.set_node_attributes(g, dict(enumerate(colour)), "colour")
+            found = self._recent[memo] = (g, (histogram_key(types), digest))
+        return found
 
     def is_new(self, types: Sequence[str], edges, geo: bytes | None = None) -> bool:
         return self._check(types, edges, geo, add=False)
@@ -150,9 +199,9 @@ class Deduper:
             return True
         if geo is not None and geo in self.geometric:
             return False  # the same parts at the same places as a shape seen before
-        g = typed_graph(types, edges)
-        key = (histogram_key(types), nx.weisfeiler_lehman_graph_hash(g, node_attr="type"))
-        match = nx.algorithms.isomorphism.categorical_node_match("type", None)
+        g, key = self._graph_and_key(types, edges)
+        # equal stable colours imply equal types; matching them prunes VF2 to colour classes
+        match = nx.algorithms.isomorphism.categorical_node_match("colour", None)
         bucket = self._buckets.get(key, [])
         self.graph_tests += len(bucket)
         new = not any(nx.is_isomorphic(g, other, node_match=match) for other in bucket)

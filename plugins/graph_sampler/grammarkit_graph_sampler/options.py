@@ -34,6 +34,10 @@ class SamplerOptions(BaseModel):
     dedupe: Literal["histogram", "isomorphism"] = Field("isomorphism", description="what counts "
                                                         "as new: typed graph (up to isomorphism) or type "
                                                         "histogram (fewer: the castle runs dry at 32)")
+    counts: Literal["examples", "grammar"] = Field("examples", description="part counts a variant "
+                                                  "may have: each type's fewest..most over the examples "
+                                                  "(two or more examples; issue 28) or whatever the "
+                                                  "grammar's own count constraints allow")
     max_parts: Optional[int] = Field(None, ge=1, description="largest variant (default: 4 x the "
                                      "largest example)")
     max_match_steps: int = Field(2000, ge=1, description="assignments tried per boundary search")

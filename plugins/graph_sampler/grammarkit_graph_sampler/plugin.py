@@ -20,11 +20,20 @@ from grammarkit.run import BackendSpec, Request, Result
 from .options import SamplerOptions
 
 
+# runs asking for at least this many variants start the executor's workers at once (about
+# 10 s of work at the castle's rate, far more than a worker's start-up)
+WARM_N = 100
+
+
 def run(request: Request) -> Iterator[Result]:
     """Yield new variants; return the run's statistics (growth table, attempts, outcomes)."""
     from .sampler import GraphSampler
 
     t0 = time.perf_counter()
+    warm = getattr(request.executor, "warm", None)
+    if warm is not None and request.n >= WARM_N:
+        # a long run: the workers start while the examples are read and checked here
+        warm()
     sampler = GraphSampler(request.grammar, seed=request.seed, executor=request.executor,
                            options=request.options)
     cap = max(request.iterations, sampler.options.max_iterations)
@@ -68,23 +77,37 @@ def summary(sampler, elapsed: float, request: Request, cap: int | None = None) -
         "iterations": [s.row() for s in sampler.stats],
     }
     stopped = sampler.stopped if made < request.n else "n"
+    # `stopped_by` is the machine-readable cause ("n", "time", "iterations", "exhausted"),
+    # `stopped` the same in words
+    out["stopped_by"] = stopped
     out["stopped"] = {"n": f"made the {request.n} asked for", "time": "the time limit was reached",
                       "iterations": f"the iteration cap ({cap or request.iterations}) was reached",
                       "exhausted": "an iteration found no new variant"}.get(stopped, stopped)
     out["dropped_by_final_check"] = dropped
-    if made < request.n:
+    if made < request.n and stopped != "time":
+        # the time case has no sentence of the back end's own: the run layer, which owns the
+        # budget, says it (with the limit in seconds); nothing else explains the shortfall
         last = sampler.stats[-1] if sampler.stats else None
-        if stopped == "time":
-            why = f"made {made} of {request.n}: the time limit was reached"
-        elif stopped == "exhausted" and last is not None:
-            why = (f"made {made} of {request.n}: iteration {last.iteration} found no new variant in "
+        if stopped == "exhausted" and last is not None:
+            why = (f"iteration {last.iteration} found no new variant in "
                    f"{last.attempts} attempts ({', '.join(f'{k} {v}' for k, v in last.outcomes.items() if v)}); "
-                   "other options (--option max-subgraph-fraction=..., tolerance=...) may find more")
+                   "other options (--option max-subgraph-fraction=..., tolerance=...) may find more"
+                   + count_note(sampler))
         else:
-            why = (f"made {made} of {request.n}: the iteration cap ({cap or request.iterations}) was reached; "
+            why = (f"the iteration cap ({cap or request.iterations}) was reached; "
                    "a larger --iterations or --option max-iterations=... may find more")
         out["shortfall"] = why
     return out
+
+
+def count_note(sampler) -> str:
+    """Why the count range (option counts="examples") may be what ran the pool dry."""
+    dropped = sum(s.outcomes["counts"] for s in sampler.stats)
+    if not dropped or not sampler.count_range:
+        return ""
+    ranges = ", ".join(f"{t} {lo}..{hi}" for t, (lo, hi) in sampler.count_range.items())
+    return (f"; {dropped} attempts had part counts outside the examples' range ({ranges}), which "
+            "admits few variants: --option counts=grammar keeps any count the grammar allows")
 
 
 BACKEND = BackendSpec(

@@ -38,7 +38,7 @@ from grammarkit.tiling import (
     match_boundary, random_connected_subgraph,
 )
 
-OUTCOMES = ("no-cut", "no-match", "too-large", "known", "docking", "invalid", "final-check", "valid")
+OUTCOMES = ("no-cut", "no-match", "too-large", "counts", "known", "docking", "invalid", "final-check", "valid")
 
 
 @dataclass
@@ -135,6 +135,7 @@ class _Context:
     rules: Any
     contact_tolerance: float
     max_parts: int
+    count_range: dict | None = None  # {type: (lo, hi)} a variant's counts must lie in (None: any)
     mesh_cache: dict = field(default_factory=dict)
     bounds_cache: dict = field(default_factory=dict)
     part_cache: geometry.PartCache = field(default_factory=geometry.PartCache)
@@ -190,10 +191,28 @@ def kept_lost_neighbour(recip: Shape, kept: Sequence[int]) -> list[int]:
     return sorted(set(a[(a >= 0) & (b < 0)].tolist()) | set(b[(b >= 0) & (a < 0)].tolist()))
 
 
+def count_outside(count_range: dict | None, histogram: tuple) -> str:
+    """The first type whose count (`histogram`: sorted (type, count) pairs) lies outside
+    `count_range` ({type: (lo, hi)}, None: no bound), as "Gate: 0 not in 1..2"; "" if none."""
+    if count_range is None:
+        return ""
+    have = dict(histogram)
+    for t, (lo, hi) in count_range.items():
+        if not lo <= have.get(t, 0) <= hi:
+            return f"{t}: {have.get(t, 0)} not in {lo}..{hi}"
+    for t in have:
+        if t not in count_range:
+            return f"{t}: no example has one"
+    return ""
+
+
 def attempt_seed(seed: int, iteration: int, index: int) -> np.random.Generator:
     return np.random.default_rng(np.random.SeedSequence([int(seed) & 0xFFFFFFFF, iteration, index]))
 
 
+# the paper's attempt as one sequence of steps (pick, BFS, cut, match, dock, replace, check),
+# each an early exit with its outcome; the steps read one another's locals
+# long: the paper's attempt, one step after another
 def run_attempt(ctx: _Context, iteration: int, index: int, known: frozenset) -> AttemptResult:
     """One subgraph replacement attempt (see the module docstring)."""
     opt = ctx.options
@@ -223,6 +242,11 @@ def run_attempt(ctx: _Context, iteration: int, index: int, known: frozenset) -> 
         return AttemptResult(iteration, index, "too-large", detail=f"{n_new} parts")
     types = [recip.types[i] for i in kept] + [donor.types[i] for i in inserted]
     hkey = histogram_key(types)
+    outside = count_outside(ctx.count_range, hkey)
+    if outside:
+        # option counts="examples": a castle without a gate is not kept (issue 28), so it is
+        # dropped before any geometry
+        return AttemptResult(iteration, index, "counts", detail=outside)
     if opt.dedupe == "histogram" and hkey in known:
         # Cheap early exit before any geometry: the merge would drop it anyway.
         return AttemptResult(iteration, index, "known")
@@ -311,8 +335,9 @@ def _strip(shape: "Shape") -> "Shape":
                  shape.parents, shape.operation, shape.ids, geo=shape.geo)
 
 
-def _session_init(protos, options, seed, rules, tolerance, max_parts, geo_vertices=()) -> _Context:
-    ctx = _Context(protos, [], [], options, seed, rules, tolerance, max_parts, geo_vertices=list(geo_vertices))
+def _session_init(protos, options, seed, rules, tolerance, max_parts, geo_vertices=(), count_range=None) -> _Context:
+    ctx = _Context(protos, [], [], options, seed, rules, tolerance, max_parts, count_range,
+                   geo_vertices=list(geo_vertices))
     ctx.known = set()  # type: ignore[attr-defined]
     return ctx
 
@@ -325,6 +350,14 @@ def _session_pool(ctx: _Context, added: list, fresh: list) -> None:
 
 def _session_known(ctx: _Context, added: list) -> None:
     ctx.known.update(added)  # type: ignore[attr-defined]
+
+
+def _session_work(ctx: _Context, item: tuple) -> Any:
+    """One item of a batch: ("attempt", iteration, index) -> AttemptResult, or ("check", shape)
+    -> the final check's first problem ("" accepted)."""
+    if item[0] == "check":
+        return _session_final_check(ctx, item[1])
+    return _session_attempt(ctx, (item[1], item[2]))
 
 
 def _session_attempt(ctx: _Context, item: tuple[int, int]) -> "AttemptResult":
@@ -372,6 +405,16 @@ class IterationStats:
                 "valid": self.outcomes["valid"], "new": self.new,
                 "shapes": self.shapes_after, "outcomes": dict(self.outcomes),
                 "reasons": dict(sorted(self.reasons.items())), "seconds": round(self.seconds, 3)}
+
+
+def count_target(examples: Sequence[Shape], mode: str) -> dict | None:
+    """{type: (fewest, most)} over the examples (option counts="examples", two or more
+    examples: one example gives no range), or None (the grammar's own constraints only)."""
+    from grammarkit.tiling import example_count_ranges
+
+    if mode != "examples" or len(examples) < 2:
+        return None
+    return example_count_ranges([s.types for s in examples])
 
 
 class GraphSampler:
@@ -432,6 +475,7 @@ class GraphSampler:
         self.examples = [sh.prepare(self.protos, self.orient) for sh in self.examples]
         largest = max(len(s) for s in self.examples)
         self.max_parts = self.options.max_parts or 4 * largest
+        self.count_range = count_target(self.examples, self.options.counts)
         self.stats: list[IterationStats] = []
         self.counter = 0
         self.stopped = ""  # what ended the last run (see `run`)
@@ -443,6 +487,9 @@ class GraphSampler:
         return self.contact_tolerance / 10.0
 
     # The pool grows as variants are kept; examples are never emitted.
+    # the iteration / batch / merge loop of one run is one generator (its stopping rules share
+    # the loop's state: emitted, fresh, stopped)
+    # long: one generator for the run's iteration, batch and merge loop
     def run(self, n: int, iterations: int, *, progress: Callable | None = None,
             time_is_up: Callable[[], bool] | None = None) -> Iterator[Shape]:
         """Yield up to `n` new variants over at most `iterations` iterations; `time_is_up()`
@@ -465,7 +512,8 @@ class GraphSampler:
         if n == 0 or iterations == 0:
             return
         session = self.executor.session(_session_init, self.protos, opt, self.seed, self.rules,
-                                        self.contact_tolerance, self.max_parts, self.geo_vertices)
+                                        self.contact_tolerance, self.max_parts, self.geo_vertices,
+                                        self.count_range)
         sent = 0  # pool shapes the session already has
         known_sent: set = set()
         try:
@@ -485,27 +533,14 @@ class GraphSampler:
                 sent = len(pool)
                 advance = progress(f"iteration {it}/{iterations}", budget) if progress else None
                 new_this: list[int] = []
-                for start in range(0, budget, opt.batch_size):
-                    indices = list(range(start, min(budget, start + opt.batch_size)))
-                    added = sorted(dedupe.known() - known_sent, key=repr)
-                    if added:
-                        session.update(_session_known, added)
-                        known_sent.update(added)
-                    candidates = []
-                    for res in session.map(_session_attempt, [(it, i) for i in indices]):
-                        st.attempts += 1
-                        st.outcomes[res.outcome] += 1
-                        if res.outcome == "invalid":
-                            why = rejection_reason(res.detail)
-                            st.reasons[why] = st.reasons.get(why, 0) + 1
-                        if res.shape is None:
-                            continue
-                        shape = res.shape.prepare(self.protos, self.orient)
-                        if dedupe.is_new(shape.types, shape.edges, shape.geo):
-                            candidates.append((res, shape))
-                        else:
-                            dedupe.note_duplicate(shape.geo)
-                    for shape in self._keep(session, candidates, dedupe, st, n - emitted):
+                # candidates of the last batch (new when tested) whose final check rides with
+                # the next batch's attempts, so the workers never wait on one check alone
+                pending: list = []
+
+                def keep(verdicts: list | None) -> Iterator[Shape]:
+                    nonlocal emitted, pending
+                    batch, pending = pending, []
+                    for shape in self._keep(session, batch, dedupe, st, n - emitted, verdicts):
                         self.counter += 1
                         shape.key = f"variant_{self.counter:05d}"
                         pool.append(shape)
@@ -514,6 +549,37 @@ class GraphSampler:
                         st.new += 1
                         emitted += 1
                         yield shape
+
+                for start in range(0, budget, opt.batch_size):
+                    if len(pending) >= n - emitted:
+                        # these may be the last ones wanted: check them before more attempts
+                        yield from keep(None)
+                        if emitted >= n:
+                            break
+                    indices = list(range(start, min(budget, start + opt.batch_size)))
+                    added = sorted(dedupe.known() - known_sent, key=repr)
+                    if added:
+                        session.update(_session_known, added)
+                        known_sent.update(added)
+                    checks = [("check", _strip(sh)) for _, sh in pending] if opt.final_check else []
+                    results = session.map(_session_work, checks + [("attempt", it, i) for i in indices])
+                    yield from keep([next(results) for _ in checks] if opt.final_check else None)
+                    candidates = []
+                    for res in results:
+                        st.attempts += 1
+                        st.outcomes[res.outcome] += 1
+                        if res.outcome in ("invalid", "counts"):
+                            why = (rejection_reason(res.detail) if res.outcome == "invalid"
+                                   else f"counts {res.detail.split(':')[0]}")
+                            st.reasons[why] = st.reasons.get(why, 0) + 1
+                        if res.shape is None:
+                            continue
+                        shape = res.shape.prepare(self.protos, self.orient)
+                        if dedupe.is_new(shape.types, shape.edges, shape.geo):
+                            candidates.append((res, shape))
+                        else:
+                            dedupe.note_duplicate(shape.geo)
+                    pending = candidates
                     if advance:
                         advance(len(indices), attempts=st.attempts, valid=st.outcomes["valid"],
                                 new=st.new, total_new=emitted)
@@ -522,6 +588,9 @@ class GraphSampler:
                     if time_is_up is not None and time_is_up():
                         self.stopped = "time"
                         break
+                # the iteration's last candidates join the pool before the next iteration
+                if pending and emitted < n:
+                    yield from keep(None)
                 st.shapes_after = len(pool)
                 st.seconds = time.perf_counter() - t0
                 self.stats.append(st)
@@ -540,19 +609,30 @@ class GraphSampler:
         finally:
             session.close()
 
-    def _keep(self, session, candidates: list, dedupe: Deduper, st: "IterationStats", wanted: int) -> Iterator["Shape"]:
+    def _keep(self, session, candidates: list, dedupe: Deduper, st: "IterationStats", wanted: int,
+              verdicts: list | None = None) -> Iterator["Shape"]:
         """The candidates of a batch (valid, new at the time of the test) that are kept, in
-        attempt order: each passes the final check (run through the session, so in the
-        workers) and is still new once the earlier ones are kept. Checks are made for as many
-        as are still wanted at a time, so a run that reaches -n checks few extra."""
+        attempt order: each passes the final check and is still new once the earlier ones are
+        kept. `verdicts`: the final checks of all `candidates`, made already (they ride with
+        the next batch's attempts); else checks are run through the session (so in the
+        workers) for as many as are still wanted at a time, so a run that reaches -n checks
+        few extra."""
         queue = list(candidates)
-        while queue and wanted > 0:
-            head, queue = queue[:wanted], queue[wanted:]
-            if self.options.final_check:
-                verdicts = list(session.map(_session_final_check, [_strip(sh) for _, sh in head]))
-            else:
-                verdicts = [""] * len(head)
-            for (res, shape), problem in zip(head, verdicts):
+        if verdicts is not None:
+            checked = list(zip(queue, verdicts))
+            queue = []
+        while wanted > 0 and (queue or verdicts is not None):
+            if verdicts is None:
+                head, queue = queue[:wanted], queue[wanted:]
+                if self.options.final_check:
+                    found = list(session.map(_session_work, [("check", _strip(sh)) for _, sh in head]))
+                else:
+                    found = [""] * len(head)
+                checked = list(zip(head, found))
+            verdicts = None
+            for (res, shape), problem in checked:
+                if wanted <= 0:
+                    break
                 if problem:  # `grammarkit validate` would reject the file: never kept
                     st.outcomes["valid"] -= 1
                     st.outcomes["final-check"] += 1
@@ -564,6 +644,7 @@ class GraphSampler:
                 shape.operation["attempt"] = [shape.iteration, res.index]
                 wanted -= 1
                 yield shape
+            checked = []
 
     def growth_table(self) -> list[dict]:
         rows = [{"iteration": 0, "shapes": len(self.examples), "new": len(self.examples)}]

@@ -94,6 +94,9 @@ def _scale(problem: LabelProblem) -> float:
     return float(FINITE_LIMIT / max(bound, 1e-12))
 
 
+# long: one alpha-expansion move is one graph (unary edges, the pairwise table's four cases, the
+# source/sink terminals) built in vectorised steps that share the same index arrays; split, each
+# piece would take and return half a dozen of them
 def _expansion_move(problem: LabelProblem, labels: np.ndarray, alpha: int, scale: float,
                     timing: list[float]) -> tuple[np.ndarray | None, int]:
     """The labelling after the best alpha-expansion of `labels` (None if nothing can move)."""

@@ -211,6 +211,8 @@ def retarget(mesh: Any, size: Sequence[float], **options) -> trimesh.Trimesh:
     return retarget_report(mesh, size, **options).mesh
 
 
+# long: the command's stages in order (checks, offsets, steps, labelling, solve, stitch, scale)
+# with the timings and refusals that the report carries across all of them
 def retarget_report(mesh: Any, size: Sequence[float], *, allow_scale: bool = False,
                     exact: bool = False, open_surface: bool = False,
                     offsets: Offsets | None = None, name: str = "mesh", seed: int = 0,
@@ -283,6 +285,8 @@ def retarget_report(mesh: Any, size: Sequence[float], *, allow_scale: bool = Fal
             f"offsets: {have}); keep that size or pass --allow-scale (allow_scale=True) to scale "
             f"along {along}")
     k = steps_for_target(input_size * frame.scale, target * frame.scale, lattice, covered)
+    k, fixed_axes = _drop_unjoinable_growth(k, lattice, gens_n, offsets, fixed_axes, target,
+                                            input_size, tol, allow_scale, name)
     stats["lattice"] = {"input_voxels": lattice.n_in.astype(int).tolist(),
                         "voxel": np.round(np.linalg.norm(gens_n, axis=1) / frame.scale, 6).tolist()}
 
@@ -333,6 +337,34 @@ def retarget_report(mesh: Any, size: Sequence[float], *, allow_scale: bool = Fal
         lo = np.asarray(out.bounds[0], dtype=np.float64)
         out.vertices = (np.asarray(out.vertices) - lo) * factors + lo
     return finish(out, method, k, factors, labelling=labelling, solution=solution, label_grid=grid)
+
+
+def _drop_unjoinable_growth(k: np.ndarray, lattice: Any, gens_n: np.ndarray, offsets: Offsets,
+                            fixed_axes: list[int], target: np.ndarray, input_size: np.ndarray,
+                            tol: np.ndarray, allow_scale: bool, name: str) -> tuple[np.ndarray, list[int]]:
+    """Growth along an offset the mesh spans in fewer than 3 voxels is impossible: a copy is
+    joined where both copies have the voxels on both sides of the seam (the pairwise energy is
+    infinite where one side is empty), which takes 3 voxels of the input along the offset (a
+    staircase's two stringers 0.95 apart are such an offset). Such steps are refused with that
+    reason, or with `allow_scale` dropped and the axes they would grow scaled instead."""
+    short = [i for i in range(3) if lattice.structured[i] and k[i] > 0 and lattice.n_in[i] < 3]
+    if not short:
+        return k, fixed_axes
+    axes = sorted({a for i in short for a in range(3)
+                   if abs(gens_n[i][a]) >= 0.5 * np.linalg.norm(gens_n[i])})
+    if not allow_scale:
+        along = ", ".join(AXES[a] for a in axes)
+        which = ", ".join(f"({', '.join(f'{x:.4g}' for x in offsets.generators[i])})" for i in short)
+        raise ShapeError(
+            f"{name}: cannot grow along {along}: the principal offset {which} repeats only once in the "
+            f"mesh (it spans {int(lattice.n_in[short[0]])} of its voxels; a copy is joined only where two "
+            f"copies overlap, which needs 3), so no copy can be added along it (requested "
+            f"{_fmt(target)}, the mesh is {_fmt(input_size)}); keep that size or pass --allow-scale "
+            f"(allow_scale=True) to scale along {along}")
+    k = k.copy()
+    k[short] = 0
+    extra = [a for a in axes if a not in fixed_axes and abs(target[a] - input_size[a]) > tol[a]]
+    return k, sorted(fixed_axes + extra)
 
 
 def _covered_axes(gens_n: np.ndarray, structured: np.ndarray) -> np.ndarray:

@@ -35,10 +35,16 @@ class SurfaceDistance:
     The remaining points within `cap` of the surface get the exact distance to the nearest of
     a few candidate triangles: the faces of the nearest dense samples and of the nearest
     vertices (a k-d tree of points cannot see a small face without samples; its vertices can).
-    Points farther than `cap` from every sample and vertex get `cap`."""
+    Points farther than `cap` from every sample and vertex get `cap`.
+
+    oriented=True measures the distance to the faces whose normal agrees with the point's
+    (n . n_face > 0.5) only, the vertex shortcut included: a translation that puts a face
+    onto a face turned the other way (the left jamb of a window onto its right jamb, when
+    the window is half a bay wide) does not map the model onto itself. The offset checks use
+    it; the seam cost compares copies of the same geometry and keeps the plain distance."""
 
     def __init__(self, cloud: FeatureCloud, mesh_n: trimesh.Trimesh, cap: float,
-                 k_samples: int = 6, k_vertices: int = 3):
+                 k_samples: int = 6, k_vertices: int = 3, oriented: bool = False):
         from scipy.spatial import cKDTree
 
         self.cloud, self.cap = cloud, cap
@@ -48,6 +54,7 @@ class SurfaceDistance:
         self.vertex_tree = cKDTree(self.vertices)
         self.triangles = np.asarray(mesh_n.triangles, dtype=np.float64)
         self.vertex_faces = _vertex_faces(np.asarray(mesh_n.faces), len(self.vertices))
+        self.face_normals = np.asarray(mesh_n.face_normals, dtype=np.float64) if oriented else None
 
     def __call__(self, points: np.ndarray, normals: np.ndarray) -> np.ndarray:
         cloud, cap = self.cloud, self.cap
@@ -62,7 +69,8 @@ class SurfaceDistance:
         on_plane = found & agree & (tangential <= 1.5 * cloud.params.dense) & (along <= 1e-6)
         value = np.where(on_plane.any(axis=1), 0.0, cap)
         vd, vj = self.vertex_tree.query(points, k=self.k_vertices, distance_upper_bound=cap)
-        value[vd[:, 0] <= 1e-6] = 0.0
+        if self.face_normals is None:
+            value[vd[:, 0] <= 1e-6] = 0.0
         near = (value > 0) & (found.any(axis=1) | np.isfinite(vd[:, 0]))
         if near.any():
             idx = np.flatnonzero(near)
@@ -75,6 +83,9 @@ class SurfaceDistance:
             rows = np.repeat(np.arange(len(idx)), cand.shape[1])
             faces = cand.ravel()
             ok = faces >= 0
+            if self.face_normals is not None:
+                ok &= np.einsum("ij,ij->i", self.face_normals[np.maximum(faces, 0)],
+                                normals[idx][rows]) > 0.5
             rows, faces = rows[ok], faces[ok]
             closest = trimesh.triangles.closest_point(self.triangles[faces], points[idx][rows])
             d = np.linalg.norm(closest - points[idx][rows], axis=1)

@@ -13,8 +13,9 @@ import numpy as np
 
 __all__ = ["rotate_ink", "break_strokes", "augment_ink", "MAX_ROTATION", "MAX_PERSPECTIVE"]
 
-MAX_ROTATION = 5.0  # degrees, the "small rotations"
-MAX_PERSPECTIVE = 5.0  # degrees of camera pitch/yaw error covered in training
+MAX_ROTATION = 6.0  # degrees: the "small rotations" (5) with a margin
+MAX_PERSPECTIVE = 6.0  # degrees of camera pitch/yaw error covered in training (the 5, with a margin)
+MAX_PARTIAL = 0.3  # share of the ink cut out of a training drawing at most
 
 
 def rotate_ink(ink: np.ndarray, degrees: float) -> np.ndarray:

@@ -225,11 +225,15 @@ def sketch_session_command(session: Path, output: Path, library: Path | None, mo
 @click.option("--style", type=click.Choice(("sketchy", "plain", "augmented")), default="sketchy",
               show_default=True,
               help="Training drawings: hand-drawn-looking (the paper's), exact lines (Table 3), or "
-                   "hand-drawn with the page turned and the view off by up to 5 degrees and some "
+                   "hand-drawn with the page turned and the view off by up to 6 degrees and some "
                    "strokes broken off (augmented).")
 @click.option("--types", default=None, help="Comma-separated object types to train (default: all).")
 @click.option("--classifiers-only", is_flag=True,
               help="Train the snippet classifiers only (e.g. to compare training styles).")
+@click.option("--classifier-input", default="as-drawn", show_default=True,
+              help="What the classifiers read: as-drawn (the paper) or centre-lines (every line "
+                   "thinned to one pixel, whatever the pen), for all types or per type as "
+                   "TYPE=KIND,... (types not named: as-drawn).")
 @click.option("--cache", type=click.Path(file_okay=False, path_type=Path), default=None,
               help="Folder caching the rendered training sets (default: ~/.cache/grammarkit/sketch).")
 @click.option("--no-cache", is_flag=True, help="Render the training sets without reading or writing the cache.")
@@ -239,7 +243,7 @@ def sketch_session_command(session: Path, output: Path, library: Path | None, mo
 @click.option("--seed", type=int, default=0, show_default=True)
 def train_sketch_command(library: Path, output: Path, samples: int, classifier_epochs: int,
                          regressor_epochs: int, style: str, types: str | None, classifiers_only: bool,
-                         cache: Path | None,
+                         classifier_input: str, cache: Path | None,
                          no_cache: bool, threads: int, workers: int, seed: int) -> None:
     """Train the sketch recognizer of a snippet library: one classifier per object type and one
     parameter regressor per snippet, on renders of snippets with parameters sampled in their
@@ -258,10 +262,14 @@ def train_sketch_command(library: Path, output: Path, samples: int, classifier_e
                       regressor_epochs=regressor_epochs, style=style, seed=seed, threads=threads,
                       workers=workers, types=[t.strip() for t in types.split(",") if t.strip()] if types else None,
                       regressors=not classifiers_only,
+                      classifier_input=_classifier_input_option(classifier_input),
                       cache=None if no_cache else (cache or DEFAULT_CACHE))
-    reporter = RichReporter(console)
-    with reporter.progress:
-        models = train(library, cfg, reporter)
+    if console.is_terminal:
+        reporter: Any = RichReporter(console)
+        with reporter.progress:
+            models = train(library, cfg, reporter)
+    else:  # a log or a pipe (train_shipped.py): plain lines as the training goes
+        models = train(library, cfg, LineReporter())
     save_models(models, output)
     for t, m in models.types.items():
         acc = m.metrics.get("val_accuracy")
@@ -270,6 +278,56 @@ def train_sketch_command(library: Path, output: Path, samples: int, classifier_e
         click.echo(f"{t}: {len(m.classes)} classes, validation accuracy {acc:.3f}{rmse}")
     size = output.stat().st_size
     click.echo(f"wrote {output} ({size / 1e6:.2f} MB) in {models.meta['seconds']:.0f} s")
+
+
+def _classifier_input_option(text: str) -> str | dict[str, str]:
+    """`--classifier-input`: KIND, or TYPE=KIND,... (a usage error names a bad KIND)."""
+    from .strokes import INPUT_KINDS
+
+    def kind(k: str) -> str:
+        if k not in INPUT_KINDS:
+            raise click.BadParameter(f"unknown classifier input {k!r}; expected one of "
+                                     f"{', '.join(INPUT_KINDS)}", param_hint="--classifier-input")
+        return k
+
+    if "=" not in text:
+        return kind(text.strip())
+    out = {}
+    for item in filter(None, (i.strip() for i in text.split(","))):
+        t, sep, k = item.partition("=")
+        if not sep or not t.strip():
+            raise click.BadParameter(f"expected TYPE=KIND, got {item!r}", param_hint="--classifier-input")
+        out[t.strip()] = kind(k.strip())
+    return out
+
+
+class LineReporter:
+    """Progress as plain lines on stderr (a task's start, then every fifth of it), for logs and
+    pipes, where rich's bars would show nothing until the end."""
+
+    def __init__(self) -> None:
+        import time
+
+        self._clock = time.monotonic
+        self.start = self._clock()
+
+    def say(self, message: str) -> None:
+        click.echo(f"[{self._clock() - self.start:7.1f} s] {message}", err=True)
+
+    def task(self, description: str, total: int):  # noqa: ANN201
+        self.say(f"{description}: 0 of {total}")
+        done = [0]
+
+        def advance(n: int = 1, info: str = "") -> None:
+            before = done[0]
+            done[0] += n
+            step = max(1, total // 5)
+            if done[0] >= total or done[0] // step > before // step:
+                self.say(f"{description}: {done[0]} of {total} {info}".rstrip())
+        return advance
+
+    def note(self, message: str) -> None:
+        self.say(f"note: {message}")
 
 
 class RichReporter:

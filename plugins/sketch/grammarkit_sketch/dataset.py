@@ -31,7 +31,7 @@ from .image import RES, level, resize, to_input
 from .library import SnippetLibrary
 from .stages import StageDeriver, StageSpec
 
-GENERATOR_VERSION = 5
+GENERATOR_VERSION = 6
 DEFAULT_CACHE = Path(os.environ.get("GRAMMARKIT_SKETCH_CACHE",
                                     Path.home() / ".cache" / "grammarkit" / "sketch"))
 MAX_ATTEMPTS = 20  # parameter draws per sample before giving up on a snippet

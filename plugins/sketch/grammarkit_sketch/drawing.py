@@ -55,8 +55,8 @@ def training_style(rng: np.random.Generator, kind: str = "sketchy") -> DrawStyle
     """A random pen for a training image: sketchy lines of varied width, wobble, overshoot and
     passes (from nearly clean to shaky), or the plain line drawing; the view may be off by up
     to 2 degrees (people do not draw exact perspective). "augmented": the sketchy pen with the
-    view off by up to 5 degrees, the page turned by up to 5 degrees, and in 40% of the
-    drawings 5-25% of the ink cut out (partial strokes)."""
+    view off by up to 6 degrees, the page turned by up to 6 degrees, and in 40% of the
+    drawings 5-30% of the ink cut out (partial strokes)."""
     seed = int(rng.integers(0, 2**31 - 1))
     width = float(rng.uniform(1.0, 3.5))
     pitch, yaw = (float(v) for v in rng.uniform(-2.0, 2.0, 2))
@@ -66,10 +66,10 @@ def training_style(rng: np.random.Generator, kind: str = "sketchy") -> DrawStyle
                     overshoot=float(rng.uniform(1.0, 7.0)), strokes=int(rng.integers(1, 4)),
                     seed=seed, pitch_offset=pitch, yaw_offset=yaw)
     if kind == "augmented":  # issue 30: page turned, perspective off, strokes broken off
-        from .augment import MAX_PERSPECTIVE, MAX_ROTATION
+        from .augment import MAX_PARTIAL, MAX_PERSPECTIVE, MAX_ROTATION
 
         p2, y2, rot = (float(v) for v in rng.uniform(-1.0, 1.0, 3))
-        partial = float(rng.uniform(0.05, 0.25)) if rng.random() < 0.4 else 0.0
+        partial = float(rng.uniform(0.05, MAX_PARTIAL)) if rng.random() < 0.4 else 0.0
         return replace(pen, pitch_offset=p2 * MAX_PERSPECTIVE, yaw_offset=y2 * MAX_PERSPECTIVE,
                        rotation=rot * MAX_ROTATION, partial=partial)
     return pen

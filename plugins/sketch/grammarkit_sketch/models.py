@@ -233,3 +233,29 @@ def merge_models(parts: list[SketchModels]) -> SketchModels:
     meta = dict(first.meta)
     meta["seconds"] = round(sum(float(m.meta.get("seconds", 0.0)) for m in parts), 1)
     return SketchModels(first.library_hash, first.library_name, types, meta, None, dict(first.library_files))
+
+
+def graft_regressors(classifiers: SketchModels, regressors: SketchModels) -> SketchModels:
+    """The classifiers of one models file with the parameter regressors of another, trained on
+    the same library with the same stages and classes (e.g. classifiers retrained on augmented
+    drawings over regressors trained on many sketchy ones: train_shipped.py). The regressors'
+    validation metrics come along; `meta["regressors_from"]` records their training settings."""
+    if classifiers.library_hash != regressors.library_hash:
+        raise ModelFileError(f"{regressors.path or 'the regressors'} were trained on another library than "
+                             f"{classifiers.path or 'the classifiers'}; cannot combine them", None,
+                             code="sketch-retrain")
+    types: dict[str, TypeModel] = {}
+    for t, tm in classifiers.types.items():
+        src = regressors.types.get(t)
+        if src is None or src.stage != tm.stage or src.classes != tm.classes:
+            raise ModelFileError(f"{regressors.path or 'the regressors'}: object type {t!r} is missing or "
+                                 f"has other stages or classes than in {classifiers.path or 'the classifiers'}",
+                                 None, code="sketch-bad-models")
+        metrics = {k: v for k, v in tm.metrics.items() if not k.startswith("val_rmse.")}
+        metrics.update({k: v for k, v in src.metrics.items() if k.startswith("val_rmse.")})
+        types[t] = TypeModel(tm.stage, tm.classes, tm.classifier, dict(src.regressors), tm.width, metrics)
+    meta = dict(classifiers.meta)
+    meta["regressors_from"] = {"config": regressors.meta.get("config"),
+                               "seconds": regressors.meta.get("seconds")}
+    return SketchModels(classifiers.library_hash, classifiers.library_name, types, meta, None,
+                        dict(classifiers.library_files))

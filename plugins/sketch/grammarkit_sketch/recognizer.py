@@ -30,6 +30,7 @@ from .models import ModelFileError, SketchModels, TypeModel, load_models
 from .calibration import softmax
 from .nets import require_torch
 from .rectify import rectify_input
+from .strokes import classifier_input
 from .refine import EXACT_STYLE, METHODS, SCORE_SHORT, SCORES, VIEW_RANGE, Scorer, centre_on_plateaus, refine
 from .stages import StageDeriver, StageSpec
 
@@ -148,6 +149,7 @@ class Recognizer:
         torch = require_torch()
         if len(tm.classes) == 1:
             return np.zeros(1)
+        x = classifier_input(np.asarray(x, dtype=np.float32), tm.metrics.get("classifier_input", "as-drawn"))
         with torch.no_grad():
             out = tm.network()(torch.from_numpy(x[None, None].astype(np.float32)))
         return out[0].numpy().astype(np.float64)
@@ -172,6 +174,8 @@ class Recognizer:
             u = reg.network()(torch.from_numpy(x[None, None].astype(np.float32)))[0].numpy()
         return u.astype(float), list(reg.params), list(reg.hidden)
 
+    # long: the recognition of one input in order (rectify, classify, calibrate, regress, refine,
+    # re-rank, score) with the timings each step adds to the Recognition
     def recognize_input(self, x: np.ndarray, object_type: str, *, stage: StageSpec | None = None,
                         refine_steps: int = 0, method: str = "pattern", snippet: str | None = None,
                         seed: int = 0, t_load: float = 0.0, target: np.ndarray | None = None,

@@ -298,21 +298,29 @@ def metropolis(score: Callable[[np.ndarray], float], u0: np.ndarray, steps: int,
 
 
 def with_prior(scorer: Callable[[np.ndarray], float], u_net: np.ndarray,
-               sigma: float) -> Callable[[np.ndarray], float]:
+               sigma: float, floor: float = 0.0) -> Callable[[np.ndarray], float]:
     """The score times a Gaussian prior around the network's estimate: s(u) x exp(-|u - u_net|^2
     / (2 sigma^2)) over the parameters (not the view offsets). With sigma the regressor's
     validation RMSE this is the maximum a posteriori estimate with the network as the prior:
     the drawing moves a parameter away from the network's value only as far as it shows it
     better. Measured (docs/sketch.md): once the regressors reach RMSE 0.02-0.06, the score's own
     optimum (biased by the pen's overshoot and wobble) lies further from the truth than the
-    network's estimate, and refinement without the prior made the error larger."""
+    network's estimate, and refinement without the prior made the error larger.
+
+    `floor`: a value no search will accept a proposal at or below (the network estimate's
+    objective: `refine`'s searches only take improvements on it). A score is at most 1, so a
+    proposal whose prior factor alone is below `floor` cannot be taken: it is not rendered and
+    counts 0.0, which changes no decision of the search (the same result, fewer renders)."""
     u_net = np.asarray(u_net, dtype=float)
     k = len(u_net)
     inv = 0.5 / (sigma * sigma)
 
     def objective(u: np.ndarray) -> float:
         d = np.asarray(u, dtype=float)[:k] - u_net
-        return scorer(u) * math.exp(-inv * float(d @ d))
+        factor = math.exp(-inv * float(d @ d))
+        if factor < floor:
+            return 0.0
+        return scorer(u) * factor
     return objective
 
 
@@ -340,7 +348,8 @@ def refine(scorer: Scorer, u0: np.ndarray, steps: int, method: str = "pattern",
     if steps <= 0 or k == 0:
         return np.asarray(u0, float), scorer(start), time.perf_counter() - t0
     if method == "pattern":
-        goal = scorer if prior_sigma is None else with_prior(scorer, u0, prior_sigma)
+        # with the prior: proposals that cannot beat the network's estimate are not rendered
+        goal = scorer if prior_sigma is None else with_prior(scorer, u0, prior_sigma, floor=scorer(start))
         u, _ = pattern(goal, start, min(steps, PATTERN_WARMUP))
         u, _ = scan(goal, u, SCAN_POINTS, k, SCAN_MIN_GAIN)
         u, s = pattern(goal, u, steps)

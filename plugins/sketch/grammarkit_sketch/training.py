@@ -20,6 +20,7 @@ from .library import SnippetLibrary, load_library
 from .models import RegressorModel, SketchModels, TypeModel
 from .nets import build_classifier, build_regressor, count_parameters, require_torch
 from .stages import StageSpec, default_stage
+from .strokes import classifier_input
 
 
 @dataclass
@@ -37,6 +38,17 @@ class TrainConfig:
     workers: int = 1  # processes rendering the training set
     types: list[str] | None = None  # object types to train (default: all)
     regressors: bool = True  # False: classifiers only (e.g. to compare training styles)
+    # what the classifiers read: "as-drawn" (the paper) or "centre-lines" (strokes.py: every
+    # line thinned to one pixel, so the pen's width does not matter), for every type or per
+    # type ({"Roof": "centre-lines"}; types not named read the drawing as drawn)
+    classifier_input: str | dict[str, str] = "as-drawn"
+
+    def input_of(self, object_type: str) -> str:
+        """What the classifier of `object_type` reads."""
+        if isinstance(self.classifier_input, dict):
+            named = {k.lower(): v for k, v in self.classifier_input.items()}
+            return named.get(object_type.lower(), "as-drawn")
+        return self.classifier_input
     cache: Path | None = DEFAULT_CACHE
     stages: dict[str, StageSpec] = field(default_factory=dict)  # overrides of default_stage
 
@@ -44,7 +56,8 @@ class TrainConfig:
         return {"samples": self.samples, "val_share": self.val_share,
                 "classifier_epochs": self.classifier_epochs, "regressor_epochs": self.regressor_epochs,
                 "batch": self.batch, "lr": self.lr, "width": self.width, "style": self.style,
-                "seed": self.seed, "regressors": self.regressors}
+                "seed": self.seed, "regressors": self.regressors,
+                "classifier_input": self.classifier_input}
 
 
 class Reporter:
@@ -132,7 +145,9 @@ def train_type(library: SnippetLibrary, stage: StageSpec, cfg: TrainConfig, repo
     group_of = {name: gi for gi, g in enumerate(groups) for name in g}
     labels = np.array([group_of[data.snippets[i]] for i in data.snippet], dtype=np.int64)
     tr, va = split_indices(len(data), cfg.val_share, cfg.seed)
-    metrics: dict[str, Any] = {"samples": len(data), "classes": len(groups)}
+    metrics: dict[str, Any] = {"samples": len(data), "classes": len(groups),
+                               "classifier_input": cfg.input_of(t)}
+    xc = classifier_input(data.x, cfg.input_of(t))
 
     classifier_state: dict = {}
     torch = require_torch()
@@ -141,7 +156,7 @@ def train_type(library: SnippetLibrary, stage: StageSpec, cfg: TrainConfig, repo
         net = build_classifier(len(groups), cfg.width)
         advance = reporter.task(f"{t}: classifier ({count_parameters(net):,} weights, "
                                 f"{len(groups)} classes)", cfg.classifier_epochs)
-        classifier_state, acc = _train_net(net, data.x[tr], labels[tr], (data.x[va], labels[va]), "ce",
+        classifier_state, acc = _train_net(net, xc[tr], labels[tr], (xc[va], labels[va]), "ce",
                                            cfg.classifier_epochs, cfg, advance, cfg.seed)
         metrics["val_accuracy"] = round(acc, 4)
     else:  # one class: nothing to choose (the classifier still exists, so files look alike)
@@ -192,13 +207,14 @@ def fine_tune_classifier(library: SnippetLibrary, tm: TypeModel, cfg: TrainConfi
     group_of = {name: gi for gi, g in enumerate(tm.classes) for name in g}
     labels = np.array([group_of[data.snippets[i]] for i in data.snippet], dtype=np.int64)
     tr, va = split_indices(len(data), cfg.val_share, cfg.seed)
+    xc = classifier_input(data.x, tm.metrics.get("classifier_input", "as-drawn"))
     torch.manual_seed(cfg.seed)
     net = build_classifier(len(tm.classes), tm.width)
     net.load_state_dict({k: (v.float() if v.is_floating_point() else v) for k, v in tm.classifier.items()})
-    vx, vy = torch.from_numpy(data.x[va]), torch.from_numpy(labels[va])
+    vx, vy = torch.from_numpy(xc[va]), torch.from_numpy(labels[va])
     start = _evaluate(net, vx, vy, "ce")
     advance = reporter.task(f"{t}: fine-tuning the classifier (start: acc {start:.3f})", cfg.classifier_epochs)
-    state, acc = _train_net(net, data.x[tr], labels[tr], (data.x[va], labels[va]), "ce",
+    state, acc = _train_net(net, xc[tr], labels[tr], (xc[va], labels[va]), "ce",
                             cfg.classifier_epochs, cfg, advance, cfg.seed)
     metrics = dict(tm.metrics)
     metrics["fine_tune"] = {"style": cfg.style, "samples": cfg.samples, "epochs": cfg.classifier_epochs,
@@ -207,6 +223,53 @@ def fine_tune_classifier(library: SnippetLibrary, tm: TypeModel, cfg: TrainConfi
     if acc < start:  # a tie goes to the tuned weights: they have seen the perturbations
         return replace(tm, metrics=metrics)
     return replace(tm, classifier=state, metrics=metrics, net=None)
+
+
+def fine_tune_regressors(library: SnippetLibrary, tm: TypeModel, cfg: TrainConfig,
+                         reporter: Reporter | None = None) -> TypeModel:
+    """The type's parameter regressors trained further from their current weights on
+    `cfg.samples` renders per snippet in `cfg.style` (the same renders, from the cache, as
+    `fine_tune_classifier` with the same settings), `cfg.regressor_epochs` epochs at learning
+    rate `cfg.lr` in batches of `cfg.batch`. Each regressor keeps the epoch with the best
+    validation RMSE on those renders, or its starting weights when they score better (issue
+    30: the regressors had only seen the training pen, upright and through the exact camera)."""
+    torch = require_torch()
+    reporter = reporter or Reporter()
+    t = tm.stage.object_type
+    infos = library.snippets_of(t)
+    advance = reporter.task(f"{t}: rendering {cfg.samples} {cfg.style} sketches per snippet",
+                            len(infos) * cfg.samples)
+    data = generate(library, tm.stage, cfg.samples, seed=cfg.seed, style=cfg.style, cache=cfg.cache,
+                    workers=cfg.workers, progress=lambda n: advance(n))
+    tr, va = split_indices(len(data), cfg.val_share, cfg.seed)
+    regressors, metrics, changed = dict(tm.regressors), dict(tm.metrics), []
+    for si, info in enumerate(infos):
+        reg = tm.regressors.get(info.name)
+        if reg is None or not reg.params or info.name not in data.snippets:
+            continue
+        si_data = data.snippets.index(info.name)
+        rows = np.flatnonzero(data.snippet == si_data)
+        rtr, rva = np.intersect1d(rows, tr), np.intersect1d(rows, va)
+        if len(rtr) == 0 or len(rva) == 0:
+            continue
+        target = data.u[:, [info.param_names.index(v) for v in reg.params]]
+        torch.manual_seed(cfg.seed + si + 1)
+        net = build_regressor(len(reg.params), reg.width)
+        net.load_state_dict({k: (v.float() if v.is_floating_point() else v) for k, v in reg.state.items()})
+        vx, vy = torch.from_numpy(data.x[rva]), torch.from_numpy(target[rva])
+        start = _evaluate(net, vx, vy, "mse")
+        step = reporter.task(f"{t}: fine-tuning regressor {info.name} (start: rmse {start:.3f})",
+                             cfg.regressor_epochs)
+        state, rmse = _train_net(net, data.x[rtr], target[rtr], (data.x[rva], target[rva]), "mse",
+                                 cfg.regressor_epochs, cfg, step, cfg.seed + si + 1)
+        metrics[f"fine_tune_rmse.{info.name}"] = [round(start, 4), round(min(rmse, start), 4)]
+        if rmse < start:
+            regressors[info.name] = replace(reg, state=state, net=None)
+            changed.append(info.name)
+    metrics["fine_tune_regressors"] = {"style": cfg.style, "samples": cfg.samples,
+                                       "epochs": cfg.regressor_epochs, "lr": cfg.lr,
+                                       "batch": cfg.batch, "seed": cfg.seed, "changed": changed}
+    return replace(tm, regressors=regressors, metrics=metrics)
 
 
 def train(library: Any, cfg: TrainConfig | None = None, reporter: Reporter | None = None) -> SketchModels:

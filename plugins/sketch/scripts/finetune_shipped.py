@@ -1,9 +1,15 @@
 """Fine-tune the classifiers of a models file (default: the shipped weights) on renders with
 issue 30's perturbations (style "augmented": the page turned and the view off by up to 5
 degrees, 40% of the drawings with 5-25% of the ink cut out), starting from their trained
-weights; the regressors are kept. Then calibrate with calibrate_shipped.py.
+weights; with `--regressors`, the parameter regressors too, on the same renders (cached: the
+second pass renders nothing). Then calibrate with calibrate_shipped.py.
 
     python plugins/sketch/scripts/finetune_shipped.py -o tuned.sketch.pt [--samples 40] [--epochs 4]
+        [--regressors [--regressor-epochs 8 --regressor-lr 3e-4 --regressor-batch 8]]
+        [--no-classifiers]
+
+The shipped weights: train_shipped.py, then this script with its defaults and `--regressors`
+on them, then calibrate_shipped.py (docs/sketch.md, "Calibration and robustness").
 
 A run of the defaults took ~12 minutes on the loaded 2-core machine (rendering dominates);
 same models, settings and seed give the same file. `-o` never defaults to the shipped file
@@ -54,6 +60,11 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--types", default=None, help="comma-separated object types (default: all)")
     ap.add_argument("--workers", type=int, default=1)
     ap.add_argument("--seed", type=int, default=7)
+    ap.add_argument("--regressors", action="store_true", help="fine-tune the regressors as well")
+    ap.add_argument("--no-classifiers", action="store_true", help="keep the classifiers as they are")
+    ap.add_argument("--regressor-epochs", type=int, default=8)
+    ap.add_argument("--regressor-lr", type=float, default=3e-4)
+    ap.add_argument("--regressor-batch", type=int, default=8)
     args = ap.parse_args(argv)
     if args.output.resolve() == SHIPPED.resolve() and not args.replace_shipped:
         ap.error(f"{args.output} is the shipped weights file; pass --replace-shipped to write it")
@@ -61,20 +72,32 @@ def main(argv: list[str] | None = None) -> int:
 
     from grammarkit_sketch.models import save_models
     from grammarkit_sketch.recognizer import get_recognizer
-    from grammarkit_sketch.training import TrainConfig, fine_tune_classifier
+    from grammarkit_sketch.training import TrainConfig, fine_tune_classifier, fine_tune_regressors
 
     torch.set_num_threads(1)
     rec = get_recognizer(args.models)
     reporter = LineReporter()
     cfg = TrainConfig(samples=args.samples, classifier_epochs=args.epochs, lr=args.lr,
                       style="augmented", seed=args.seed, workers=args.workers)
+    reg_cfg = TrainConfig(samples=args.samples, regressor_epochs=args.regressor_epochs,
+                          lr=args.regressor_lr, batch=args.regressor_batch, style="augmented",
+                          seed=args.seed, workers=args.workers)
     chosen = [t.strip() for t in args.types.split(",")] if args.types else list(rec.models.types)
     for t in chosen:
-        tm = rec.models.types[rec.library.check_type(t)]
-        rec.models.types[tm.stage.object_type] = fine_tune_classifier(rec.library, tm, cfg, reporter)
-        reporter.say(f"{t}: {rec.models.types[tm.stage.object_type].metrics.get('fine_tune')}")
-    rec.models.meta["fine_tune"] = {"samples": args.samples, "epochs": args.epochs, "lr": args.lr,
-                                    "seed": args.seed, "style": "augmented", "types": chosen}
+        key = rec.library.check_type(t)
+        if not args.no_classifiers:
+            rec.models.types[key] = fine_tune_classifier(rec.library, rec.models.types[key], cfg, reporter)
+            reporter.say(f"{t}: {rec.models.types[key].metrics.get('fine_tune')}")
+        if args.regressors:
+            rec.models.types[key] = fine_tune_regressors(rec.library, rec.models.types[key], reg_cfg, reporter)
+            reporter.say(f"{t}: {rec.models.types[key].metrics.get('fine_tune_regressors')}")
+    if not args.no_classifiers:
+        rec.models.meta["fine_tune"] = {"samples": args.samples, "epochs": args.epochs, "lr": args.lr,
+                                        "seed": args.seed, "style": "augmented", "types": chosen}
+    if args.regressors:
+        rec.models.meta["fine_tune_regressors"] = {
+            "samples": args.samples, "epochs": args.regressor_epochs, "lr": args.regressor_lr,
+            "batch": args.regressor_batch, "seed": args.seed, "style": "augmented", "types": chosen}
     save_models(rec.models, args.output)
     reporter.say(f"wrote {args.output}")
     return 0

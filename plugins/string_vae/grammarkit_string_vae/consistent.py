@@ -236,6 +236,8 @@ class ConsistentDecoder:
             res = wide
         return res
 
+    # long: one beam search over the parts in ear order: its placement, contact and cycle-closing
+    # long: checks share the beam's state at every step; split up, that state would be passed around
     def _search(self, graph: TypedGraph, votes: dict[tuple[int, int], np.ndarray], width: int,
                 deadline: float | None) -> ConsistentResult:
         t0 = time.perf_counter()

@@ -116,13 +116,16 @@ def _graph_of_result(result: Any) -> tuple[TypedGraph, Any]:
     raise GrammarkitError(f"result {result.id!r} has neither an assembly nor a graph to learn from")
 
 
+# long: one pass over the back end's results with the checks and bookkeeping of every graph
+# (the nested `add` shares the counters); split up, the counters would be passed around
 def build_dataset(grammar: Any, *, source: str = "graph-sampler", n: int = 1000, seed: int = 0,
                   iterations: int = 4, options: Mapping[str, Any] | None = None,
                   strings_per_graph: int = 10, include_examples: bool = True, frames: bool = True,
                   workers: int | None = 1, progress: Callable | None = None,
-                  grammar_file: str | None = None) -> tuple[Dataset, dict]:
+                  grammar_file: str | None = None, time_limit: float | None = None) -> tuple[Dataset, dict]:
     """A dataset of up to `n` graphs from back end `source` (plus the examples); returns the
-    dataset and a report (counts, skipped graphs, shortfall)."""
+    dataset and a report (counts, skipped graphs, shortfall). `time_limit` (seconds) is the run
+    layer's graceful budget: the back end stops after it and what it made is kept."""
     from grammarkit.run import grammar_hash, iter_results
     from grammarkit.tiling import load_examples, shape_graph
 
@@ -174,7 +177,8 @@ def build_dataset(grammar: Any, *, source: str = "graph-sampler", n: int = 1000,
             add(g, f"example_{asm.name}", f"example:{asm.name}", asm)
     made = 0
     for result in iter_results(grammar, backend=source, n=n, seed=seed, iterations=iterations,
-                               options=dict(options or {}), workers=workers, progress=progress):
+                               options=dict(options or {}), workers=workers, progress=progress,
+                               time_limit=time_limit):
         report["results"] += 1
         g, asm = _graph_of_result(result)
         add(g, str(result.id), f"{source}:{result.id}", asm)
@@ -182,8 +186,9 @@ def build_dataset(grammar: Any, *, source: str = "graph-sampler", n: int = 1000,
     shortfall = None
     if made < n:
         shortfall = (f"back end {source!r} made {made} of the {n} results asked for (with "
-                     f"{iterations} iteration(s)); more --iterations or other --option values may "
-                     "give more")
+                     f"{iterations} iteration(s)"
+                     + (f", time limit {time_limit:g} s" if time_limit is not None else "")
+                     + "); more --iterations or other --option values may give more")
     ds = make_dataset(graphs, rules, alphabet, ids=ids, sources=sources, frames=all_frames, variants=all_variants,
                       strings_per_graph=strings_per_graph, seed=seed,
                       meta={"grammar": grammar.name, "grammar_hash": grammar_hash(grammar),

@@ -21,9 +21,24 @@ from .requires import require_learning
 
 
 def generate(request: Request) -> Iterator[Result]:
-    # One loop over samples with its bookkeeping (skips, where graphs were lost, instantiation
-    # statistics, stopping rules): long, but split up it would pass a dozen counters around.
     require_learning("the string-vae back end")
+    import torch
+
+    # decoding runs one latent point at a time (batch 1, a 192-unit GRU step): intra-op threads
+    # cannot help, and on a shared machine their spin-waits made a step 17.7 ms instead of
+    # 0.32 ms (2 threads against 1 at load average 11); the run's workers parallelise instead
+    threads = torch.get_num_threads()
+    torch.set_num_threads(1)
+    try:
+        stats = yield from _generate(request)
+    finally:
+        torch.set_num_threads(threads)
+    return stats
+
+
+# long: one loop over samples with its bookkeeping (skips, where graphs were lost, instantiation
+# statistics, stopping rules); split up it would pass a dozen counters around
+def _generate(request: Request) -> Iterator[Result]:
     from .graphs import GraphSet
     from .modelfile import load_vae
     from .sampling import Sampler, SamplingSettings
@@ -36,7 +51,7 @@ def generate(request: Request) -> Iterator[Result]:
                                 magnitude=opts.magnitude, steps=opts.steps,
                                 local_magnitude=opts.local_magnitude, points=opts.points,
                                 path_length=opts.path_length, batch=opts.batch, max_tokens=opts.max_tokens,
-                                max_length=opts.max_length)
+                                max_length=opts.max_length, min_length=opts.min_length)
     if opts.decoding == "placed" and not opts.categories:
         raise GrammarkitError("--option decoding=placed needs edge categories: --option categories=FILE.edges "
                               "(or builtin:castle)")
@@ -52,6 +67,8 @@ def generate(request: Request) -> Iterator[Result]:
     for g in sampler.train_graphs:
         train.add(g)
     seen = GraphSet()
+    if opts.search_past_known:  # perturbation grows its offset past training graphs and repeats
+        sampler.known = lambda g: (not opts.include_training and g in train) or g in seen
     em = inst = None
     if opts.categories:
         from .edgemodel import load_edge_model
@@ -66,7 +83,8 @@ def generate(request: Request) -> Iterator[Result]:
             from .placed import PlacedDecoder
 
             sampler.placed = PlacedDecoder(vae, inst, expansions=opts.placed_steps, width=opts.width,
-                                           slack=opts.slack, temperature=opts.temperature)
+                                           slack=opts.slack, temperature=opts.temperature, reach=opts.reach,
+                                           max_open=opts.max_open_rings)
     failures: dict[str, int] = {}
     inst_stats = {"instantiated": 0, "failed": 0, "tries": 0, "monte_carlo": 0, "seconds": 0.0}
     advance = request.progress("string-vae", request.n)
@@ -77,7 +95,7 @@ def generate(request: Request) -> Iterator[Result]:
         advance(0, decoded=sampler.decoded_points, made=index, lost=sampler.decoded_points - index)
     sampler.on_point = on_point
     skipped = {"invalid": 0, "training": 0, "duplicate": 0, "too large": 0}
-    stages = {"decoding": 0, "categories": 0, "3D placement": 0}  # where the graphs that were not built failed
+    stages = {"decoding": 0, "categories": 0, "3D placement": 0, "novelty": 0}  # where the graphs that were not built failed
     stopped = None
     while index < request.n and sampler.decoded_points < limit and stopped is None:
         request.check_deadline()
@@ -160,7 +178,8 @@ def generate(request: Request) -> Iterator[Result]:
     for key, c in sampler.lost.items():  # latent points that decoded to nothing usable
         stages[key] = stages.get(key, 0) + c
     # valid graphs the run could not use: training graphs and graphs made already
-    stages["novelty"] = skipped["training"] + skipped["duplicate"]
+    # (and those the perturbation search moved past, counted by the sampler)
+    stages["novelty"] = stages.get("novelty", 0) + skipped["training"] + skipped["duplicate"]
     stats["lost"] = stages
     if index < request.n:
         why = {"time limit": "the time limit was reached",
@@ -169,7 +188,7 @@ def generate(request: Request) -> Iterator[Result]:
         worst = max(stages, key=stages.get)
         neck = (f"; the bottleneck is {worst} ({stages[worst]} of {sum(stages.values())} graphs lost there: "
                 f"{', '.join(f'{k} {v}' for k, v in stages.items())})" if any(stages.values()) else "")
-        stats["shortfall"] = (f"made {index} of {request.n}: {why} after decoding {sampler.decoded_points} latent "
+        stats["shortfall"] = (f"{why} after decoding {sampler.decoded_points} latent "
                               f"points{neck}; skipped {skipped}"
                               + (f"; {inst_stats['failed']} could not be instantiated ({failures})" if inst else ""))
     return stats
@@ -177,8 +196,9 @@ def generate(request: Request) -> Iterator[Result]:
 
 def shipped_defaults(opts, grammar_name: str):  # noqa: ANN001, ANN201
     """The options with the shipped models filled in when no model is given: the grammar's
-    `builtin:` VAE, its edge categories (unless given), placed decoding and the length prior of
-    strings of at most 40 tokens (unless given), the settings docs/string-vae.md measures.
+    `builtin:` VAE, its edge categories (unless given), placed decoding, the length prior of
+    training strings of 41-56 tokens and at most two open rings (unless given), the settings
+    docs/string-vae.md measures.
     A grammar without shipped weights is told what ships and how to train one."""
     from .modelfile import WEIGHTS
 
@@ -197,7 +217,13 @@ def shipped_defaults(opts, grammar_name: str):  # noqa: ANN001, ANN201
     cats = update.get("categories", opts.categories)
     update["decoding"] = opts.decoding or ("placed" if cats else "masked")
     if update["decoding"] == "placed" and opts.max_length is None and opts.max_tokens is None:
-        update["max_length"] = 40
+        # the measured setting (docs/string-vae.md): budgets of the training strings of 41-56
+        # tokens (smaller castles are nearly all known), at most two open rings at a time
+        update["max_length"] = 56
+        if opts.min_length is None:
+            update["min_length"] = 41
+    if update["decoding"] == "placed" and opts.max_open_rings is None:
+        update["max_open_rings"] = 2
     return opts.model_copy(update=update)
 
 

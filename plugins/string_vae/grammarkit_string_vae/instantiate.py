@@ -152,6 +152,8 @@ class Instantiator:
         out.seconds = time.perf_counter() - t0
         return out
 
+    # long: one chronological backtracking search: the insertion stack, the candidates per
+    # long: part and the budget are one state, undone together
     def _try(self, graph: TypedGraph, adj, start: int, predicted, rng, out: Instantiation):  # noqa: ANN001
         """One try from `start`: parts in breadth-first order, each through the edge to its BFS
         parent; when no category of an edge works, backtrack chronologically to the previous

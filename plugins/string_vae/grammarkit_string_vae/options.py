@@ -32,6 +32,13 @@ class StringVAEOptions(BaseModel):
     max_length: Optional[int] = Field(None, ge=2, description="placed decoding's length prior: every sample's "
                                       "budget is the length of a random training string of at most this many "
                                       "tokens (start points stay the whole pool)")
+    reach: bool = Field(True, description="placed decoding: mask placements by the chain reach table (the fewest "
+                        "parts that can still dock to each open ring's owner; false: the straight-line bound only, "
+                        "the earlier decoder) and rank the beam by it")
+    max_open_rings: Optional[int] = Field(None, ge=1, description="placed decoding: no new ring label while this many "
+                                          "are open (default: none; 2 with the shipped models)")
+    min_length: Optional[int] = Field(None, ge=2, description="placed decoding's length prior: the bucket's "
+                                      "lower end (budgets from training strings of min_length..max_length tokens)")
     slack: float = Field(0.15, ge=0, description="placed decoding: the length prior's slack (budget = the "
                          "start string's length x (1 + slack))")
     temperature: float = Field(0.0, ge=0, description="0: most likely token; > 0: sample tokens")
@@ -46,6 +53,9 @@ class StringVAEOptions(BaseModel):
                                        "points (default: 200 x n)")
     patience: int = Field(60, ge=1, description="stop after this many decoded latent points without a new "
                           "shape (and say why)")
+    search_past_known: bool = Field(True, description="perturb/interpolate/path: grow the offset past decoded "
+                                    "graphs that are training graphs or made already (the paper's \"until a new "
+                                    "valid string\"); false: stop at any graph other than the start point's")
     include_training: bool = Field(False, description="also yield graphs of the training set")
     categories: Optional[str] = Field(None, description="edge-category model (.edges, from `grammarkit train "
                                       "edge-categories`, or builtin:castle for the shipped one): instantiate every "

@@ -79,7 +79,8 @@ class PlacedDecoder:
 
     def __init__(self, vae: Any, instantiator: Any, *, expansions: int = 150, branching: int = 2,
                  retries: int = 2, slack: float = 0.15, pressure: int = 40, temperature: float = 0.0,
-                 width: int = 16, homing: float = 1.0):
+                 width: int = 16, homing: float = 1.0, reach: bool = True, homing_from: float | None = None,
+                 max_open: int | None = None):
         self.vae = vae
         self.model = vae.model
         self.vocab = vae.vocab
@@ -96,6 +97,10 @@ class PlacedDecoder:
         self.temperature = float(temperature)
         self.width = max(1, int(width))
         self.homing = float(homing)
+        self.max_open = None if max_open is None else int(max_open)
+        # with the reach table the beam is ranked by it from the first letter (measured better
+        # than from half the budget); the straight-line homing starts at half the budget as before
+        self.homing_from = float(homing_from if homing_from is not None else (0.0 if reach else 0.5))
         self._autos: dict[int, Automaton] = {}
         self._cands: dict[tuple, list] = {}
         self.types = list(vae.alphabet.types)
@@ -106,6 +111,11 @@ class PlacedDecoder:
         for c in self.cats.categories:
             total[(c.a, c.b)] = total.get((c.a, c.b), 0) + c.count
         self.logfreq = [math.log(max(1, c.count) / max(1, total[(c.a, c.b)])) for c in self.cats.categories]
+        self.reach = None
+        if reach:
+            from .reach import ReachTable
+
+            self.reach = ReachTable(self.cats, self.types)
         self.stats = {"letters": 0, "collision": 0, "no dock": 0, "ground": 0, "reach": 0, "out of steps": 0}
 
     # ---- budgets ---------------------------------------------------------------------------
@@ -222,12 +232,20 @@ class PlacedDecoder:
         # from a part that can still grow: the new one or the owner of an open branch
         left = ctx.state.a.max_len - ctx.state.length
         stack = [q for q in ctx.state.stack if q >= 0]
+        # parts still possible after this letter: the tokens left minus the end and one ring
+        # label per open ring (the reach table counts parts of a chain, exact up to collisions)
+        parts_left = left - 2 - len(ctx.state.rings)
         for o in owners:
             if o == parent:
                 continue
             near = min([d[o]] + [float(np.linalg.norm(P[o] - P[q])) for q in stack])
             if near > (left + 1) * self.step_max:
                 return None, "reach"
+            if self.reach is not None and parts_left < self.reach.depth:
+                need = min([self.reach.parts_needed(ty, Fy, T[o], F[o])]
+                           + [self.reach.parts_needed(T[q], F[q], T[o], F[o]) for q in stack if q != o])
+                if need > parts_left:
+                    return None, "reach"
         radius = R + self.geom._r(ty, vy)
         touched: dict[int, int] = {}
         for j in np.flatnonzero(d <= radius + 2 * self.inst.tolerance):
@@ -275,17 +293,29 @@ class PlacedDecoder:
         # in the second half of the budget the beam keeps the hypotheses whose open rings can
         # close soonest: the new part's distance to the nearest docking spot of each open
         # ring's owner, in docking steps, weighs more and more (not when placing a given string)
-        weight = self.homing * min(1.0, max(0.0, 2.0 * st.length / st.a.max_len - 1.0)) if ctx.forced is None else 0
+        weight = self.homing * min(1.0, max(0.0, (st.length / st.a.max_len - self.homing_from) / (1.0 - self.homing_from))) if ctx.forced is None else 0
         if len(out) > self.width and weight > 0:
             owners = [o for o in set(st.rings.values())]
             if owners:
                 for hyp in out:
-                    y = hyp.frames[-1][:3, 3]
-                    hyp.rank = hyp.score - weight * sum(
-                        min(float(np.linalg.norm(p - y)) for p in self._spots(ctx.types, hyp.frames, o))
-                        for o in owners) / self.step_max
+                    hyp.rank = hyp.score - weight * self._homing(ctx, hyp, owners, ty)
         out.sort(key=lambda h: -(h.rank if h.rank is not None else h.score))
         return out[:self.width]
+
+    def _homing(self, ctx: "_Ctx", hyp: _Hyp, owners: list, ty: str) -> float:
+        """How far the open rings are from closing in `hyp` (whose last part is a new type-`ty`
+        part): per open ring's owner, the fewest parts a chain from the new part or an open
+        branch's owner needs to dock to it (the reach table), or without one the distance from
+        the new part to the owner's nearest docking spot in docking steps."""
+        y = hyp.frames[-1]
+        if self.reach is None:
+            return sum(min(float(np.linalg.norm(p - y[:3, 3])) for p in self._spots(ctx.types, hyp.frames, o))
+                       for o in owners) / self.step_max
+        T, F = ctx.types, hyp.frames
+        stack = [q for q in ctx.state.stack if 0 <= q < len(F)]
+        return float(sum(min([self.reach.parts_needed(ty, y, T[o], F[o])]
+                             + [self.reach.parts_needed(T[q], F[q], T[o], F[o]) for q in stack if q != o])
+                         for o in owners))
 
     # ---- the search ------------------------------------------------------------------------
     @torch.no_grad()
@@ -394,6 +424,10 @@ class PlacedDecoder:
         else:
             if allowed and self.pressure:
                 allowed = st.closing(allowed, self.pressure, ctx.soft_end)
+            if self.max_open is not None and len(st.rings) >= self.max_open:
+                # no new ring while max_open are open (a ring can only close on a chain that
+                # comes back to its owner; many at once rarely all do within the budget)
+                allowed = [t for t in allowed if not (self.vocab.kind(t)[0] == "ring" and self.vocab.kind(t)[1] not in st.rings)]
             order = self._ordered(ctx, logits, allowed)
         beams = {}
         if ctx.forced is None and st.rings and any(self.vocab.kind(t)[0] == "node" for t in order):

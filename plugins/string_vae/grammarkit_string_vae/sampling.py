@@ -52,6 +52,7 @@ class SamplingSettings:
     batch: int = 128  # seeds decoded together
     max_tokens: int | None = None  # size control: start only from training points whose string is this short
     max_length: int | None = None  # placed decoding's length prior: budgets drawn from training strings this short
+    min_length: int | None = None  # ... and at least this long (the bucket's lower end)
 
 
 @dataclass
@@ -81,6 +82,7 @@ class Sampler:
     placed: object = None  # decoding "placed": the placed.PlacedDecoder that decodes each point
     stop: object = None  # a callable: True when the run's time is up (placed decoding polls it per point)
     on_point: object = None  # a callable, called after every decoded latent point (progress)
+    known: object = None  # a callable graph -> bool: graphs the search moves past (training graphs, made ones)
 
     def __post_init__(self) -> None:
         self.rng = np.random.default_rng(self.seed)
@@ -119,11 +121,12 @@ class Sampler:
 
     def _bucket(self) -> list[int]:
         """The training strings' lengths (in characters, as the budget counts them) of at most
-        `max_length`; the shortest training string's when none is that short."""
+        `max_length` (and at least `min_length`); the shortest training string's when none is that short."""
         S = self.vae.train_strings
         m = self.settings.max_length
-        lengths = sorted(len(t) for t in S if len(t) <= m)
-        return lengths or [min(len(t) for t in S)]
+        lo = self.settings.min_length or 0
+        lengths = sorted(len(t) for t in S if lo <= len(t) <= m)
+        return lengths or sorted(len(t) for t in S if len(t) <= m) or [min(len(t) for t in S)]
 
     def _decode(self, z: np.ndarray, parents: list[tuple[int, ...]] | None = None) -> list[Decoded]:
         self._calls += 1
@@ -159,7 +162,8 @@ class Sampler:
     def _search(self, centres: np.ndarray, avoid: list[list[int]], magnitude: float, steps: int,
                 mode: str, parents: list[tuple[int, ...]]) -> list[Sample | None]:
         """For each centre, offsets of growing magnitude until a valid string whose graph is
-        none of `avoid[i]` (training graph indices) appears; None where none did."""
+        none of `avoid[i]` (training graph indices) and not `known` appears (the paper's "until
+        a new valid string"); None where none did."""
         found: list[Sample | None] = [None] * len(centres)
         todo = list(range(len(centres)))
         D = centres.shape[1]
@@ -171,10 +175,13 @@ class Sampler:
             outs = self._decode(z, [parents[i] for i in todo])
             left = []
             for j, i, d in zip(range(len(todo)), todo, outs):
-                if d.valid and not any(_same(d.graph, self.train_graphs[a]) for a in avoid[i]):
+                if (d.valid and not any(_same(d.graph, self.train_graphs[a]) for a in avoid[i])
+                        and not (self.known is not None and self.known(d.graph))):
                     found[i] = Sample(z[j], d, mode, parents[i], k)
-                else:
-                    left.append(i)
+                    continue
+                if d.valid:  # a valid decode of a graph the search moves past
+                    self.lost["novelty"] = self.lost.get("novelty", 0) + 1
+                left.append(i)
             todo = left
         return found
 

@@ -224,6 +224,8 @@ class ParsedString:
     ring_chars: list[tuple[int, int]] = field(default_factory=list)  # their labels' characters
 
 
+# long: one left-to-right pass over the tokens with the branch stack and open ring labels;
+# long: every error case points at its own character, so the checks stay with that state
 def decode(text: str, alphabet: Alphabet, fmt: str = "smiles") -> ParsedString:
     """Parse a shape string into its graph; malformed strings raise ShapeStringError at the
     offending character (unknown letters, unbalanced brackets, empty branches, ring labels

@@ -79,6 +79,8 @@ def _tokens(vocab: Vocab, strings: list[str], max_len: int) -> tuple[np.ndarray,
     return arr, lengths
 
 
+# long: the training loop with its schedules (KL warm-up, word dropout, time limit) and
+# long: per-epoch monitoring, which share the model, optimiser and history
 def train_vae(dataset: Dataset, config: TrainConfig = TrainConfig(), *,
               progress: Callable[[dict], None] | None = None) -> TrainResult:
     """Train a StringVAE on `dataset`; `progress(row)` is called after every epoch."""

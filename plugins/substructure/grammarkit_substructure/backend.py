@@ -97,7 +97,8 @@ def _typed_graph(types, edges):
     key = [tuple(zlib.crc32(t.encode("utf-8")) for t in names), tuple(sorted(colour))]
     classes = len(set(colour))
     for _ in range(n):
-        colour = [hash((colour[i], tuple(sorted(colour[w] for w in nbrs[i])))) for i in range(n)]
+        get = colour.__getitem__  # the previous round's colours (map + sorted: no generator frames)
+        colour = [hash((colour[i], tuple(sorted(map(get, nb))))) for i, nb in enumerate(nbrs)]
         key.append(tuple(sorted(colour)))
         now = len(set(colour))
         if now == classes:
@@ -125,13 +126,35 @@ def _trivial(donor: Shape, host: Shape, op, known: list) -> bool:
     for v in op.copied:
         counts[donor.types[v]] = counts.get(donor.types[v], 0) + 1
     hist = tuple(sorted((t, c) for t, c in counts.items() if c))
-    if not any(hist == kh for kh, _ in known):
+    same = [k for k in known if k[0] == hist]
+    if not same:
         return False
     kept, edges = replace_subgraph(len(host), host.edges, op.removed, donor.edges, op.copied,
                                    [(b, w) for _, w, b, _ in op.pairs])
     types = [host.types[v] for v in kept] + [donor.types[v] for v in op.copied]
-    g, h = _typed_graph(types, edges)
-    return any(h == kh for _, kh in known)
+    # a cheap invariant first: the typed degree multiset (most non-trivial results differ in
+    # it, and the Weisfeiler-Lehman refinement below is the dearer step)
+    degrees = _typed_degrees(types, edges)
+    same = [k for k in same if k[2] == degrees]
+    if not same:
+        return False
+    h = _typed_graph(types, edges)[1]
+    return any(h == k[1] for k in same)
+
+
+def _typed_degrees(types, edges) -> tuple:  # noqa: ANN001
+    """The sorted (type, degree) pairs of a typed graph: an isomorphism invariant."""
+    deg = [0] * len(types)
+    for u, v in edges:
+        deg[u] += 1
+        deg[v] += 1
+    return tuple(sorted(zip(types, deg)))
+
+
+def _known(types, edges) -> tuple:  # noqa: ANN001
+    """(histogram, WL key, typed degrees) of a shape the trivial test compares against."""
+    hist, key = _typed_graph(types, edges)
+    return hist, key, _typed_degrees(types, edges)
 
 
 def candidate(state: _State, index: int) -> dict:
@@ -140,7 +163,7 @@ def candidate(state: _State, index: int) -> dict:
     rng = np.random.default_rng(np.random.SeedSequence([int(state.seed) & 0xFFFFFFFF, int(index)]))
     opt = state.options
     if "known" not in state.cache:
-        state.cache["known"] = [_typed_graph(e.types, e.edges) for e in state.examples]
+        state.cache["known"] = [_known(e.types, e.edges) for e in state.examples]
     examples_known = state.cache["known"]
     if "target" not in state.cache:
         state.cache["target"] = count_target(state.examples, getattr(opt, "counts", "grammar"))
@@ -159,7 +182,7 @@ def candidate(state: _State, index: int) -> dict:
             options.extend((d, j, op) for j, op in enumerate(ops))
         if not options:
             break
-        known = examples_known + ([_typed_graph(host.types, host.edges)] if host_key is None else [])
+        known = examples_known + ([_known(host.types, host.edges)] if host_key is None else [])
         embedded = 0
         done = False
         # Local edits first: an operation whose pieces are "the rest of the shape" (stored as
@@ -187,7 +210,8 @@ def candidate(state: _State, index: int) -> dict:
             tried += 1
             out = embed(donor, host, op, state.rules, embedding=opt.embedding, repair=opt.repair,
                         orientation_degrees=opt.orientation_degrees, max_parts=state.max_parts,
-                        origin_at=opt.frame_origin)
+                        origin_at=opt.frame_origin,
+                        cache=state.cache.setdefault("geometry", {}) if opt.reuse_geometry else None)
             if out.shape is None:
                 continue
             history.append({"donor": donor.name, "operation": op.to_json(host.ids, donor.ids),
@@ -246,6 +270,36 @@ def load_examples(grammar, tolerance: float | None) -> tuple[list, list[Shape], 
     return assemblies, shapes, tol
 
 
+def _shortfall(made: int, asked: int, stopped: str, stats: dict, opt, target: dict | None) -> str:  # noqa: ANN001
+    """Why a run made fewer variants than asked: the rule that stopped it and where the
+    candidates' shapes went (rejected embeddings, outside the examples' counts, repeats,
+    dropped by the final check), with the option that would change it."""
+    # the time case names no cause of its own: the run layer, which owns the budget, puts
+    # "the time limit (S s) was reached; " before this account (summary["stopped_by"] == "time")
+    why = {"patience": f"the last {opt.patience} candidates gave nothing new after ",
+           "candidates": f"max_candidates ({opt.max_candidates}) reached after "}.get(stopped, "")
+    repeats = stats["valid"] - stats["new"] - stats.get("dropped_by_final_check", 0)
+    parts = [f"{why}{stats['candidates']} candidates",
+             f"{stats['embeddings_tried']} embeddings tried, {stats['valid'] + stats['outside_counts']} "
+             "valid for the grammar",
+             f"{stats['valid']} within the examples' counts" if target else f"{stats['valid']} kept",
+             f"{repeats} of them repeat an example or an earlier result"]
+    if stats.get("dropped_by_final_check"):
+        parts.append(f"{stats['dropped_by_final_check']} dropped by the final check")
+    text = ", ".join(parts)
+    if stats["outside_counts"] and target:
+        seen = ", ".join(f"{t} {lo}..{hi}" for t, (lo, hi) in sorted(target.items()))
+        text += (f"; {stats['outside_counts']} valid shapes had part counts outside the examples' ({seen}) "
+                 "and were not written (--option counts=grammar writes every shape the grammar accepts)")
+    rejected = stats["embeddings_tried"] - stats["valid"] - stats["outside_counts"]
+    if rejected > 0:
+        text += f"; {rejected} embeddings broke the grammar (placements, support, holes)"
+    hint = ("longer chains (--option operations=8), " if opt.operations < 8 else "") + "--option q=1 or more examples may find more"
+    return f"{text}; {hint}" if stopped != "time" else f"{text}; a longer --time-limit may find more"
+
+
+# long: the run loop (batches, dedupe, final check, results) and its summary share the
+# counters; the candidate work and the shortfall text are in their own functions
 def run(request) -> Iterator:  # noqa: ANN001
     """Yield up to `request.n` new valid assemblies; return the run's statistics."""
     from grammarkit.errors import DerivationError
@@ -336,25 +390,10 @@ def run(request) -> Iterator:  # noqa: ANN001
                "variants_per_minute": round(60.0 * made / elapsed, 1) if elapsed > 0 else None}
     if made < request.n and stopped != "time":
         stopped = "patience" if stats["candidates"] - last_new >= opt.patience else "candidates"
+    summary["stopped_by"] = stopped  # machine-readable: "n", "time", "patience", "candidates"
     summary["stopped"] = {"n": f"made the {request.n} asked for", "time": "the time limit was reached",
                           "patience": f"{opt.patience} candidates in a row gave nothing new",
                           "candidates": f"the candidate cap ({opt.max_candidates}) was reached"}[stopped]
-    if made < request.n and stopped == "time":
-        summary["shortfall"] = f"made {made} of {request.n}: the time limit was reached"
-    elif made < request.n:
-        why = (f"the last {opt.patience} candidates gave nothing new" if stats["candidates"] - last_new >= opt.patience
-               else f"max_candidates ({opt.max_candidates}) reached" if stats["candidates"] >= opt.max_candidates
-               else "stopped")
-        target = count_target(examples, opt.counts)
-        outside = ""
-        if stats["outside_counts"] and target:
-            seen = ", ".join(f"{t} {lo}..{hi}" for t, (lo, hi) in sorted(target.items()))
-            outside = (f"{stats['outside_counts']} more valid shapes had part counts outside the "
-                       f"examples' ({seen}) and were not written (--option counts=grammar writes "
-                       "every shape the grammar accepts); ")
-        summary["shortfall"] = (f"{why}: {stats['candidates']} candidates gave {stats['valid']} valid shapes, "
-                                f"{made} of them new (the rest repeat an example or an earlier result); "
-                                + outside
-                                + ("longer chains (--option operations=8), " if opt.operations < 8 else "")
-                                + "--option q=1 or more examples may find more")
+    if made < request.n:
+        summary["shortfall"] = _shortfall(made, request.n, stopped, stats, opt, count_target(examples, opt.counts))
     return summary

@@ -49,6 +49,9 @@ class SubstructureOptions(BaseModel):
                                                    "range (fewest..most; with two or more examples), "
                                                    "or only within what the grammar's count "
                                                    "constraints allow (`grammar`)")
+    reuse_geometry: bool = Field(True, description="keep each placed example part's contact data, "
+                                 "frame and support verdicts across embeddings (rigid embedding; "
+                                 "`false`: recompute them every time, the former behaviour, same results)")
     final_check: bool = Field(True, description="validate every variant with `grammarkit validate`'s "
                               "rules and defaults before it is written (one it rejects is dropped and "
                               "counted)")

@@ -53,6 +53,9 @@ class Shape:
     centroids: np.ndarray = field(default=None)  # type: ignore[assignment]
     graph: OrderedGraph = field(default=None)  # type: ignore[assignment]
     _counts: dict | None = field(default=None, repr=False)
+    # per part, the example part it is a rigid copy of: (example name, part id); the part's
+    # mesh is that part's mesh in its own frame moved by `transforms[i]` (PartCache keys)
+    origins: list | None = field(default=None, repr=False)
 
     def __len__(self) -> int:
         return len(self.types)
@@ -86,7 +89,8 @@ class Shape:
                     [p.mesh for p in assembly.parts],
                     [np.asarray(p.transform, dtype=np.float64) for p in assembly.parts],
                     [str(p.meta.get("source", f"{name}/{p.id}")) for p in assembly.parts],
-                    edges, float(g.graph["tolerance"]), name)
+                    edges, float(g.graph["tolerance"]), name,
+                    origins=[(name, p.id) for p in assembly.parts])
         cents = np.array([g.nodes[p.id]["centroid"] for p in assembly.parts]).reshape(-1, 3)
         return shape.finish(cents)
 
@@ -201,8 +205,14 @@ def _renumber(types: Sequence[str]) -> list[str]:
 
 def embed(donor: Shape, host: Shape, op: Operation, rules=None, *, embedding: str = "rigid",
           repair: bool = True, orientation_degrees: float = 20.0,
-          max_parts: int | None = None, origin_at: str = "foot") -> Embedded:
-    """Apply `op` with geometry: the host without S, plus S' of the donor mapped into the hole."""
+          max_parts: int | None = None, origin_at: str = "foot", cache: dict | None = None) -> Embedded:
+    """Apply `op` with geometry: the host without S, plus S' of the donor mapped into the hole.
+
+    `cache` (a dict kept across calls, e.g. per run) holds a `grammarkit.tiling.PartCache`:
+    with the rigid embedding every part is a source part at a placement (`part_key(source,
+    transform)`), so its contact data, frames and support verdicts are computed once per
+    placement instead of once per embedding; only the required sites of copied parts and of
+    kept parts that lost a neighbour are checked again."""
     removed = set(op.removed)
     kept = [v for v in range(len(host)) if v not in removed]
     copied = list(op.copied)
@@ -234,7 +244,20 @@ def embed(donor: Shape, host: Shape, op: Operation, rules=None, *, embedding: st
     sources = [host.sources[v] for v in kept] + [donor.sources[x] for x in copied]
     base_edges = induced_edges(host.edges, kept)
     new_idx = list(range(len(kept), n_new))
-    result = _check(rules, types, meshes, base_edges, new_idx, host.tolerance)
+    keys = pcache = sites_of = origins = None
+    if host.origins is not None and donor.origins is not None:
+        origins = [host.origins[v] for v in kept] + [donor.origins[x] for x in copied]
+    if cache is not None and embedding == "rigid" and origins is not None:
+        from grammarkit.tiling import PartCache, part_key
+
+        pcache = cache.setdefault("parts", PartCache())
+        ids = cache.setdefault("origins", {})
+        keys = [part_key(ids.setdefault(o, len(ids)), M) for o, M in zip(origins, transforms)]
+        position = {v: k for k, v in enumerate(kept)}
+        lost = {position[u if v in removed else v] for u, v in host.edges
+                if (u in removed) != (v in removed)}
+        sites_of = sorted(lost | set(new_idx))
+    result = _check(rules, types, meshes, base_edges, new_idx, host.tolerance, keys, pcache, sites_of)
     repaired = False
     if result[1] and repair:
         fixed = _repair_ground(donor, host, copied, meshes, len(kept))
@@ -246,21 +269,24 @@ def embed(donor: Shape, host: Shape, op: Operation, rules=None, *, embedding: st
     if problems:
         return Embedded(None, problems)
     shape = Shape(_renumber(types), types, meshes, transforms, sources, sorted(edges),
-                  host.tolerance, host.name)
+                  host.tolerance, host.name, origins=origins if not repaired else None)
     return Embedded(shape.finish(), [], repaired)
 
 
-def _check(rules, types, meshes, base_edges, new_idx, tolerance) -> tuple[set, list[str]]:
+def _check(rules, types, meshes, base_edges, new_idx, tolerance, keys=None, pcache=None,  # noqa: ANN001
+           sites_of=None) -> tuple[set, list[str]]:
     lo, hi = bounds_of(meshes)
     try:
-        edges = set(base_edges) | contacts_involving(meshes, types, new_idx, tolerance, lo, hi, rules)
+        edges = set(base_edges) | contacts_involving(meshes, types, new_idx, tolerance, lo, hi, rules,
+                                                     keys=keys, cache=pcache)
     except ForbiddenContact as exc:
         return set(), [str(exc)]
     if rules is None:
         return edges, []
     parts = [Part(str(i), t, m) for i, (t, m) in enumerate(zip(types, meshes))]
-    cents = prepare(parts).centroid
-    return edges, edit_violations(rules, types, sorted(edges), meshes, cents, tolerance, new_idx, lo, hi)
+    cents = pcache.geometry(parts, keys).centroid if pcache is not None else prepare(parts).centroid
+    return edges, edit_violations(rules, types, sorted(edges), meshes, cents, tolerance, new_idx, lo, hi,
+                                  keys=keys, cache=pcache, sites_of=sites_of)
 
 
 def _repair_ground(donor: Shape, host: Shape, copied: list[int], meshes: list, k: int):

@@ -1,12 +1,17 @@
 """Asset inserts: i() and the primitive operations."""
 from __future__ import annotations
 
+from typing import Any
+
 from ....ir import (
     Arg,
+    Binary,
     Call,
     Case,
     CaseArm,
+    Num,
     OpCall,
+    Ref,
     Seq,
     Str,
 )
@@ -40,12 +45,38 @@ def _builtin(name: str, frame: str, span: Span | None, options: bool) -> tuple:
     return [call], None
 
 
+def _sized(w: Any, h: Any, d: Any, frame: str, span: Span | None) -> list:
+    """CGA's primitives with dimensions: a w x h x d box (CGA's x, y, z) centred in the scope's
+    xz and standing on its y = 0, as t() s() in grammarkit's axes (frame Y: CGA's y is z).
+    Sizes are taken by magnitude: a centred box of width -w is the box of width w (rule files
+    write negative sizes, and the engine's s() refuses them)."""
+    w, h, d = (Call(func="abs", args=(v,), span=span) if not (isinstance(v, Num) and v.value >= 0) else v
+               for v in (w, h, d))
+    def half_rest(size: str, dim: Any) -> Any:
+        return Binary(op="/", left=Binary(op="-", left=Ref(name=size), right=dim), right=Num(value=2))
+    if frame == "Y":
+        move, size = (half_rest("scope.sx", w), half_rest("scope.sy", d), Num(value=0)), (w, d, h)
+    else:
+        move, size = (half_rest("scope.sx", w), Num(value=0), half_rest("scope.sz", d)), (w, h, d)
+    return [OpCall(name="t", args=tuple(Arg(value=v) for v in move), span=span),
+            OpCall(name="s", args=tuple(Arg(value=v) for v in size), span=span)]
+
+
 def _h_primitive(cga: str):
     def handler(h: HandlerContext):
         items, approx = _builtin(_PRIMITIVE_OPS[cga], h.frame, h.span, False)
-        if h.args:
+        args = [translate_expr(a, h.ctx) for a in h.args]
+        sides = args[0] if cga in ("primitiveCylinder", "primitiveCone", "primitiveDisk") and args else None
+        if cga == "primitiveCube" and len(args) == 3:
+            return _sized(*args, h.frame, h.span) + items, None
+        if cga == "primitiveCylinder" and len(args) == 3:
+            diameter = Binary(op="*", left=Num(value=2), right=args[1])
+            items = _sized(diameter, args[2], diameter, h.frame, h.span) + items
+            args = args[:1]
+        if args and not (len(args) == 1 and isinstance(sides, Num) and sides.value == 16):
             approx = (f"{cga}:options", "the number of segments (and other arguments) is "
-                      "grammarkit's fixed 16")
+                      "grammarkit's fixed 16" if sides is not None or cga != "primitiveCube"
+                      else "its arguments are not translated")
         return items, approx
     return handler
 

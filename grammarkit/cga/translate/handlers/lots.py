@@ -8,6 +8,7 @@ from lark import Token, Tree
 from ....ir import (
     Arg,
     Branch,
+    Num,
     OpCall,
     Ref,
     Seq,
@@ -96,15 +97,22 @@ def _h_shape_op(gk: str, n: int):
         if h.block is None:
             raise Untranslatable(f"op:{gk}", f"{gk}() without a block", h.span)
         need(h.args, n, n, gk, h.span)
-        if h.frame != "Y":
-            raise Untranslatable(f"{gk}:face", f"{gk}() on a face of a volume (its front is CGA's "
-                                 "scope -z, which grammarkit's faces do not have)", h.span)
         entries = h.t.comp_entries(h.block, h.frame, h.rctx, "shape-parts")
         if not entries:
             raise Untranslatable(f"{gk}:no-selector", "none of its selectors is supported", h.span)
-        return [OpCall(name=gk, args=tuple(Arg(value=translate_expr(a, h.ctx)) for a in h.args),
-                       block=tuple(entries), span=h.span)], None
+        args = [translate_expr(a, h.ctx) for a in h.args]
+        if h.frame != "Y":
+            # CGA classifies the edges' outward normals into the scope's quadrants; on a face
+            # of a volume (frame Z: the scope's z is the face normal) no edge is front or back
+            # (CGA's shapeX is setback(comp(fe) { front = f | ... })), grammarkit's faces call
+            # their -y/+y edges front/back too, so those wings get no width
+            args = [Num(value=0) if side in ("front", "back") else a for side, a in zip(_SHAPE_SIDES[gk], args)]
+        return [OpCall(name=gk, args=tuple(Arg(value=a) for a in args), block=tuple(entries), span=h.span)], None
     return handler
+
+
+_SHAPE_SIDES = {"shapeL": ("front", "left"), "shapeU": ("front", "right", "left"),
+                "shapeO": ("front", "right", "back", "left")}
 
 
 for _gk, _n in (("shapeL", 2), ("shapeU", 3), ("shapeO", 4)):

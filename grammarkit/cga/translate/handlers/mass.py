@@ -26,9 +26,14 @@ def _h_extrude(h: HandlerContext):
         return [OpCall(name="extrude", args=(Arg(value=translate_expr(h.args[0], h.ctx)),), span=h.span)], None
     if len(h.args) == 2:
         how = axis_name(h.args[0]) or "an axis"
-        h = translate_expr(h.args[1], h.ctx)
-        return [OpCall(name="extrude", args=(Arg(value=h),), span=h.span)], (
-            "extrude:axis", f"extrusion along {how} is made along the face normal")
+        call = OpCall(name="extrude", args=(Arg(value=translate_expr(h.args[1], h.ctx)),), span=h.span)
+        # along the face normal anyway: face.normal (the default), vertex.normal (a planar
+        # face's vertex normals are its normal), and world.y / world.up (.flatTop) on a lot or
+        # a face of it (frame Y: grammarkit lots are flat, their normal is the world's up)
+        if how in ("face.normal", "vertex.normal") or (
+                h.frame == "Y" and how in ("world.y", "world.up", "world.up.flatTop")):
+            return [call], None
+        return [call], ("extrude:axis", f"extrusion along {how} is made along the face normal")
     raise Untranslatable("op:extrude/" + str(len(h.args)), "extrude() with these arguments", h.span)
 
 

@@ -104,9 +104,17 @@ def _h_translate(h: HandlerContext):
     absolute position or along the world's or the object's axes is reported."""
     need(h.args, 5, 5, "translate", h.span)
     mode, system = axis_name(h.args[0]), axis_name(h.args[1])
+    if (mode, system) == ("rel", "world") and h.frame == "Y" and all(
+            isinstance(e, Num) and e.value == 0 for e in (translate_expr(h.args[i], h.ctx) for i in (2, 4))):
+        # straight up in the world (`translate(rel, world, 0, curbHeight, 0)` on a lot): a
+        # lot-like scope's up axis is the world's, unless a turn of the scope tilted it
+        up = translate_expr(h.args[3], h.ctx)
+        return [OpCall(name="t", args=(Arg(value=Num(value=0)), Arg(value=Num(value=0)), Arg(value=up)),
+                       span=h.span)], ("translate:rel.world", "moved along the scope's up axis, which is "
+                                       "the world's on a lot and its volumes (not after a turn that tilts it)")
     if (mode, system) != ("rel", "scope"):
         raise Untranslatable(f"translate:{mode}.{system}", f"translate({mode}, {system}, ...): only "
-                             "rel, scope (which is t()) is translated", h.span)
+                             "rel, scope (which is t()) and rel, world straight up on a lot are translated", h.span)
     return _moved(h.args[2:], h), None
 
 
@@ -211,11 +219,14 @@ def _h_align_scope_to_geometry(h: HandlerContext):
     up = axis_name(h.args[0])
     if up not in ("yUp", "zUp"):
         raise Untranslatable("alignScopeToGeometry:up", f"up axis {up!r}", h.span)
+    # the rest of the rule is in the up axis's convention even where the alignment itself is
+    # not translated (a located warning): the frame must follow CGA, or later splits go astray
+    h.t.frame_change = "Y" if up == "yUp" else "Z"
     face_name = axis_name(h.args[1])
     face: Any
     if face_name in _FACE_SELECTORS:
         face = Str(value=_FACE_SELECTORS[face_name])
-    elif face_name is not None and "." in face_name:
+    elif face_name == "auto" or (face_name is not None and "." in face_name):
         raise Untranslatable("alignScopeToGeometry:face", f"face selector {face_name!r}", h.span)
     else:
         face = translate_expr(h.args[1], h.ctx)
@@ -232,7 +243,6 @@ def _h_align_scope_to_geometry(h: HandlerContext):
             edge = translate_expr(h.args[2], h.ctx)
     if isinstance(face, Str) and face.value == "any" and not isinstance(edge, Str):
         raise Untranslatable("alignScopeToGeometry:face", "face selector any with an edge index", h.span)
-    h.t.frame_change = "Y" if up == "yUp" else "Z"
     call_args = (Arg(value=edge),) if isinstance(face, Num) and face.value == 0 else (Arg(value=edge), Arg(value=face))
     return [OpCall(name="alignScopeToGeometry", args=call_args, span=h.span)], None
 
@@ -340,7 +350,7 @@ def _h_rotate(h: HandlerContext):
         raise Untranslatable("op:rotate", "the engine has no rotate(mode, system, x, y, z) operation "
                              "(INTERFACES.md item 2)", h.span)
     angles = [translate_expr(a, h.ctx) for a in h.args[2:]]
-    head = (Arg(value=Str(value=mode)), Arg(value=Str(value=system)))
+    head = (Arg(value=Ref(name=mode)), Arg(value=Ref(name=system)))  # identifiers, as the engine's spec
     y_up = system == "world" or h.frame == "Y"
     if not y_up:
         return [OpCall(name="rotate", args=head + tuple(Arg(value=a) for a in angles), span=h.span)], None
@@ -351,6 +361,6 @@ def _h_rotate(h: HandlerContext):
                         span=h.span)]
     if mode == "abs" and len(steps) > 1:
         # absolute angles about several axes: set the first, then turn on by the others
-        rel = (Arg(value=Str(value="rel")), Arg(value=Str(value=system)))
+        rel = (Arg(value=Ref(name="rel")), Arg(value=Ref(name=system)))
         steps = steps[:1] + [s.model_copy(update={"args": rel + s.args[2:]}) for s in steps[1:]]
     return steps, None
