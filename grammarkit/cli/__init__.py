@@ -85,10 +85,22 @@ def _stop(signum: int, frame: object) -> None:
 _SWALLOWING_PACKAGES = (f"{os.sep}trimesh{os.sep}",)
 
 
+# A C extension module's initialization that calls back into Python (nanobind, which
+# manifold3d is built with, creates its enums with `enum.Enum(...)`): a KeyboardInterrupt raised
+# there becomes a C++ exception that nothing catches, and the process aborts (exit -6, issue
+# 31: a batch stopped 0.6 s after its start, in the lazy `import manifold3d`). Inside one, the
+# stop is asked again once the module exists.
+_EXTENSION_INIT = ("<frozen importlib._bootstrap_external>", frozenset({
+    "ExtensionFileLoader.create_module", "ExtensionFileLoader.exec_module"}))
+
+
 def _in_code_that_swallows_stops(frame: Any) -> bool:
     while frame is not None:
-        name = frame.f_code.co_filename
-        if any(p in name for p in _SWALLOWING_PACKAGES) or frame.f_code.co_name == "__set_name__":
+        code = frame.f_code
+        if any(p in code.co_filename for p in _SWALLOWING_PACKAGES) \
+                or code.co_name == "__set_name__" \
+                or (code.co_filename == _EXTENSION_INIT[0]
+                    and getattr(code, "co_qualname", "") in _EXTENSION_INIT[1]):
             return True
         frame = frame.f_back
     return False

@@ -226,3 +226,30 @@ def test_a_stop_while_a_class_names_its_fields_stops_the_command_cleanly(sig):
     assert done.returncode == 130, (done.returncode, done.stdout, done.stderr)
     assert "interrupted" in done.stderr and "Traceback" not in done.stderr, done.stderr
     assert "lost" not in done.stdout
+
+
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])
+def test_a_stop_while_an_extension_module_initializes_comes_once_it_exists(sig):
+    # manifold3d (nanobind) creates its enums from C during its import: a stop raised there is
+    # a C++ exception nothing catches, and the process aborted (exit -6 on CI, a batch stopped
+    # 0.6 s after its start). The signal is sent from inside that enum creation.
+    done = run_script(f"""
+        import enum
+        sys.modules.pop("manifold3d", None)
+        original, sent = enum.EnumType.__call__, []
+        def call(cls, *args, **kwargs):
+            if not sent:
+                sent.append(1)
+                os.kill(os.getpid(), {int(sig)})
+                for _ in range(1000): pass  # the handler runs here, inside the module's init
+            return original(cls, *args, **kwargs)
+        enum.EnumType.__call__ = call
+        try:
+            import manifold3d
+            for _ in range(10 ** 8): pass
+            print("lost")
+        except KeyboardInterrupt:
+            print("stopped", sent == [1], "manifold3d" in sys.modules)
+    """)
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert done.stdout.split() == ["stopped", "True", "True"], done.stdout + done.stderr
