@@ -97,6 +97,12 @@ def edge_selectors(frame: Frame, selector: str) -> tuple[tuple[str, ...] | None,
     there is no counterpart."""
     if selector in _WORLD:
         return _WORLD[selector], None
+    if selector in ("streetSide", "noStreetSide"):
+        # CGA 2012's street selectors read CityEngine's street-adjacency attributes; without
+        # them (an initial shape that is no block's lot, as every grammarkit lot) CityEngine
+        # selects no edge for either, and the remainder is the whole face (PyPRT 1.12)
+        return (), (f"{selector} selects no edge: it needs CityEngine's street attributes, "
+                    f"which grammarkit lots lack (as CityEngine without them)")
     prefix, _, rest = selector.rpartition(".")
     base = _EDGE_BASE[frame]
     if prefix in ("object", "street") and rest in base:
