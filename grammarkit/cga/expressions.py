@@ -282,6 +282,12 @@ def _ref(name: str, span: Span | None, ctx: ExprContext) -> Any:
     if name in _FUNCTIONS and _FUNCTIONS[name][1] == 0:
         # a built-in function called without parentheses (`~(rand)`): CGA allows it
         return Call(func=_FUNCTIONS[name][0], args=(), span=span)
+    if name == "scope.elevation":
+        # the world height of the scope's origin (CGA's y): grammarkit's scope.tz is the origin's
+        # world z whatever the frame, and its lots lie at z = 0 (sea level)
+        return Ref(name="scope.tz", span=span)
+    if name == "initialShape.origin.py":
+        return Num(value=0.0, span=span)  # the lot's height: grammarkit lots lie at z = 0
     head = name.split(".", 1)[0]
     if head in ("geometry", "scope", "comp", "split", "initialShape", "material", "seedian",
                 "world", "object", "pivot", "trim", "convert"):

@@ -65,3 +65,57 @@ def test_legacy_street_selectors_are_errors_with_strict(tmp_path):
     res = CliRunner().invoke(cli_main, ["import-cga", str(src), "-o", str(out), "--strict"])
     assert res.exit_code == 1 and not out.exists()
     assert "street.cga:2:22" in res.output and "streetSide selects no edge" in res.output
+
+
+ELEVATION = """Lot --> t(0, 2, 0) extrude(10) comp(f) { side: Facade }
+Facade --> split(y) { 3: Ground | ~1: Upper }
+Upper --> Check
+Ground --> Check
+Check --> case scope.elevation - initialShape.origin.py > 4: report("high", 1) X. else: report("low", 1) X.
+"""
+
+
+def test_scope_elevation_is_the_world_height_of_the_scope_origin():
+    # Esri's Facade_Schematic.cga: `case scope.elevation - initialShape.origin.py > ...`
+    r = imported(ELEVATION)
+    assert "scope.tz - 0" in line(r, "Check")
+    reports = grammarkit.derive(r.grammar, lot=LOT).reports
+    # the lot raised 2 m: ground floors start at 2, upper floors at 5, on each of 4 facades
+    assert reports["high"]["n"] == 4 and reports["low"]["n"] == 4
+
+
+# the preset pattern of Esri's Building_From_OpenStreetMap.cga: CityEngine stores a rule's
+# attribute presets as `style` blocks; a style overrides hidden "estimated" attrs that other
+# attrs derive from (a chain through functions), with values that read the lot's area
+PRESETS = """
+@Order(1) attr Levels = _getLevels
+@Order(2) @Distance attr Eave_Ht = _getEaveHeight
+@Hidden attr height = -1
+@Hidden attr estimatedLevels = defaultLevels
+@Hidden attr estimatedFloorHeight = 3.7
+const defaultLevels = 2
+hasHeight = height != -1
+_getLevels = case hasHeight: max(rint(height / estimatedFloorHeight), 1) else: estimatedLevels
+_getEaveHeight = case hasHeight: height else: Levels * estimatedFloorHeight
+@StartRule
+Generate --> extrude(Eave_Ht) Mass.
+
+style Town
+attr estimatedLevels =
+	case geometry.area < 100 : 1
+	case geometry.area < 500 : 4
+	else                     : 9
+attr estimatedFloorHeight = 3
+
+style Plain
+attr height = 10
+"""
+
+
+def test_a_packages_presets_are_its_styles_and_change_the_building():
+    heights = {}
+    for style in (None, "Town", "Plain"):
+        r = imported(PRESETS, **({"style": style} if style else {}))
+        heights[style] = bbox(grammarkit.derive(r.grammar, lot=LOT))[1][2]
+    # default 2 x 3.7; Town on the 320 m2 lot: 4 levels of 3 m; Plain: the height itself
+    assert np.allclose([heights[None], heights["Town"], heights["Plain"]], [7.4, 12.0, 10.0], atol=0.01)
