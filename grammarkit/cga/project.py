@@ -116,9 +116,13 @@ def _resolvemap_names(root: Path) -> tuple[str, ...]:
     text = f.read_text(encoding="utf-8", errors="replace")[:2_000_000]
     names = set()
     for key, value in re.findall(r'key="/([^/"]+)/[^"]*"\s+value="([^"]*)"', text):
+        # a value may carry a reader's scheme (`gltf:.ws/ESRI.lib/x.glb!/...` for a texture
+        # inside a glTF): the entry is still the imported project's
+        value = re.sub(r"^[A-Za-z][A-Za-z0-9+]*:(?!/)", "", value)
         if not value.startswith(".ws/"):
             names.add(key)
-    return tuple(sorted(names))
+    # a project the package carries under .ws/ is an imported one, never the package itself
+    return tuple(sorted(n for n in names if not (root / ".ws" / n).is_dir()))
 
 
 def _choose_rule(root: Path, rule: str | None, stem_hint: str | None) -> tuple[Path, tuple[Path, ...]]:

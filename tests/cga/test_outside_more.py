@@ -119,3 +119,41 @@ def test_a_packages_presets_are_its_styles_and_change_the_building():
         heights[style] = bbox(grammarkit.derive(r.grammar, lot=LOT))[1][2]
     # default 2 x 3.7; Town on the 320 m2 lot: 4 levels of 3 m; Plain: the height itself
     assert np.allclose([heights[None], heights["Town"], heights["Plain"]], [7.4, 12.0, 10.0], atol=0.01)
+
+
+def test_array_index_ranges_parse_and_are_located_warnings():
+    # Esri's Plant_Loader.cga (envelope2002.rpk): `m[1:n, 0]`, `m[n:-1:1, 4]`; a syntax error
+    # there made the whole import (and every plant) fall away
+    text = ('const m = [1, 2; 3, 4]\nconst n = 1\nconst first = findFirst(m[1:n, 0], 2)\n'
+            'const back = findFirst(m[n:-1:1, 1], 4)\nLot --> extrude(3) X\n')
+    r = translate_cga(text, filename="t.cga")
+    assert r.ok, [d.format(text) for d in r.diagnostics]
+    assert "Lot --> extrude(3) X" in r.text
+    lines = {d.span.line for d in r.diagnostics if d.severity == "warning" and "array" in d.message}
+    assert {3, 4} <= lines
+
+
+RESOLVE_MAP = """<?xml version="1.0" encoding="UTF-8"?>
+<resolvemap>
+  <entry key="/Lib/assets/tree.glb/img0" value="gltf:.ws/Lib/assets/tree.glb!/10/20/tree_0.png" />
+  <entry key="/Lib/rules/Tall.cga" value=".ws/Lib/rules/Tall.cga" />
+  <entry key="/Pkg/rules/main.cga" value="rules/main.cga" />
+</resolvemap>
+"""
+
+
+def test_a_package_finds_the_projects_it_carries_under_ws(tmp_path):
+    # a value with a reader's scheme (`gltf:.ws/...`) named the imported project as the
+    # package's own, so `/Lib/rules/...` was looked for in the package and not found
+    pkg = tmp_path / "Pkg"
+    (pkg / "rules").mkdir(parents=True)
+    (pkg / ".ws" / "Lib" / "rules").mkdir(parents=True)
+    (pkg / ".resolvemap.xml").write_text(RESOLVE_MAP, encoding="utf-8")
+    (pkg / ".ws" / "Lib" / "rules" / "Tall.cga").write_text("Generate --> extrude(25) T.\n", encoding="utf-8")
+    (pkg / "rules" / "main.cga").write_text('import Tall: "/Lib/rules/Tall.cga"\n'
+                                            "@StartRule\nLot --> Tall.Generate\n", encoding="utf-8")
+    out = tmp_path / "o" / "main.grammar"
+    res = CliRunner().invoke(cli_main, ["import-cga", str(pkg), "-o", str(out)])
+    assert res.exit_code == 0 and "not found" not in res.output, res.output
+    model = grammarkit.derive(grammarkit.parse(out.read_text(), filename=str(out)), lot=LOT)
+    assert np.isclose(bbox(model)[1][2], 25.0, atol=0.01)
