@@ -65,7 +65,12 @@ def place_assets(grammar: Grammar, report: ImportReport, output: "str | Path | N
     mapping = {p: Path(os.path.relpath(Path(r).resolve(), out_dir)).as_posix() for p, r in found.items()}
     dirs = relative_dirs(search_dirs, output) if search_dirs else ()
     wrap = bool(dirs) and not supports_asset_dirs()
-    if not mapping and not dirs:
+    # a computed workspace path (`/ESRI.lib/assets/...` from Esri's Plant_Loader) names a file
+    # of a project the package carries; asset_dir lines do not map its project prefix, so
+    # computed names go through the lookup of the workspace paths alone
+    named_only = bool(projects) and not wrap and supports_asset_dirs()
+    wrap = wrap or named_only
+    if not mapping and not dirs and not named_only:
         return grammar
     data = grammar.model_dump(mode="python")
     wrapped = [False]
@@ -95,7 +100,8 @@ def place_assets(grammar: Grammar, report: ImportReport, output: "str | Path | N
         out = out.model_copy(update={"statements": lines + tuple(out.statements)})
     if wrapped[0]:
         named = {name: relative_dirs([d], output)[0] for name, d in (projects or {}).items()}
-        out = out.model_copy(update={"statements": (_lookup_function(fname, dirs, named), *out.statements)})
+        out = out.model_copy(update={"statements": (_lookup_function(fname, () if named_only else dirs, named),
+                                                    *out.statements)})
     return out
 
 

@@ -146,8 +146,29 @@ def _choose_rule(root: Path, rule: str | None, stem_hint: str | None) -> tuple[P
         hits = [p for p in found if p.stem == hint]
         if len(hits) == 1:
             return hits[0], found
+    # a package with sources only (no bin/): the one rule file no other rule file imports is
+    # the set's entry (envelope2002.cga imports facade, volume0110, ... and none imports it)
+    tops = _not_imported(found)
+    if len(tops) == 1:
+        return tops[0], found
     raise ProjectError(f"{root}: several rule files, choose one with --rule: "
                        + ", ".join(p.relative_to(rules_dir).as_posix() for p in found))
+
+
+_IMPORT = re.compile(r'^[ \t]*import\s+(?:[A-Za-z_][A-Za-z0-9_]*\s*:\s*)?"([^"\n]+)"', re.M)
+
+
+def _not_imported(found: tuple[Path, ...]) -> list[Path]:
+    """The rule files that no other one of `found` imports (matched by file name, as the
+    workspace paths of imports name files of other projects too)."""
+    imported: set[str] = set()
+    for f in found:
+        try:
+            text = f.read_text(encoding="utf-8", errors="replace")[:1_000_000]
+        except OSError:
+            continue
+        imported.update(Path(m).name for m in _IMPORT.findall(text) if Path(m).name != f.name)
+    return [f for f in found if f.name not in imported]
 
 
 def _extract(archive: Path, dest: Path) -> None:

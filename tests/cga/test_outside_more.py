@@ -157,3 +157,40 @@ def test_a_package_finds_the_projects_it_carries_under_ws(tmp_path):
     assert res.exit_code == 0 and "not found" not in res.output, res.output
     model = grammarkit.derive(grammarkit.parse(out.read_text(), filename=str(out)), lot=LOT)
     assert np.isclose(bbox(model)[1][2], 25.0, atol=0.01)
+
+
+def test_a_sources_only_package_starts_at_the_file_no_other_imports(tmp_path):
+    # Esri/pyprt-examples' envelope2002.rpk: five rule files, no compiled bin/; the entry is the
+    # one the others do not import (it imports them)
+    pkg = tmp_path / "Set"
+    (pkg / "rules" / "typology").mkdir(parents=True)
+    (pkg / "rules" / "typology" / "main.cga").write_text(
+        'import vol: "volume.cga"\nimport fac : "/Set/rules/typology/facade.cga"\n'
+        "@StartRule\nLot --> vol.Mass\n", encoding="utf-8")
+    (pkg / "rules" / "typology" / "volume.cga").write_text(
+        'import fac: "facade.cga"\nMass --> extrude(9) fac.Wall\n', encoding="utf-8")
+    (pkg / "rules" / "typology" / "facade.cga").write_text("Wall --> W.\n", encoding="utf-8")
+    out = tmp_path / "o" / "set.grammar"
+    res = CliRunner().invoke(cli_main, ["import-cga", str(pkg), "-o", str(out)])
+    assert res.exit_code == 0, res.output
+    model = grammarkit.derive(grammarkit.parse(out.read_text(), filename=str(out)), lot=LOT)
+    assert np.isclose(bbox(model)[1][2], 9.0, atol=0.01)
+
+
+def test_a_computed_workspace_asset_path_is_found_in_the_carried_project(tmp_path):
+    # Esri's Plant_Loader builds `AssetFolder + "/" + name` with AssetFolder = "/ESRI.lib/..."
+    pkg = tmp_path / "Pkg"
+    (pkg / "rules").mkdir(parents=True)
+    assets = pkg / ".ws" / "Lib" / "assets"
+    assets.mkdir(parents=True)
+    (assets / "box.obj").write_text("v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\n"
+                                    "v 0 1 1\nf 1 4 3 2\nf 5 6 7 8\nf 1 2 6 5\nf 2 3 7 6\nf 3 4 8 7\n"
+                                    "f 4 1 5 8\n", encoding="utf-8")
+    (pkg / "rules" / "main.cga").write_text(
+        'const folder = "/Lib/assets"\nattr name = "box"\n'
+        '@StartRule\nLot --> extrude(4) i(folder + "/" + name + ".obj") X.\n', encoding="utf-8")
+    out = tmp_path / "o" / "main.grammar"
+    res = CliRunner().invoke(cli_main, ["import-cga", str(pkg), "-o", str(out)])
+    assert res.exit_code == 0, res.output
+    model = grammarkit.derive(grammarkit.parse(out.read_text(), filename=str(out)), lot=LOT)
+    assert np.allclose(bbox(model), [[0, 0, 0], [20, 16, 4]], atol=0.02)
