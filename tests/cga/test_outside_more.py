@@ -194,3 +194,16 @@ def test_a_computed_workspace_asset_path_is_found_in_the_carried_project(tmp_pat
     assert res.exit_code == 0, res.output
     model = grammarkit.derive(grammarkit.parse(out.read_text(), filename=str(out)), lot=LOT)
     assert np.allclose(bbox(model), [[0, 0, 0], [20, 16, 4]], atol=0.02)
+
+
+def test_an_untranslatable_colour_attr_keeps_its_type():
+    # Esri's Facade_Schematic.cga without its import: `attr PrimaryColor = _getInitialPrimaryColor`,
+    # a function whose arms are colours and one call into the missing file; the stand-in was
+    # the number 0, and `color(PrimaryColor)` made the whole translation fail `check`
+    text = ('import lib: "missing.cga"\nattr x = 1\n'
+            '_pick = case x == 1: lib.colorOf(x) else: "#ff0000"\n'
+            "attr C = _pick\nLot --> color(C) extrude(2) X.\n")
+    r = translate_cga(text, filename="t.cga")
+    assert r.ok, [d.format(text) for d in r.diagnostics]
+    assert 'attr C = ""' in r.text
+    assert any(d.span and d.span.line == 4 for d in r.diagnostics if d.severity == "warning")

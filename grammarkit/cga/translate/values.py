@@ -3,7 +3,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from lark import Tree
+from lark import Token, Tree
 
 from ...expr_eval import NOT_CONSTANT, fold_constant
 from ...functions import BUILTIN_FUNCTIONS
@@ -47,7 +47,7 @@ class ValuesMixin:
                 status, message = "approximated", f"{v.kind} {v.name}: {exc.message}; {how}"
             else:
                 status = "dropped"
-                value = Num(value=0) if not looks_like_string(v.value) else Str(value="")
+                value = Num(value=0) if not self._looks_text(v.value) else Str(value="")
                 message = (f"{v.kind} {v.name}: {exc.message}; defined as "
                            f"{'0' if isinstance(value, Num) else chr(34) * 2} instead")
         # a value that reads the shape (geometry.area, scope.sx) is exact: CGA evaluates attrs
@@ -60,6 +60,28 @@ class ValuesMixin:
             return Const(name=gk, value=value, span=v.span)
         rng, enum = self._annotations(v, value)
         return Attr(name=gk, value=value, range=rng, enum=enum, span=v.span)
+
+    def _looks_text(self, tree: Any, depth: int = 0) -> bool:
+        """Whether a CGA value is text: a string literal in it, or in the body of a function or
+        the value of an attr/const it names (`attr PrimaryColor = _getInitialPrimaryColor`,
+        whose case arms are colours): the stand-in for an untranslatable value keeps the type,
+        so `color(PrimaryColor)` still checks."""
+        if looks_like_string(tree):
+            return True
+        if not isinstance(tree, Tree) or depth > 8:
+            return False
+        values = {v.name: v.value for v in self.values}
+        for sub in tree.iter_subtrees():
+            if sub.data not in ("ref", "func_call") or not sub.children:
+                continue
+            name = sub.children[0].value if isinstance(sub.children[0], Token) else None
+            arity = len(sub.children[1].children) if sub.data == "func_call" and len(sub.children) > 1 \
+                and isinstance(sub.children[1], Tree) else 0
+            fn = self.functions.get((name, arity))
+            target = fn.body if fn is not None else values.get(name) if sub.data == "ref" else None
+            if target is not None and target is not tree and self._looks_text(target, depth + 1):
+                return True
+        return False
 
     def _fallback_value(self, tree: Any, ctx: ExprContext) -> tuple[Any, str | None]:
         """A value for an attr/const whose CGA value grammarkit cannot express."""
