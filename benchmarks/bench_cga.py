@@ -2,6 +2,8 @@
 
     python benchmarks/bench_cga.py                 # every file in grammars/cga/
     python benchmarks/bench_cga.py --json out.json # also the machine-readable table
+    python benchmarks/bench_cga.py ~/outside/*.cga # rule files from outside (docs/cga.md, "Rule
+                                                   # files from outside the project")
 
 Per file: constructs total / translated / warned (approximated + dropped); whether the
 translation passes `grammarkit check`; whether it derives (`grammarkit.derive` on a 20 x 16 m
