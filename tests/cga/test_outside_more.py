@@ -207,3 +207,12 @@ def test_an_untranslatable_colour_attr_keeps_its_type():
     assert r.ok, [d.format(text) for d in r.diagnostics]
     assert 'attr C = ""' in r.text
     assert any(d.span and d.span.line == 4 for d in r.diagnostics if d.severity == "warning")
+
+
+def test_an_untranslatable_color_attr_stands_in_as_white():
+    text = ('import lib: "missing.cga"\nattr x = 1\n'
+            '_pick = case x == 1: lib.colorOf(x) else: "#ff0000"\n'
+            "@Color\nattr C = _pick\nLot --> extrude(2) color(C) X.\n")
+    r = imported(text)
+    assert 'attr C = "#ffffff"' in r.text
+    assert grammarkit.derive(r.grammar, lot=LOT).triangle_count == 12

@@ -48,8 +48,10 @@ class ValuesMixin:
             else:
                 status = "dropped"
                 value = Num(value=0) if not self._looks_text(v.value) else Str(value="")
-                message = (f"{v.kind} {v.name}: {exc.message}; defined as "
-                           f"{'0' if isinstance(value, Num) else chr(34) * 2} instead")
+                if any(a.children[0].value == "@Color" for a in v.annotations):
+                    value = Str(value="#ffffff")  # a colour attr: CityEngine's default white
+                shown = "0" if isinstance(value, Num) else f'"{value.value}"'
+                message = f"{v.kind} {v.name}: {exc.message}; defined as {shown} instead"
         # a value that reads the shape (geometry.area, scope.sx) is exact: CGA evaluates attrs
         # and consts on the initial shape, and so does the engine (grammarkit/split/attrs.py)
         self._record(v.kind, v.name, status, v.span, feature=feature, message=message,
