@@ -7,13 +7,14 @@ Tables (medians of --runs runs, measured in this process):
    corner towers touching, cut to N parts breadth-first): enumeration time (wall, and CPU time
    of the child process, which other jobs on the machine disturb less), the fitted exponent
    of time against parts, and the brute force where it finishes (it does not beyond ~20 parts);
-3. valid new variants per minute of the substructure back end beside the graph sampler's, both
-   through grammarkit.run on the same examples.
+3. candidates and valid new variants per minute of the substructure back end (memo on, the
+   default) beside the same back end with `memo=false` (the baseline, same candidates and
+   variants) and the graph sampler, all through grammarkit.run on the same examples.
 
 Paper: up to 3 s to enumerate all matching subgraphs for 5-70 nodes (2.9 GHz laptop).
 Targets: <= 0.3 s at 70 nodes, <= 10 s at 1,000 nodes, exponent <= 2.2.
 
-    python benchmarks/bench_substructure.py [--runs 3] [--variants 20] [--skip-yield] [--only-scaling]
+    python benchmarks/bench_substructure.py [--runs 3] [--variants 20] [--skip-yield] [--only-scaling] [--only-yield --grammars castle facade]
 """
 from __future__ import annotations
 
@@ -151,36 +152,85 @@ def table_scaling(runs: int, brute_limit: float, limit: float, sizes=(20, 70, 30
               f"{kc:.2f} (CPU)")
 
 
-def table_yield(n: int, timeout: float, grammars: list[str] | None = None) -> None:
-    from grammarkit.dsl import load
-    from grammarkit.run import iter_results
+def _rate(g, backend: str, n: int, timeout: float, iterations: int, options: dict, workers: int = 1) -> dict:
+    """One run through grammarkit.run (files written to a temporary folder, as a user's run):
+    variants and candidates per minute of wall time, start-up included."""
+    import tempfile
 
-    print(f"\n### Valid new variants per minute (grammarkit.run, 1 worker, up to {n} variants or {timeout:.0f} s)\n")
-    print("(baseline: the substructure back end with `reuse_geometry=false`, the former per-embedding "
-          "recomputation; same variants)\n")
-    print("| example grammar | substructure | baseline | speed-up | graph sampler | ratio |")
+    from grammarkit.run import run_backend
+
+    with tempfile.TemporaryDirectory() as tmp:
+        t = time.perf_counter()
+        summary = run_backend(g, out=Path(tmp) / "v", backend=backend, n=n, seed=7, iterations=iterations,
+                              workers=workers, time_limit=timeout, options=options)
+        dt = time.perf_counter() - t
+    stats = summary.stats or {}
+    return {"made": summary.total, "seconds": dt, "variants": 60.0 * summary.total / dt,
+            "candidates": 60.0 * stats.get("candidates", 0) / dt, "count": stats.get("candidates", 0),
+            "embeddings": stats.get("embeddings_tried", 0), "stopped": stats.get("stopped_by", "")}
+
+
+def table_yield(n: int, timeout: float, grammars: list[str] | None = None, runs: int = 1,
+                graph_sampler: bool = True) -> None:
+    from grammarkit.dsl import load
+
+    print(f"\n### Valid new variants per minute (grammarkit.run, 1 worker, up to {n} variants or {timeout:.0f} s, "
+          f"seed 7, median of {runs})\n")
+    print("(baseline: the substructure back end with `memo=false`, each candidate evaluated afresh; "
+          "the same candidates, embeddings and variants in the same run)\n")
+    print("| grammar | variants | candidates | candidates/min memo | baseline | speed-up | variants/min memo "
+          "| baseline | graph sampler | ratio |")
+    print("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
+    for gpath in sorted(EXAMPLES.glob("*/*.grammar")):
+        if grammars and gpath.stem not in grammars:
+            continue
+        g = load(gpath)
+        memo, base, gs = [], [], []
+        for _ in range(runs):
+            memo.append(_rate(g, "substructure", n, timeout, 1, {}))
+            base.append(_rate(g, "substructure", n, timeout, 1, {"memo": False}))
+            if graph_sampler:
+                gs.append(_rate(g, "graph-sampler", n, timeout, 4, {}))
+        for a, b in zip(memo, base):  # same seed and candidates: the memo changes no result
+            if a["count"] == b["count"] and (a["made"], a["embeddings"]) != (b["made"], b["embeddings"]):
+                raise SystemExit(f"{gpath.stem}: memo and baseline differ on the same candidates")
+
+        def med(rows, key):  # noqa: ANN001, ANN202
+            return statistics.median(r[key] for r in rows)
+
+        c_m, c_b = med(memo, "candidates"), med(base, "candidates")
+        v_m, v_b = med(memo, "variants"), med(base, "variants")
+        v_g = med(gs, "variants") if gs else float("nan")
+        print(f"| {gpath.stem} | {memo[0]['made']} | {memo[0]['count']} ({memo[0]['stopped']}) | {c_m:.0f} | {c_b:.0f} "
+              f"| {c_m / c_b if c_b else float('nan'):.2f} | {v_m:.1f} | {v_b:.1f} | {v_g:.1f} "
+              f"| {v_m / v_g if v_g else float('nan'):.2f} |")
+
+
+def table_workers(n: int, timeout: float, grammars: list[str] | None = None, runs: int = 1) -> None:
+    """Wall time of the same run (seed 7, memo on) on 1 worker and on 2 (the executor's
+    "auto" rule starts the second when the work left repays its start-up); the outputs must
+    be the same whatever the number of workers (checked here by the counts, by the files in
+    tests/substructure/test_backend.py)."""
+    from grammarkit.dsl import load
+
+    print(f"\n### Workers (grammarkit.run, up to {n} variants or {timeout:.0f} s, seed 7, median of {runs})\n")
+    print("| grammar | variants | candidates | 1 worker | 2 workers | speed-up |")
     print("|---|---:|---:|---:|---:|---:|")
     for gpath in sorted(EXAMPLES.glob("*/*.grammar")):
         if grammars and gpath.stem not in grammars:
             continue
         g = load(gpath)
-        rates = []
-        for backend, it, options in (("substructure", 1, {}), ("substructure", 1, {"reuse_geometry": False}),
-                                     ("graph-sampler", 4, {})):
-            t = time.perf_counter()
-            made = 0
-            try:
-                for _ in iter_results(g, backend=backend, n=n, seed=7, iterations=it, workers=1,
-                                      timeout=timeout, options=options):
-                    made += 1
-            except Exception as exc:  # a run that stops at the time limit still counts what it made
-                if "time budget" not in str(exc):
-                    raise
-            dt = time.perf_counter() - t
-            rates.append(60.0 * made / dt)
-        ratio = rates[0] / rates[2] if rates[2] else float("nan")
-        speed = rates[0] / rates[1] if rates[1] else float("nan")
-        print(f"| {gpath.stem} | {rates[0]:.1f} | {rates[1]:.1f} | {speed:.2f} | {rates[2]:.1f} | {ratio:.2f} |")
+        one, two = [], []
+        for _ in range(runs):
+            one.append(_rate(g, "substructure", n, timeout, 1, {}, workers=1))
+            two.append(_rate(g, "substructure", n, timeout, 1, {}, workers=2))
+        for a, b in zip(one, two):
+            if a["stopped"] != "time" and b["stopped"] != "time" and \
+                    (a["made"], a["count"], a["embeddings"]) != (b["made"], b["count"], b["embeddings"]):
+                raise SystemExit(f"{gpath.stem}: 1 and 2 workers differ")
+        t1 = statistics.median(r["seconds"] for r in one)
+        t2 = statistics.median(r["seconds"] for r in two)
+        print(f"| {gpath.stem} | {one[0]['made']} | {one[0]['count']} | {t1:.1f} s | {t2:.1f} s | {t1 / t2:.2f} |")
 
 
 def main() -> None:
@@ -191,8 +241,11 @@ def main() -> None:
     ap.add_argument("--variants", type=int, default=20)
     ap.add_argument("--yield-timeout", type=float, default=120.0)
     ap.add_argument("--skip-yield", action="store_true")
+    ap.add_argument("--yield-runs", type=int, default=1, help="runs per back end in the yield table (median)")
+    ap.add_argument("--no-graph-sampler", action="store_true", help="leave the graph sampler out of the yield table")
     ap.add_argument("--only-yield", action="store_true")
     ap.add_argument("--only-scaling", action="store_true", help="only the grown castles (table 2)")
+    ap.add_argument("--only-workers", action="store_true", help="only the 1-against-2-workers table")
     ap.add_argument("--grammars", nargs="+", help="the example grammars of the yield table (default: all)")
     args = ap.parse_args()
     import os
@@ -200,12 +253,15 @@ def main() -> None:
     print(f"load average at start: {os.getloadavg()[0]:.2f} ({os.cpu_count()} cores, shared with other jobs)")
     if args.only_scaling:
         table_scaling(args.runs, args.brute_limit, args.limit)
+    elif args.only_workers:
+        table_workers(args.variants, args.yield_timeout, args.grammars, args.yield_runs)
     else:
         if not args.only_yield:
             table_examples(args.runs, args.brute_limit)
             table_scaling(args.runs, args.brute_limit, args.limit)
         if not args.skip_yield:
-            table_yield(args.variants, args.yield_timeout, args.grammars)
+            table_yield(args.variants, args.yield_timeout, args.grammars, args.yield_runs,
+                        not args.no_graph_sampler)
     print(f"\nload average at end: {os.getloadavg()[0]:.2f}")
 
 

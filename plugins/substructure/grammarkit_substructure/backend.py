@@ -157,6 +157,70 @@ def _known(types, edges) -> tuple:  # noqa: ANN001
     return hist, key, _typed_degrees(types, edges)
 
 
+# Shapes kept by the memo before it starts afresh (a bound on memory: a castle shape with its
+# meshes is a few hundred kB; forgetting changes no result, only what is computed again).
+MEMO_SHAPES = 2000
+
+
+def _memo(state: _State) -> dict:
+    """The run's memo of evaluations on shapes named by their path (start example, then the
+    (donor, operation) indices applied): operations, trivial verdicts, known keys and
+    embeddings. Every entry is a pure function of its path, so the memo changes what is
+    computed, never a result, and workers with different memos give the same output."""
+    memo = state.cache.get("memo")
+    if memo is None or state.cache.get("memo_shapes", 0) > MEMO_SHAPES:
+        memo = state.cache["memo"] = {}
+        state.cache["memo_shapes"] = 0
+        # the path-keyed operation lists and verdicts live in state.cache beside the examples'
+        for k in [k for k in state.cache if isinstance(k, tuple) and _is_path_key(k)]:
+            del state.cache[k]
+    return memo
+
+
+def _is_path_key(key: tuple) -> bool:
+    """A cache key of a shape reached by operations: (donor, path) or ("trivial", path) with a
+    path longer than an example's ("example", i)."""
+    inner = key[1] if len(key) == 2 else None
+    return isinstance(inner, tuple) and len(inner) == 3
+
+
+def _remember(state: _State, table: dict, key: tuple, out: Any) -> None:
+    table[key] = out
+    if out.shape is not None:
+        state.cache["memo_shapes"] = state.cache.get("memo_shapes", 0) + 1
+
+
+def _host_known(memo: dict | None, path: Any, host: Shape) -> tuple:
+    """`_known` of a shape reached by operations (kept per path with the memo)."""
+    if memo is None:
+        return _known(host.types, host.edges)
+    table = memo.setdefault("known", {})
+    if path not in table:
+        table[path] = _known(host.types, host.edges)
+    return table[path]
+
+
+def _step_options(state: _State, host: Shape, host_key: Any, key: Any, rng: Any) -> tuple[list, list]:
+    """Every (donor index, operation index, operation) on the current shape, and the order
+    they are tried in. Local edits first: an operation whose pieces are "the rest of the
+    shape" (stored as complements) mostly swaps one whole example for another, a trivial
+    result; those are drawn only after every local one (random order within each group)."""
+    options = []
+    for d in range(len(state.examples)):
+        donor = state.examples[d]
+        same = host_key == ("example", d)
+        ops = _operations(state, d, donor if same else host, ("example", d) if same else key)
+        options.extend((d, j, op) for j, op in enumerate(ops))
+    if not options:
+        return options, []
+    local = [k for k, (_, _, op) in enumerate(options)
+             if not op.copied_side.complement and not op.removed_side.complement]
+    far = [k for k, (_, _, op) in enumerate(options)
+           if op.copied_side.complement or op.removed_side.complement]
+    order = [local[i] for i in rng.permutation(len(local))] + [far[i] for i in rng.permutation(len(far))]
+    return options, order
+
+
 def candidate(state: _State, index: int) -> dict:
     """Candidate `index`: a chain of up to `steps` operations from an example (each shape
     along the chain is a result); a pure function of (seed, index)."""
@@ -170,32 +234,25 @@ def candidate(state: _State, index: int) -> dict:
     target = state.cache["target"]
     start = int(rng.integers(len(state.examples)))
     host, host_key = state.examples[start], ("example", start)
+    # `path`: the start example and the (donor, operation) indices applied so far; the shape
+    # it names is a pure function of it, so with `memo` every evaluation on it is kept
+    path: Any = host_key
+    memo = _memo(state) if getattr(opt, "memo", False) else None
     history: list = []
     shapes: list = []
     tried = outside = 0
     for _ in range(state.steps):
-        options = []
-        for d in range(len(state.examples)):
-            donor = state.examples[d]
-            same = host_key == ("example", d)
-            ops = _operations(state, d, donor if same else host, ("example", d) if same else host_key)
-            options.extend((d, j, op) for j, op in enumerate(ops))
+        key = host_key if memo is None else path
+        options, order = _step_options(state, host, host_key, key, rng)
         if not options:
             break
-        known = examples_known + ([_known(host.types, host.edges)] if host_key is None else [])
+        known = examples_known + ([_host_known(memo, path, host)] if host_key is None else [])
         embedded = 0
         done = False
-        # Local edits first: an operation whose pieces are "the rest of the shape" (stored as
-        # complements) mostly swaps one whole example for another, a trivial result; those are
-        # drawn only after every local one (random order within each group).
-        local = [k for k, (_, _, op) in enumerate(options)
-                 if not op.copied_side.complement and not op.removed_side.complement]
-        far = [k for k, (_, _, op) in enumerate(options)
-               if op.copied_side.complement or op.removed_side.complement]
         # an example host's verdicts are the same in every candidate (its known shapes are the
-        # examples): kept per (donor, example, operation)
-        verdicts = state.cache.setdefault(("trivial", host_key), {}) if host_key is not None else {}
-        order = [local[i] for i in rng.permutation(len(local))] + [far[i] for i in rng.permutation(len(far))]
+        # examples): kept per (donor, example, operation); with the memo, per path
+        verdicts = state.cache.setdefault(("trivial", key), {}) if key is not None else {}
+        embedded_memo = memo.setdefault(("embed", path), {}) if memo is not None else None
         for k in order:
             if embedded >= opt.tries:
                 break
@@ -208,15 +265,19 @@ def candidate(state: _State, index: int) -> dict:
                 continue
             embedded += 1
             tried += 1
-            out = embed(donor, host, op, state.rules, embedding=opt.embedding, repair=opt.repair,
-                        orientation_degrees=opt.orientation_degrees, max_parts=state.max_parts,
-                        origin_at=opt.frame_origin,
-                        cache=state.cache.setdefault("geometry", {}) if opt.reuse_geometry else None)
+            out = embedded_memo.get((d, j)) if embedded_memo is not None else None
+            if out is None:
+                out = embed(donor, host, op, state.rules, embedding=opt.embedding, repair=opt.repair,
+                            orientation_degrees=opt.orientation_degrees, max_parts=state.max_parts,
+                            origin_at=opt.frame_origin,
+                            cache=state.cache.setdefault("geometry", {}) if opt.reuse_geometry else None)
+                if embedded_memo is not None:
+                    _remember(state, embedded_memo, (d, j), out)
             if out.shape is None:
                 continue
             history.append({"donor": donor.name, "operation": op.to_json(host.ids, donor.ids),
                             "repaired": out.repaired})
-            host, host_key = out.shape, None
+            host, host_key, path = out.shape, None, (path, d, j)
             # a shape outside the examples' counts is a step on the way, not a result: the
             # next operation may bring it back (a gate moved is a wall turned gate, then a
             # gate turned wall)

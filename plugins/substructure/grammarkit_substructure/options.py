@@ -52,6 +52,10 @@ class SubstructureOptions(BaseModel):
     reuse_geometry: bool = Field(True, description="keep each placed example part's contact data, "
                                  "frame and support verdicts across embeddings (rigid embedding; "
                                  "`false`: recompute them every time, the former behaviour, same results)")
+    memo: bool = Field(True, description="keep every evaluation on a shape reached by a chain of "
+                       "operations (its operations, trivial verdicts and embeddings), named by the "
+                       "chain, for the whole run: candidates that start alike reuse them (`false`: "
+                       "evaluate each candidate afresh, the former behaviour, same results)")
     final_check: bool = Field(True, description="validate every variant with `grammarkit validate`'s "
                               "rules and defaults before it is written (one it rejects is dropped and "
                               "counted)")
