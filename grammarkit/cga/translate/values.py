@@ -30,6 +30,17 @@ from .model import (
 _FOLD_FUNCTIONS = {spec.name: spec for spec in BUILTIN_FUNCTIONS}
 
 
+def _fold_functions() -> dict:
+    """The built-ins and the split engine's text, list and array functions (str(), listItem,
+    cgaIndex: `Folder + "/trees.csv"` is folded with CGA's str() of the const). Imported
+    lazily: grammarkit.split is not needed to read a .cga."""
+    if "str" not in _FOLD_FUNCTIONS:
+        from ...split.strings import STRING_FUNCTIONS
+
+        _FOLD_FUNCTIONS.update({spec.name: spec for spec in STRING_FUNCTIONS})
+    return _FOLD_FUNCTIONS
+
+
 class ValuesMixin:
     """Translates attr and const declarations."""
 
@@ -158,10 +169,10 @@ class ValuesMixin:
                 return NOT_CONSTANT
             visiting.add(name)
             try:
-                return fold_constant(value, lookup, _FOLD_FUNCTIONS)
+                return fold_constant(value, lookup, _fold_functions())
             finally:
                 visiting.discard(name)
-        value = fold_constant(expr, lookup, _FOLD_FUNCTIONS)
+        value = fold_constant(expr, lookup, _fold_functions())
         return None if value is NOT_CONSTANT else value
 
     def _annotations(self, v: ValueDef, value: Any) -> tuple[Any, Any]:
