@@ -101,8 +101,6 @@ def _typed(v: Any) -> str:
         return "b1" if v else "b0"
     if isinstance(v, (int, float)):
         return "f" + repr(float(v))
-    if isinstance(v, str) and v.startswith(ARRAY_TAG):
-        raise ValueError("an array cannot hold arrays")
     return "s" + str(v)
 
 
@@ -127,7 +125,26 @@ def _array(v: Any) -> tuple[int, int, list[Any]]:
 
 
 def _new_array(rows: Any, cols: Any, *items: Any) -> str:
-    return array_value(_index(rows), _index(cols), items)
+    """An array literal of rows x cols items; an item that is an array is spliced in, as CGA
+    does: the items of a row side by side (`[a, b]`, same number of rows), the rows one under
+    another (`[a; "x"; b]`, same number of columns)."""
+    r, c = _index(rows), _index(cols)
+    if not any(isinstance(x, str) and x.startswith(ARRAY_TAG) for x in items):
+        return array_value(r, c, items)
+    blocks = [_array(x) if isinstance(x, str) and x.startswith(ARRAY_TAG) else (1, 1, [x]) for x in items]
+    out_rows: list[list[Any]] = []
+    for k in range(r):
+        row = blocks[k * c:(k + 1) * c]
+        nonempty = [b for b in row if b[0] * b[1]]
+        if len({b[0] for b in nonempty}) > 1:
+            raise ValueError("arrays side by side in an array literal have different numbers of rows")
+        height = nonempty[0][0] if nonempty else 0
+        for i in range(height):
+            out_rows.append([x for b in nonempty for x in b[2][i * b[1]:(i + 1) * b[1]]])
+    if len({len(x) for x in out_rows}) > 1:
+        raise ValueError("the rows of an array literal have different numbers of columns")
+    width = len(out_rows[0]) if out_rows else 0
+    return array_value(len(out_rows), width, [x for row in out_rows for x in row])
 
 
 def _array_index(m: Any, i: Any, j: Any = None) -> Any:
@@ -145,15 +162,12 @@ def _array_index(m: Any, i: Any, j: Any = None) -> Any:
 
 def _span(n: int, start: Any, end: Any, step: Any) -> list[int]:
     """CGA's index range start:end or start:step:end, both ends included (a negative step
-    counts down); every index must lie in 0..n-1."""
+    counts down); indices outside 0..n-1 select nothing (a range over the rows of a table
+    that has none, `m[1:nRows(m) - 1, 0]`, is empty)."""
     a, b, k = _index(start), _index(end), _index(step)
     if k == 0:
         raise ValueError("an array index range has step 0")
-    picked = list(range(a, b + (1 if k > 0 else -1), k))
-    bad = next((i for i in picked if not 0 <= i < n), None)
-    if bad is not None:
-        raise ValueError(f"array index {bad} out of range (0..{n - 1})")
-    return picked
+    return [i for i in range(a, b + (1 if k > 0 else -1), k) if 0 <= i < n]
 
 
 def _array_slice(m: Any, *bounds: Any) -> str:

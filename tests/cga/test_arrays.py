@@ -106,9 +106,24 @@ def test_read_string_table_from_the_projects_assets(project):
     assert "Name" in line(r, "Lot")
 
 
-def test_a_table_that_is_not_there_is_a_located_warning(tmp_path):
-    text = 'const t = readStringTable("nowhere.csv")\nLot --> extrude(3) X\n'
+def test_a_table_that_is_not_there_is_an_empty_array_and_a_located_warning(tmp_path):
+    # Esri's Plant_Loader.cga in envelope2002.rpk: the metadata table is not in the package;
+    # CityEngine reads it as an empty array and the building still generates
+    text = ('const t = readStringTable("nowhere.csv")\nconst n = nRows(t) - 1\n'
+            "Lot --> extrude(3 + size(t[1:n, 0])) X\n")
     r = translate_cga(text, filename=str(tmp_path / "t.cga"))
+    assert r.ok, [d.message for d in r.diagnostics]
     warned = [d for d in r.diagnostics if d.severity == "warning"]
     assert warned and warned[0].span.line == 1 and "nowhere.csv" in warned[0].message
-    assert "not found" in warned[0].message
+    assert "not found" in warned[0].message and "empty array" in warned[0].message
+    assert "const t = cgaArray(0, 0)" in r.text
+    assert height(r) == pytest.approx(3, abs=0.01)
+
+
+def test_arrays_in_an_array_literal_are_spliced():
+    # Plant_Loader's enum values: `[m[1:k, 0]; "\\n"; "PROXIES"; m[k+1:n, 0]]`
+    r = imported('const m = [1, 2; 3, 4; 5, 6]\nconst col = [m[0:1, 0]; 9; m[2:2, 0]]\n'
+                 "const wide = [m, m]\n"
+                 "Lot --> extrude(col[1] + col[3] * 10 + nRows(col) * 100 + nColumns(wide) * 1000) X\n")
+    # col = (1, 3, 9, 5): col[1] = 3, col[3] = 5, 4 rows; wide is 3 x 4
+    assert height(r) == pytest.approx(3 + 50 + 400 + 4000, abs=0.01)

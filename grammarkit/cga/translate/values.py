@@ -10,6 +10,7 @@ from ...functions import BUILTIN_FUNCTIONS
 from ...ir import (
     Attr,
     Bool,
+    Call,
     Const,
     Num,
     Str,
@@ -101,6 +102,11 @@ class ValuesMixin:
         if not isinstance(tree, Tree):
             return None, None
         kids = children(tree)
+        if tree.data == "func_call" and kids and getattr(kids[0], "value", None) in (
+                "readStringTable", "readFloatTable"):
+            # a table the import cannot read: CityEngine reads a missing file as an empty array
+            return (Call(func="cgaArray", args=(Num(value=0.0), Num(value=0.0))),
+                    "an empty array instead (CityEngine's value for a table it cannot read)")
         if tree.data == "case_expr":
             conds, vals, other = kids[0:-1:2], kids[1:-1:2], kids[-1]
             for cond, val in zip(conds, vals):
