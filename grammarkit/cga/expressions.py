@@ -150,6 +150,9 @@ class ExprContext:
     # values the operation's handler translates (or warns about), not an array value; inside a
     # call or an index (`extrude(size([1, 2]))`, `extrude(h[1])`) it is a value again
     operation_argument: bool = False
+    # attrs and consts whose CGA value is an array (a literal or a table read): named as an
+    # operation's argument itself they are per-edge values too, not a number
+    array_names: frozenset[str] = frozenset()
 
     def with_frame(self, frame: frames.Frame) -> "ExprContext":
         return replace(self, frame=frame)
@@ -333,6 +336,9 @@ def unquote(text: str) -> str:
 
 
 def _ref(name: str, span: Span | None, ctx: ExprContext) -> Any:
+    if ctx.operation_argument and name in ctx.array_names and name not in ctx.bound and name not in ctx.params:
+        raise Untranslatable("expr:array", f"the array {name} as an operation's argument is not supported here",
+                             span)
     if name in ctx.bound:
         return ctx.bound[name]
     if name in ctx.params:

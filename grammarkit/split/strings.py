@@ -216,6 +216,8 @@ ARRAY_FUNCTIONS: tuple[FunctionSpec, ...] = (
                  _array_slice),
     FunctionSpec("cgaFindFirst", 2, 2, "cgaFindFirst(m, v): CGA's findFirst of an array or a text",
                  _find_first),
+    FunctionSpec("cgaVector", 1, 1, "cgaVector(m): the items of a CGA array as a vector (per-edge values)",
+                 lambda m: tuple(_array(m)[2])),
     FunctionSpec("cgaSize", 1, 1, "cgaSize(m): CGA's size(): the items of an array", _size),
     FunctionSpec("cgaRows", 1, 1, "cgaRows(m): CGA's nRows()", lambda m: float(_array(m)[0])),
     FunctionSpec("cgaColumns", 1, 1, "cgaColumns(m): CGA's nColumns()", lambda m: float(_array(m)[1])),

@@ -127,3 +127,21 @@ def test_arrays_in_an_array_literal_are_spliced():
                  "Lot --> extrude(col[1] + col[3] * 10 + nRows(col) * 100 + nColumns(wide) * 1000) X\n")
     # col = (1, 3, 9, 5): col[1] = 3, col[3] = 5, 4 rows; wide is 3 x 4
     assert height(r) == pytest.approx(3 + 50 + 400 + 4000, abs=0.01)
+
+
+def test_an_array_const_as_an_operation_argument_is_a_located_warning_not_a_failed_check():
+    text = "const d = [1, 2, 3, 4]\nLot --> setback(d) { all: A | remainder: B }\n"
+    r = translate_cga(text, filename="t.cga")
+    assert r.ok, [d.message for d in r.diagnostics]
+    warned = [d for d in r.diagnostics if d.severity == "warning"]
+    assert warned and (warned[0].span.line, warned[0].span.column) == (2, 9)
+    assert "array d" in warned[0].message
+
+
+def test_an_array_attr_gives_envelope_its_per_edge_values():
+    literal = imported("Lot --> envelope(normal, 15, [5, 0, 0, 0], [45, 90, 90, 90]) E\n")
+    named = imported("attr bases = [5, 0, 0, 0]\nLot --> envelope(normal, 15, bases, [45, 90, 90, 90]) E\n")
+    assert "cgaVector(bases)" in line(named, "Lot")
+    volumes = [grammarkit.derive(r.grammar, lot=LOT).mesh.volume for r in (literal, named)]
+    assert volumes[1] == pytest.approx(volumes[0], rel=1e-9)
+    assert volumes[0] == pytest.approx(20 * 16 * 15 - 20 * 10**2 / 2, rel=2e-3)

@@ -233,7 +233,20 @@ class Translator(DeclarationsMixin, ValuesMixin, FunctionsMixin, BodyMixin, Entr
     def _ctx(self, frame: str, params: dict[str, str]) -> ExprContext:
         return ExprContext(self.filename, frame, params, self.value_names, self.functions,
                            on_inline=self.inlined.add, emitted=self.emitted,
-                           text_functions=self.text_functions, read_table=self._read_table)
+                           text_functions=self.text_functions, read_table=self._read_table,
+                           array_names=self._array_names())
+
+    def _array_names(self) -> frozenset[str]:
+        """The attrs and consts whose CGA value is an array literal or a table read (cached by
+        the number of values, which only grows while declarations are collected)."""
+        cached = self.__dict__.get("_array_names_cache")
+        if cached is not None and cached[0] == len(self.values):
+            return cached[1]
+        names = frozenset(v.name for v in self.values if isinstance(v.value, Tree) and (
+            v.value.data == "array" or v.value.data == "func_call" and v.value.children
+            and getattr(v.value.children[0], "value", None) in ("readStringTable", "readFloatTable")))
+        self._array_names_cache = (len(self.values), names)
+        return names
 
     def _read_table(self, expr: Any) -> "tuple[str | None, list[list[str]] | None]":
         """readStringTable's file (a name the attrs' and consts' defaults give), read once per
