@@ -15,7 +15,7 @@ whether the construct that holds the expression is dropped or approximated.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any, Callable
 
 from lark import Token, Tree
@@ -38,10 +38,12 @@ _FUNCTIONS: dict[str, tuple[str, int, int | None]] = {
     "listRange": ("listRange", 3, 3), "replace": ("replace", 3, 3),
     # the CGA utility library's text helpers and CGA's file functions (grammarkit/functions.py)
     "getRange": ("getRange", 3, 3), "getPrefix": ("getPrefix", 2, 2), "getSuffix": ("getSuffix", 2, 2),
-    "findFirst": ("findFirst", 2, 2), "findLast": ("findLast", 2, 2), "count": ("count", 2, 2),
+    "findFirst": ("cgaFindFirst", 2, 2), "findLast": ("findLast", 2, 2), "count": ("count", 2, 2),
     "fileName": ("fileName", 1, 1), "fileBasename": ("fileBasename", 1, 1),
     "fileDirectory": ("fileDirectory", 1, 1), "fileExtension": ("fileExtension", 1, 1),
     "fileSearch": ("fileSearch", 1, 1), "fileRandom": ("fileRandom", 1, 1), "fileExists": ("fileExists", 1, 1),
+    # arrays (grammarkit/split/strings.py)
+    "size": ("cgaSize", 1, 1), "nRows": ("cgaRows", 1, 1), "nColumns": ("cgaColumns", 1, 1),
 }
 # functions whose value is text: `+` with one of them concatenates (CGA converts the other side)
 _TEXT_FUNCTIONS = {"colorRGBToHex", "colorHSVToHex", "str", "substring", "listItem", "listFirst", "listLast", "listRange", "replace",
@@ -141,16 +143,22 @@ class ExprContext:
     emitted: dict[tuple[str, int], dict[str, Any]] = field(default_factory=dict)
     # names of the emitted functions whose value is text (`+` with a call of one concatenates)
     text_functions: set[str] = field(default_factory=set)
+    # readStringTable's file name (IR) -> (the name or None if not static, its rows of cells
+    # or None if not found)
+    read_table: Callable[[Any], "tuple[str | None, list[list[str]] | None]"] | None = None
+    # translating an operation's argument: an array literal there is per-edge or per-axis
+    # values the operation's handler translates (or warns about), not an array value; inside a
+    # call or an index (`extrude(size([1, 2]))`, `extrude(h[1])`) it is a value again
+    operation_argument: bool = False
+    # attrs and consts whose CGA value is an array (a literal or a table read): named as an
+    # operation's argument itself they are per-edge values too, not a number
+    array_names: frozenset[str] = frozenset()
 
     def with_frame(self, frame: frames.Frame) -> "ExprContext":
-        return ExprContext(self.filename, frame, self.params, self.values, self.functions,
-                           self.bound, self.inlining, self.on_inline, self.relative, self.emitted,
-                           self.text_functions)
+        return replace(self, frame=frame)
 
     def with_relative(self, size_ref: str | None) -> "ExprContext":
-        return ExprContext(self.filename, self.frame, self.params, self.values, self.functions,
-                           self.bound, self.inlining, self.on_inline, size_ref, self.emitted,
-                           self.text_functions)
+        return replace(self, relative=size_ref)
 
 
 def translate_expr(node: Any, ctx: ExprContext) -> Any:
@@ -171,7 +179,8 @@ def translate_expr(node: Any, ctx: ExprContext) -> Any:
     if kind == "ref":
         return _ref(kids[0].value, span, ctx)
     if kind == "func_call":
-        return _call(kids[0].value, call_args(node), span, ctx)
+        return _call(kids[0].value, call_args(node), span, replace(ctx, operation_argument=False)
+                     if ctx.operation_argument else ctx)
     if kind == "func_block_call":
         raise Untranslatable(f"fn:{kids[0].value}{{}}", f"{kids[0].value}(...) {{ ... }} as a value "
                              "(per-edge values) is not supported", span)
@@ -206,8 +215,12 @@ def translate_expr(node: Any, ctx: ExprContext) -> Any:
     if kind == "floating":
         raise Untranslatable("expr:floating", "a floating value ~ outside a split size is not "
                              "supported", span)
-    if kind in ("array", "index"):
-        raise Untranslatable("expr:array", "arrays are not supported", span)
+    if kind == "array" and ctx.operation_argument:
+        raise Untranslatable("expr:array", "an array as an operation's argument is not supported here", span)
+    if kind == "array":
+        return _array_literal(node, span, ctx)
+    if kind == "index":
+        return _array_index(node, span, replace(ctx, operation_argument=False))
     if kind == "case_expr":
         # case c1: v1 case c2: v2 else: v3 -> select(c1, v1, select(c2, v2, v3)) (lazy)
         parts = [k for k in kids if isinstance(k, Tree)]
@@ -227,6 +240,67 @@ def translate_expr(node: Any, ctx: ExprContext) -> Any:
         args.append(translate_expr(parts[-1], ctx))
         return Call(func="pick", args=tuple(args), span=span)
     raise Untranslatable(f"expr:{kind}", f"expression {kind} is not supported", span)
+
+
+def _array_literal(node: Tree, span: Span | None, ctx: ExprContext) -> Any:
+    """`[1, 2; 3, 4]` -> cgaArray(2, 2, 1, 2, 3, 4) (grammarkit/split/strings.py); `[]` is 0 x 0."""
+    rows = [list(r.children) for r in node.children if isinstance(r, Tree) and r.data == "args"]
+    if len({len(r) for r in rows}) > 1:
+        raise Untranslatable("expr:array", "the rows of an array literal have different lengths", span)
+    cols = len(rows[0]) if rows else 0
+    items = [translate_expr(x, ctx) for r in rows for x in r]
+    return Call(func="cgaArray", args=(Num(value=float(len(rows))), Num(value=float(cols)), *items), span=span)
+
+
+def _array_index(node: Tree, span: Span | None, ctx: ExprContext) -> Any:
+    """`m[i]` / `m[i, j]` -> cgaIndex(m, i[, j]); with an index range (`m[1:n, 0]`,
+    `m[n:-1:1, 4]`: start:end or start:step:end, ends included) -> cgaSlice(m, bounds...)."""
+    target, index_args = node.children[0], node.children[-1]
+    idx = list(index_args.children)
+    if len(idx) > 2:
+        raise Untranslatable("expr:array", f"an array index with {len(idx)} dimensions", span)
+    m = translate_expr(target, ctx)
+    if not any(isinstance(k, Tree) and k.data == "index_range" for k in idx):
+        return Call(func="cgaIndex", args=(m, *(translate_expr(k, ctx) for k in idx)), span=span)
+    bounds: list[Any] = []
+    for k in idx:
+        if isinstance(k, Tree) and k.data == "index_range":
+            parts = [translate_expr(x, ctx) for x in k.children if not isinstance(x, Token)]
+            start, end, step = (parts[0], parts[1], Num(value=1.0)) if len(parts) == 2 else (parts[0], parts[2], parts[1])
+        else:
+            start = end = translate_expr(k, ctx)
+            step = Num(value=1.0)
+        bounds += [start, end, step]
+    return Call(func="cgaSlice", args=(m, *bounds), span=span)
+
+
+def _read_table(name: str, args: list[Any], span: Span | None, ctx: ExprContext) -> Any:
+    """readStringTable("file.csv") / readFloatTable(...): read while importing (the file is
+    looked up as an asset is) and written into the grammar as an array literal."""
+    if ctx.read_table is None:
+        raise Untranslatable(f"fn:{name}", f"{name}(): no rule file to read the table beside", span)
+    try:
+        file, rows = ctx.read_table(translate_expr(args[0], ctx))
+    except ValueError as exc:
+        raise Untranslatable(f"fn:{name}", f"{name}(): {exc}", span) from None
+    if file is None:
+        raise Untranslatable(f"fn:{name}", f"{name}() of a file name known only while deriving", span)
+    if rows is None:
+        raise Untranslatable(f"fn:{name}", f"{name}({file!r}): the file was not found", span)
+    cols = max((len(r) for r in rows), default=0)
+    cells = [r[k] if k < len(r) else "" for r in rows for k in range(cols)]
+    if name == "readFloatTable":
+        items: list[Any] = [Num(value=_table_float(c)) for c in cells]
+    else:
+        items = [Str(value=c) for c in cells]
+    return Call(func="cgaArray", args=(Num(value=float(len(rows))), Num(value=float(cols)), *items), span=span)
+
+
+def _table_float(cell: str) -> float:
+    try:
+        return float(cell.strip())
+    except ValueError:
+        return float("nan")  # CGA: a cell that is not a number reads as NaN
 
 
 def is_text(e: Any, text_functions: "set[str] | frozenset[str]" = frozenset()) -> bool:
@@ -262,6 +336,9 @@ def unquote(text: str) -> str:
 
 
 def _ref(name: str, span: Span | None, ctx: ExprContext) -> Any:
+    if ctx.operation_argument and name in ctx.array_names and name not in ctx.bound and name not in ctx.params:
+        raise Untranslatable("expr:array", f"the array {name} as an operation's argument is not supported here",
+                             span)
     if name in ctx.bound:
         return ctx.bound[name]
     if name in ctx.params:
@@ -308,6 +385,8 @@ def _call(name: str, args: list[Any], span: Span | None, ctx: ExprContext) -> An
         return Ref(name=name, span=span)
     if name in _DERIVED_GEOMETRY and not args:
         return _derived_geometry(name, span)
+    if name in ("readStringTable", "readFloatTable") and len(args) == 1:
+        return _read_table(name, args, span, ctx)
     if name in _FUNCTIONS:
         gk, lo, hi = _FUNCTIONS[name]
         if len(args) < lo or (hi is not None and len(args) > hi):
@@ -402,7 +481,7 @@ def _inline(fn: Function, args: list[Any], span: Span | None, ctx: ExprContext) 
     values = [translate_expr(a, ctx) for a in args]
     inner = ExprContext(ctx.filename, ctx.frame, {}, ctx.values, ctx.functions,
                         dict(zip(fn.params, values)), ctx.inlining + (fn.name,), ctx.on_inline,
-                        emitted=ctx.emitted, text_functions=ctx.text_functions)
+                        emitted=ctx.emitted, text_functions=ctx.text_functions, read_table=ctx.read_table)
     out = translate_expr(fn.body, inner)
     if ctx.on_inline is not None:
         ctx.on_inline(fn.name)

@@ -121,16 +121,16 @@ def test_a_packages_presets_are_its_styles_and_change_the_building():
     assert np.allclose([heights[None], heights["Town"], heights["Plain"]], [7.4, 12.0, 10.0], atol=0.01)
 
 
-def test_array_index_ranges_parse_and_are_located_warnings():
+def test_array_index_ranges_select_rows_and_columns_ends_included():
     # Esri's Plant_Loader.cga (envelope2002.rpk): `m[1:n, 0]`, `m[n:-1:1, 4]`; a syntax error
-    # there made the whole import (and every plant) fall away
-    text = ('const m = [1, 2; 3, 4]\nconst n = 1\nconst first = findFirst(m[1:n, 0], 2)\n'
-            'const back = findFirst(m[n:-1:1, 1], 4)\nLot --> extrude(3) X\n')
+    # there made the whole import (and every plant) fall away, then they were warnings
+    text = ('const m = [1, 2; 3, 4; 5, 6]\nconst n = 2\nconst first = findFirst(m[1:n, 0], 5)\n'
+            'const back = findFirst(m[n:-1:0, 1], 2)\nLot --> extrude(1 + first + back * 10) X\n')
     r = translate_cga(text, filename="t.cga")
     assert r.ok, [d.format(text) for d in r.diagnostics]
-    assert "Lot --> extrude(3) X" in r.text
-    lines = {d.span.line for d in r.diagnostics if d.severity == "warning" and "array" in d.message}
-    assert {3, 4} <= lines
+    assert not [d for d in r.diagnostics if d.severity == "warning"]
+    # rows 1..2 of column 0: (3, 5), 5 at 1; rows 2, 1, 0 of column 1: (6, 4, 2), 2 at 2
+    assert np.isclose(bbox(grammarkit.derive(r.grammar, lot=LOT))[1][2], 1 + 1 + 2 * 10, atol=0.01)
 
 
 RESOLVE_MAP = """<?xml version="1.0" encoding="UTF-8"?>

@@ -272,7 +272,10 @@ class BodyMixin:
                          message=f"{name}(): {why}", counting=rctx.counting)
             return []
         try:
-            items, approx = handler(HandlerContext(self, name, args, block, star, frame, rctx, ctx, span, out))
+            # an array as an operation's argument itself (setback([1, 2, 3, 4]): per-edge values)
+            # is the handler's to translate, not a value (ExprContext.operation_argument)
+            op_ctx = dataclasses.replace(ctx, operation_argument=True)
+            items, approx = handler(HandlerContext(self, name, args, block, star, frame, rctx, op_ctx, span, out))
         except Untranslatable as exc:
             if block is not None and rctx.counting:
                 self._count_block(block, frame, rctx)

@@ -39,6 +39,7 @@ from ..expressions import (
 )
 from ..names import gk_name
 from ..report import Construct, ImportReport
+from ..tables import find_table, read_table
 from .body import BodyMixin
 from .declarations import DeclarationsMixin
 from .entries import EntriesMixin
@@ -232,5 +233,37 @@ class Translator(DeclarationsMixin, ValuesMixin, FunctionsMixin, BodyMixin, Entr
     def _ctx(self, frame: str, params: dict[str, str]) -> ExprContext:
         return ExprContext(self.filename, frame, params, self.value_names, self.functions,
                            on_inline=self.inlined.add, emitted=self.emitted,
-                           text_functions=self.text_functions)
+                           text_functions=self.text_functions, read_table=self._read_table,
+                           array_names=self._array_names())
+
+    def _array_names(self) -> frozenset[str]:
+        """The attrs and consts whose CGA value is an array literal or a table read (cached by
+        the number of values, which only grows while declarations are collected)."""
+        cached = self.__dict__.get("_array_names_cache")
+        if cached is not None and cached[0] == len(self.values):
+            return cached[1]
+        names = frozenset(v.name for v in self.values if isinstance(v.value, Tree) and (
+            v.value.data == "array" or v.value.data == "func_call" and v.value.children
+            and getattr(v.value.children[0], "value", None) in ("readStringTable", "readFloatTable")))
+        self._array_names_cache = (len(self.values), names)
+        return names
+
+    def _read_table(self, expr: Any) -> "tuple[str | None, list[list[str]] | None]":
+        """readStringTable's file (a name the attrs' and consts' defaults give), read once per
+        import (tables.py): (its name or None, its rows or None if it was not found)."""
+        if self.__dict__.get("_reading_table"):
+            # the consts' defaults are being collected for the file name: a table is none of them
+            raise ValueError("a table read while its own file name is worked out")
+        self._reading_table = True
+        try:
+            name = self.constant_value(expr)
+        finally:
+            self._reading_table = False
+        if not isinstance(name, str) or not name:
+            return None, None
+        cache = self.__dict__.setdefault("_tables", {})
+        if name not in cache:
+            found = find_table(name, self.filename, self.project, self.asset_dirs)
+            cache[name] = read_table(found) if found is not None else None
+        return name, cache[name]
 

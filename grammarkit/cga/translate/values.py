@@ -10,6 +10,7 @@ from ...functions import BUILTIN_FUNCTIONS
 from ...ir import (
     Attr,
     Bool,
+    Call,
     Const,
     Num,
     Str,
@@ -28,6 +29,17 @@ from .model import (
 
 # the built-in functions by name, as fold_constant takes them (pure ones are folded)
 _FOLD_FUNCTIONS = {spec.name: spec for spec in BUILTIN_FUNCTIONS}
+
+
+def _fold_functions() -> dict:
+    """The built-ins and the split engine's text, list and array functions (str(), listItem,
+    cgaIndex: `Folder + "/trees.csv"` is folded with CGA's str() of the const). Imported
+    lazily: grammarkit.split is not needed to read a .cga."""
+    if "str" not in _FOLD_FUNCTIONS:
+        from ...split.strings import STRING_FUNCTIONS
+
+        _FOLD_FUNCTIONS.update({spec.name: spec for spec in STRING_FUNCTIONS})
+    return _FOLD_FUNCTIONS
 
 
 class ValuesMixin:
@@ -90,6 +102,11 @@ class ValuesMixin:
         if not isinstance(tree, Tree):
             return None, None
         kids = children(tree)
+        if tree.data == "func_call" and kids and getattr(kids[0], "value", None) in (
+                "readStringTable", "readFloatTable"):
+            # a table the import cannot read: CityEngine reads a missing file as an empty array
+            return (Call(func="cgaArray", args=(Num(value=0.0), Num(value=0.0))),
+                    "an empty array instead (CityEngine's value for a table it cannot read)")
         if tree.data == "case_expr":
             conds, vals, other = kids[0:-1:2], kids[1:-1:2], kids[-1]
             for cond, val in zip(conds, vals):
@@ -158,10 +175,10 @@ class ValuesMixin:
                 return NOT_CONSTANT
             visiting.add(name)
             try:
-                return fold_constant(value, lookup, _FOLD_FUNCTIONS)
+                return fold_constant(value, lookup, _fold_functions())
             finally:
                 visiting.discard(name)
-        value = fold_constant(expr, lookup, _FOLD_FUNCTIONS)
+        value = fold_constant(expr, lookup, _fold_functions())
         return None if value is NOT_CONSTANT else value
 
     def _annotations(self, v: ValueDef, value: Any) -> tuple[Any, Any]:

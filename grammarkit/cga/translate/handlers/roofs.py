@@ -1,6 +1,7 @@
 """CGA's roofGable, roofHip, roofShed with all their forms, and envelope()."""
 from __future__ import annotations
 
+import dataclasses
 import math
 from typing import Any
 
@@ -232,6 +233,10 @@ def _per_edge_arg(tree: Any, frame: str, ctx: Any, span: Any, notes: list) -> An
         if len(rows) != 1:
             raise Untranslatable("envelope:array", "a 2-d array as per-edge values", span)
         return Vector(items=tuple(translate_expr(c, ctx) for c in rows[0].children))
+    if isinstance(tree, Tree) and tree.data == "ref" and tree.children[0].value in ctx.array_names:
+        # an attr or const holding the per-edge array: its items as the vector, when deriving
+        array = translate_expr(tree, dataclasses.replace(ctx, operation_argument=False))
+        return Call(func="cgaVector", args=(array,), span=span)
     return translate_expr(tree, ctx)
 
 
