@@ -137,7 +137,8 @@ class previous_solid:
 
 
 #: issue 27's speed switches, (module, attribute): True is the default, False the code before
-PRIOR_SWITCHES = [("grammarkit.split.closings", "NUMPY_REACH")]
+PRIOR_SWITCHES = [("grammarkit.split.closings", "NUMPY_REACH"),
+                  ("grammarkit.split.ops.lots", "NUMPY_INNER_RECTANGLE")]
 
 
 class prior_speed:

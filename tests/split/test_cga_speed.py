@@ -89,3 +89,47 @@ def test_numpy_reach_matches_the_loops_on_tilted_frames():
     assert python.keys() == numpy_.keys() and len(python) == 4
     for n in python:
         assert np.allclose(python[n], numpy_[n], rtol=0, atol=1e-12)
+
+
+def test_numpy_inner_rectangle_gives_the_same_rectangles(monkeypatch):
+    """innerRectangle's candidates from arrays: the same largest rectangle as the loops, on
+    rectilinear lots (ties between equal areas included) and random star polygons, turned."""
+    import math
+
+    from grammarkit.split.ops import lots
+
+    rng = np.random.default_rng(7)
+    faces = [
+        (((0.0, 0.0), (20.0, 0.0), (20.0, 12.0), (0.0, 12.0)),),
+        (((0.0, 0.0), (20.0, 0.0), (20.0, 5.0), (8.0, 5.0), (8.0, 12.0), (0.0, 12.0)),),
+        (
+            (
+                (0.0, 0.0),
+                (10.0, 0.0),
+                (10.0, 4.0),
+                (6.0, 4.0),
+                (6.0, 8.0),
+                (4.0, 8.0),
+                (4.0, 4.0),
+                (0.0, 4.0),
+            ),
+        ),
+    ]
+    for _ in range(4):
+        n = int(rng.integers(5, 10))
+        ang, r = np.sort(rng.uniform(0, 2 * math.pi, n)), rng.uniform(3, 10, n)
+        faces.append(
+            (
+                tuple(
+                    (float(r[i] * math.cos(ang[i])), float(r[i] * math.sin(ang[i])))
+                    for i in range(n)
+                ),
+            )
+        )
+    for face in faces:
+        for c, sn in ((1.0, 0.0), (math.cos(0.3), math.sin(0.3))):
+            monkeypatch.setattr(lots, "NUMPY_INNER_RECTANGLE", False)
+            loops = lots.largest_rectangle(face, c, sn)
+            monkeypatch.setattr(lots, "NUMPY_INNER_RECTANGLE", True)
+            assert lots.largest_rectangle(face, c, sn) == loops
+            assert loops is not None
