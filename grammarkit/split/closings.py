@@ -14,6 +14,9 @@ __all__ = ["drop_unspanned_closings"]
 #: projections differ from Python's compensated sum() by rounding at most, far below the 1 mm
 #: tolerance they are compared with. False restores the loops (benchmarks/bench_prt.py --prior).
 NUMPY_REACH = True
+#: below this many terminals the loops are cheaper than building the arrays (a one-volume
+#: package: ~0.2 ms of numpy set-up against microseconds)
+NUMPY_REACH_MIN = 64
 
 
 def drop_unspanned_closings(ctx: Any) -> None:
@@ -43,7 +46,7 @@ def drop_unspanned_closings(ctx: Any) -> None:
             memo[n] = found
         return found
 
-    if NUMPY_REACH:
+    if NUMPY_REACH and len(ctx.leaves) >= NUMPY_REACH_MIN:
         reach = _reach_numpy(ctx, by_node, closings_above)
     else:
         reach = _reach_python(ctx, by_node, closings_above)
