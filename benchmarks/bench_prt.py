@@ -9,6 +9,7 @@
     python benchmarks/bench_prt.py --previous           # also time the solid mode before issue 27's
                                                         # second step (prev ms, prev tris)
     python benchmarks/bench_prt.py --last               # ... before its third step (last ms, last tris)
+    python benchmarks/bench_prt.py --prior              # ... with issue 27's speed switches off (prior ms)
 
 PyPRT (`pip install pyprt`) is Esri's, under Esri's terms: never a dependency of grammarkit,
 only this optional reference. Without it the PRT columns are empty.
@@ -37,6 +38,10 @@ own: grammarkit.geometry.closing.CONVEX_PATCHES and grammarkit.split.engine.REVE
 with its triangles (`prev ms`, `prev tris`). `--last` times the solid mode before issue 27's third
 step (`last ms`, `last tris`: the numpy sliver pre-check and the parts left out of the union in
 window openings, grammarkit.split.union.SLIVER_PRECHECK and FREE_PARTS, off).
+
+`--prior` times, alternating too, the default mode with issue 27's speed switches off
+(PRIOR_SWITCHES below: each leaves the output byte-identical, tests/split/test_cga_speed.py), as
+`prior ms` and `prior cpu x` (the CPU time of the switches-off run over the default one's).
 
 On a machine shared by many jobs wall-clock times swing by several times between runs; `cpu x`
 is the ratio of the processes' CPU time (time.process_time, all threads) for the same alternating
@@ -131,14 +136,35 @@ class previous_solid:
         closing.CONVEX_PATCHES, engine.REVEAL_VIEWS, union.FREE_PARTS, union.SLIVER_PRECHECK = self.saved
 
 
+#: issue 27's speed switches, (module, attribute): True is the default, False the code before
+PRIOR_SWITCHES = [("grammarkit.split.closings", "NUMPY_REACH"),
+                  ("grammarkit.split.ops.lots", "NUMPY_INNER_RECTANGLE")]
+
+
+class prior_speed:
+    """Every PRIOR_SWITCHES switch off (the same output, the slower code before it)."""
+
+    def __enter__(self):
+        import importlib
+        self.mods = [(importlib.import_module(m), a) for m, a in PRIOR_SWITCHES]
+        self.saved = [getattr(m, a) for m, a in self.mods]
+        for m, a in self.mods:
+            setattr(m, a, False)
+
+    def __exit__(self, *exc):
+        for (m, a), v in zip(self.mods, self.saved):
+            setattr(m, a, v)
+
+
 def gk_time(grammar, lot, surfaces: str, single: bool, previous: bool = False,
-            last: bool = False) -> tuple[float, float]:
+            last: bool = False, prior: bool = False) -> tuple[float, float]:
     """(wall seconds, CPU seconds) of one derive."""
     import contextlib
 
     import grammarkit
     with single_union() if single else contextlib.nullcontext(), \
-            previous_solid(last) if previous or last else contextlib.nullcontext():
+            previous_solid(last) if previous or last else contextlib.nullcontext(), \
+            prior_speed() if prior else contextlib.nullcontext():
         t, c = time.perf_counter(), time.process_time()
         grammarkit.derive(grammar, seed=0, lot=lot, surfaces=surfaces)
         return time.perf_counter() - t, time.process_time() - c
@@ -231,12 +257,17 @@ def main(argv=None) -> int:
                     help="also time the solid mode before issue 27's second step")
     ap.add_argument("--last", action="store_true",
                     help="also time the solid mode before issue 27's third step (last ms, last tris)")
+    ap.add_argument("--prior", action="store_true",
+                    help="also time the default mode with issue 27's speed switches off (prior ms)")
+    ap.add_argument("--only", nargs="*", default=None, help="only these package names (stems)")
     args = ap.parse_args(argv)
     try:
         import pyprt  # noqa: F401 - optional reference (Esri's terms), never a dependency
     except ImportError:
         pyprt = None
     rpks = sorted(PACKAGES.glob("*.rpk")) + list(args.extra)
+    if args.only is not None:
+        rpks = [r for r in rpks if r.stem in args.only]
     rows, reference = [], {}
     with tempfile.TemporaryDirectory() as tmp:
         for rpk in rpks:
@@ -245,6 +276,8 @@ def main(argv=None) -> int:
                 row = {"package": rpk.stem, "lot": lot_name, "derives": False, "error": err}
                 gk, prt, gk_t, prt_t, base_t, prev_t, gk_c, prt_c = None, None, [], [], [], [], [], []
                 last_t: list = []
+                prior_t: list = []
+                prior_c: list = []
                 if grammar is not None:
                     try:  # once untimed: the GLB check, and warm caches for every timed run
                         gk = gk_run(grammar, lot, args.surfaces, check_glb=True)
@@ -261,6 +294,10 @@ def main(argv=None) -> int:
                             prev_t.append(gk_time(grammar, lot, "solid", False, previous=True)[0])
                         if args.last:
                             last_t.append(gk_time(grammar, lot, "solid", False, last=True)[0])
+                        if args.prior:
+                            pw, pc = gk_time(grammar, lot, args.surfaces, args.single_union, prior=True)
+                            prior_t.append(pw)
+                            prior_c.append(pc)
                     if pyprt is not None:
                         prt = prt_run(pyprt, rpk, lot)
                         prt_t.append(prt["time"])
@@ -275,6 +312,9 @@ def main(argv=None) -> int:
                 row["prev_tris"] = gk_triangles(grammar, lot) if prev_t else None
                 row["last_ms"] = statistics.median(last_t) * 1e3 if last_t else None
                 row["last_tris"] = gk_triangles(grammar, lot, last=True) if last_t else None
+                row["prior_ms"] = statistics.median(prior_t) * 1e3 if prior_t else None
+                row["prior_cpu_x"] = (statistics.median(prior_c) / statistics.median(gk_c)
+                                      if prior_c and gk_c and statistics.median(gk_c) > 0 else None)
                 row["cpu_ratio"] = (statistics.median(gk_c) / statistics.median(prt_c)
                                     if gk_c and prt_c and statistics.median(prt_c) > 0 else None)
                 row["gk_cpu_ms"] = statistics.median(gk_c) * 1e3 if gk_c else None
@@ -285,7 +325,7 @@ def main(argv=None) -> int:
                     reference.setdefault(rpk.stem, {})[lot_name] = {
                         "bbox": [[round(c, 4) for c in prt["bbox"][0]], [round(c, 4) for c in prt["bbox"][1]]]
                         if prt["bbox"] else None, "triangles": prt["triangles"]}
-    _print(rows, pyprt is not None, args.baseline, args.previous, args.last)
+    _print(rows, pyprt is not None, args.baseline, args.previous, args.last, args.prior)
     if args.record is not None and reference:
         args.record.parent.mkdir(parents=True, exist_ok=True)
         args.record.write_text(json.dumps({"source": "PyPRT generate_model, default attributes, lots of "
@@ -303,12 +343,13 @@ def _fmt(v, spec=".2f") -> str:
 
 # long: one table, one column group per option, and the summed line
 def _print(rows: list, have_prt: bool, baseline: bool = False, previous: bool = False,
-           last: bool = False) -> None:
+           last: bool = False, prior: bool = False) -> None:
     print(f"{'package':18} {'lot':6} {'der':3} {'bbox d(m)':>9} {'terms':>6} {'prt faces':>9} "
           f"{'tris gk':>8} {'tris prt':>8} {'tris x':>6} {'open':>6} {'tight gk/prt':>12} {'glb':>3} "
           f"{'bodies gk/prt':>13} {'gk ms':>8} {'prt ms':>8} {'ratio':>6} {'cpu x':>6}"
           + (f" {'base ms':>8}" if baseline else "") + (f" {'prev ms':>8} {'prev tris':>9}" if previous else "")
-          + (f" {'last ms':>8} {'last tris':>9}" if last else ""))
+          + (f" {'last ms':>8} {'last tris':>9}" if last else "")
+          + (f" {'prior ms':>8} {'prior cpu x':>11}" if prior else ""))
     for r in rows:
         gk, prt = r["gk"] or {}, r["prt"] or {}
         tight = f"{_yn(gk.get('watertight'))}/{_yn(prt.get('watertight'))}"
@@ -322,7 +363,8 @@ def _print(rows: list, have_prt: bool, baseline: bool = False, previous: bool = 
               f"{_fmt(r.get('cpu_ratio')):>6}"
               + (f" {_fmt(r.get('base_ms'), '.1f'):>8}" if baseline else "")
               + (f" {_fmt(r.get('prev_ms'), '.1f'):>8} {r.get('prev_tris') or '-'!s:>9}" if previous else "")
-              + (f" {_fmt(r.get('last_ms'), '.1f'):>8} {r.get('last_tris') or '-'!s:>9}" if last else ""))
+              + (f" {_fmt(r.get('last_ms'), '.1f'):>8} {r.get('last_tris') or '-'!s:>9}" if last else "")
+              + (f" {_fmt(r.get('prior_ms'), '.1f'):>8} {_fmt(r.get('prior_cpu_x')):>11}" if prior else ""))
         if r["error"]:
             print(f"    {r['error']}")
     timed = [r for r in rows if r["gk_ms"] is not None and r["prt_ms"] is not None]
@@ -342,6 +384,9 @@ def _print(rows: list, have_prt: bool, baseline: bool = False, previous: bool = 
         if last and all(r.get("last_ms") is not None for r in timed):
             lt = sum(r["last_ms"] for r in timed)
             line += f"; last step's solid mode {lt:.1f} ms (ratio {lt / prt_sum:.2f})"
+        if prior and all(r.get("prior_ms") is not None for r in timed):
+            pr = sum(r["prior_ms"] for r in timed)
+            line += f"; speed switches off {pr:.1f} ms (ratio {pr / prt_sum:.2f})"
         print(line)
     if not have_prt:
         print("(PyPRT is not installed: no reference columns; `pip install pyprt`, Esri's terms)")

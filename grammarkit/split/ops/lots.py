@@ -358,6 +358,12 @@ op_shape_o = operation("shapeO", (Param("front_width"), Param("right_width"), Pa
 
 
 # -- innerRectangle ----------------------------------------------------------------------------
+#: innerRectangle's candidate rectangles from numpy arrays instead of Python loops over up to
+#: 39^4 / 4 of them (the same candidates in the same order, so the same rectangle); False
+#: restores the loops (benchmarks/bench_prt.py --prior).
+NUMPY_INNER_RECTANGLE = True
+
+
 def largest_rectangle(contours: tuple, c: float, sn: float) -> tuple[float, float, float, float] | None:
     """The largest rectangle inside the region, with sides along (c, sn) and (-sn, c): (x0, y0,
     x1, y1) in that turned frame. Exact over the candidate coordinates of the region's vertices
@@ -377,28 +383,52 @@ def largest_rectangle(contours: tuple, c: float, sn: float) -> tuple[float, floa
     xs = sorted(set(xs) | {xs[0] + (xs[-1] - xs[0]) * k / 16 for k in range(1, 16)})
     ys = sorted(set(ys) | {ys[0] + (ys[-1] - ys[0]) * k / 16 for k in range(1, 16)})
     total = turned.area() * (1 + 1e-6)
-    best, best_area = None, 0.0
+    rings = [tuple((x * c + y * sn, -x * sn + y * c) for x, y in ring) for ring in contours]
+    inside = {(x, y): _inside(x, y, rings) for x in xs for y in ys}  # corners must be in the face
+    order = _candidates_numpy(xs, ys, total, inside) if NUMPY_INNER_RECTANGLE else _candidates(xs, ys, total, inside)
+    for a, x0, y0, x1, y1 in order:
+        rect = manifold3d.CrossSection.square((x1 - x0, y1 - y0)).translate((x0, y0))
+        if (rect - turned).area() < 1e-7 * max(a, 1.0):
+            return (x0, y0, x1, y1)
+    return None
+
+
+def _candidates(xs: list, ys: list, total: float, inside: dict) -> Any:
+    """The rectangles over the candidate coordinates whose corners are in the face, largest
+    first (ties: by the corners' coordinates, descending), as Python loops."""
     cand = []
     for i, x0 in enumerate(xs):
         for x1 in xs[i + 1:]:
             for j, y0 in enumerate(ys):
                 for y1 in ys[j + 1:]:
                     a = (x1 - x0) * (y1 - y0)
-                    if a > best_area + 1e-9 and a <= total:
+                    if a > 1e-9 and a <= total:
                         cand.append((a, x0, y0, x1, y1))
     cand.sort(reverse=True)
-    rings = [tuple((x * c + y * sn, -x * sn + y * c) for x, y in ring) for ring in contours]
-    inside = {(x, y): _inside(x, y, rings) for x in xs for y in ys}  # corners must be in the face
     for a, x0, y0, x1, y1 in cand:
-        if a <= best_area:
-            break
-        if not (inside[(x0, y0)] and inside[(x1, y0)] and inside[(x0, y1)] and inside[(x1, y1)]):
-            continue
-        rect = manifold3d.CrossSection.square((x1 - x0, y1 - y0)).translate((x0, y0))
-        if (rect - turned).area() < 1e-7 * max(a, 1.0):
-            best, best_area = (x0, y0, x1, y1), a
-            break
-    return best
+        if inside[(x0, y0)] and inside[(x1, y0)] and inside[(x0, y1)] and inside[(x1, y1)]:
+            yield a, x0, y0, x1, y1
+
+
+def _candidates_numpy(xs: list, ys: list, total: float, inside: dict) -> Any:
+    """_candidates' rectangles in its order, from arrays (up to 39^4 / 4 candidates: the loops
+    took most of a second per face)."""
+    import numpy as np
+
+    X, Y = np.asarray(xs, dtype=float), np.asarray(ys, dtype=float)
+    i0, i1 = np.triu_indices(len(X), 1)
+    j0, j1 = np.triu_indices(len(Y), 1)
+    inn = np.array([[inside[(x, y)] for y in ys] for x in xs], dtype=bool).reshape(len(X), len(Y))
+    xi = np.repeat(np.arange(len(i0)), len(j0))
+    yj = np.tile(np.arange(len(j0)), len(i0))
+    a0, a1, b0, b1 = i0[xi], i1[xi], j0[yj], j1[yj]
+    area = (X[a1] - X[a0]) * (Y[b1] - Y[b0])
+    keep = (area > 1e-9) & (area <= total) & inn[a0, b0] & inn[a1, b0] & inn[a0, b1] & inn[a1, b1]
+    a0, a1, b0, b1, area = a0[keep], a1[keep], b0[keep], b1[keep], area[keep]
+    # descending by (area, x0, y0, x1, y1), as the tuples' reverse sort
+    order = np.lexsort((-Y[b1], -X[a1], -Y[b0], -X[a0], -area))
+    for k in order.tolist():
+        yield float(area[k]), xs[a0[k]], ys[b0[k]], xs[a1[k]], ys[b1[k]]
 
 
 def _inside(x: float, y: float, rings: list) -> bool:
