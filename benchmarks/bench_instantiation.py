@@ -164,6 +164,15 @@ def main() -> int:
     ap.add_argument("--decodings", default="free,masked,placed", help="the `decodings` part: which decodings")
     ap.add_argument("--reference", default=None, help="the `decodings` part: dataset folders (comma-separated) "
                     "of graph-sampler outputs (other seeds) for novelty against the sampler")
+    ap.add_argument("--min-length", type=int, default=None, help="the `decodings` part: the placed rows' length "
+                    "bucket's lower end (the shipped setting: 41 with --max-length 56)")
+    ap.add_argument("--max-open", type=int, default=None, help="the `decodings` part: the placed rows' open-ring "
+                    "limit (the shipped setting: 2)")
+    ap.add_argument("--novel-only", choices=("on", "off", "both"), default="off",
+                    help="the `decodings` part: placed search treats a finished known graph as a dead end "
+                    "(the back end's novel_search), or not, or both rows")
+    ap.add_argument("--per-point", type=int, default=1, help="the `decodings` part: the dead-end rows search "
+                    "this many new graphs per latent point (the back end's per_point)")
     ap.add_argument("--placed-temperature", type=float, default=0.0,
                     help="the `decodings` part: the placed row's temperature")
     args = ap.parse_args()
@@ -488,20 +497,30 @@ def decodings_table(args, grammar) -> None:  # noqa: ANN001
             specs.append(("free (paper)" if dec == "free" else "masked", SamplingSettings(decoding=dec, batch=2)))
     for lim in (args.max_length.split(",") if "placed" in args.decodings else []):
         m = None if lim == "none" else int(lim)
-        specs.append((f"placed, length prior {'<= ' + str(m) + ' tokens' if m else 'the start string'}"
-                      f", temperature {args.placed_temperature}",
-                      SamplingSettings(decoding="placed", batch=2, max_length=m, temperature=args.placed_temperature)))
+        lo = f"{args.min_length}-" if args.min_length and m else ("<= " if m else "")
+        for novel in {"on": [True], "off": [False], "both": [False, True]}[args.novel_only]:
+            specs.append((f"placed, length prior {lo + str(m) + ' tokens' if m else 'the start string'}"
+                          f", temperature {args.placed_temperature}"
+                          + (f", at most {args.max_open} open rings" if args.max_open else "")
+                          + (", known graphs are dead ends" if novel else "")
+                          + (f", {args.per_point} per point" if novel and args.per_point > 1 else ""),
+                          SamplingSettings(decoding="placed", batch=2, max_length=m, min_length=args.min_length,
+                                           temperature=args.placed_temperature), novel))
+    specs = [(s_[0], s_[1], s_[2] if len(s_) > 2 else False) for s_ in specs]
     past = {"on": [True], "off": [False], "both": [False, True]}[args.past_known]
-    specs = [(f"{label}{', past known graphs' if p else ''}", st, p) for label, st in specs for p in past]
+    specs = [(f"{label}{', past known graphs' if p else ''}", st, p, nov)
+             for label, st, nov in specs for p in past]
     print(f"\n## Decodings side by side: {args.decode_points} perturbed latent points each, model {args.vae}"
           f" ({len(vae.train_strings)} training graphs; reference: {len(ref) if ref is not None else 0} sampler graphs)\n")
-    for label, st, past_known in specs:
+    for label, st, past_known, novel in specs:
         sampler = Sampler(vae, st, seed=args.seed)
         if st.decoding == "placed":
-            sampler.placed = PlacedDecoder(vae, inst, temperature=st.temperature)
+            sampler.placed = PlacedDecoder(vae, inst, temperature=st.temperature, max_open=args.max_open)
         seen = GraphSet()
-        if past_known:  # as the back end does (search_past_known): grow the offset past known graphs
+        if past_known or novel:  # as the back end does (search_past_known): grow the offset past known graphs
             sampler.known = lambda g, seen=seen: g in train or g in seen
+        sampler.novel_only = novel
+        sampler.per_point = args.per_point if novel else 1
         valid_graphs = built_graphs = new = new_ref = 0
         parts, per_shape = [], []
         w0, c0 = time.perf_counter(), time.process_time()

@@ -131,3 +131,39 @@ def test_a_time_limit_ends_a_placed_run_and_says_so(tmp_path):
                                     "--time-limit", "0.001", "-o", str(tmp_path / "out")])
     assert res.exit_code == 0, res.output
     assert "made 0 of 5" in res.output and "time limit" in res.output, res.output
+
+
+def _small_point(vae):
+    """The latent point of the smallest training castle and its string's length."""
+    i = min(range(len(vae.train_strings)), key=lambda k: len(vae.train_strings[k]))
+    return vae.train_mu[i].numpy(), len(vae.train_strings[i])
+
+
+def test_a_rejected_graph_is_a_dead_end_and_the_search_goes_on(shipped):
+    from grammarkit_string_vae.graphs import GraphSet
+
+    vae, _inst, dec = shipped
+    z, n = _small_point(vae)
+    first = dec.decode(z, n, seed=0)
+    assert first.valid, first.error
+    known = GraphSet()
+    known.add(first.graph)
+    again = dec.decode(z, n, seed=0, reject=lambda g: g in known)
+    # either another graph that the masks let through, or nothing, charged to novelty
+    assert (again.valid and again.graph not in known) or (not again.valid and again.stage == "novelty")
+
+
+def test_per_point_returns_distinct_graphs_from_one_latent_point(shipped):
+    from grammarkit_string_vae.graphs import GraphSet
+
+    vae, inst, dec = shipped
+    z, _n = _small_point(vae)
+    d = dec.decode(z, 30, seed=0, per_point=3)  # a budget of 30 tokens leaves room for a second castle
+    assert d.valid, d.error
+    assert d.text == dec.decode(z, 30, seed=0).text  # the first is what one string per point gives
+    assert d.more  # the search went on past the first string
+    graphs = GraphSet()
+    for x in [d, *d.more]:
+        assert x.valid and graphs.add(x.graph)  # all distinct
+        asm, problem = inst.build(x.graph, x.placement.frames, x.placement.variants)
+        assert problem is None

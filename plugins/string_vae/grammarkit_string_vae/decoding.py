@@ -18,7 +18,7 @@ Latent points are decoded in batches; everything is deterministic for a given se
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any, Sequence
 
 import numpy as np
@@ -45,6 +45,7 @@ class Decoded:
     repaired: str | None = None  # masked dead ends: None, "backtrack", "resample", "rules" or "failed"
     placement: Any = None  # placed decoding: frames, variants and categories (placed.Placement)
     stage: str | None = None  # invalid: where it failed ("decoding", "3D placement")
+    more: list = field(default_factory=list)  # placed decoding with `per_point` > 1: further finished strings
 
 
 def check_text(text: str, alphabet: Alphabet, rules: TopologyRules) -> Decoded:

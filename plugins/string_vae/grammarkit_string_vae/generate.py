@@ -69,6 +69,8 @@ def _generate(request: Request) -> Iterator[Result]:
     seen = GraphSet()
     if opts.search_past_known:  # perturbation grows its offset past training graphs and repeats
         sampler.known = lambda g: (not opts.include_training and g in train) or g in seen
+        sampler.novel_only = opts.novel_search
+    sampler.per_point = opts.per_point
     em = inst = None
     if opts.categories:
         from .edgemodel import load_edge_model

@@ -56,6 +56,11 @@ class StringVAEOptions(BaseModel):
     search_past_known: bool = Field(True, description="perturb/interpolate/path: grow the offset past decoded "
                                     "graphs that are training graphs or made already (the paper's \"until a new "
                                     "valid string\"); false: stop at any graph other than the start point's")
+    novel_search: bool = Field(True, description="placed decoding: a finished string whose graph is a training "
+                               "graph or made already is a dead end of the search, which goes on to the next "
+                               "alternative (needs search_past_known); false: such points are lost to novelty")
+    per_point: int = Field(1, ge=1, description="placed decoding: new graphs searched per latent point (the search "
+                           "goes on after a finished string; the further ones share the point's prefix)")
     include_training: bool = Field(False, description="also yield graphs of the training set")
     categories: Optional[str] = Field(None, description="edge-category model (.edges, from `grammarkit train "
                                       "edge-categories`, or builtin:castle for the shipped one): instantiate every "

@@ -43,7 +43,9 @@ import torch
 
 from .consistent import ConsistentDecoder, _relative
 from .decoding import Decoded, check_text
+from .graphs import GraphSet
 from .masked import Automaton, DecodeState
+from .strings import decode as decode_string
 from .vocab import EOS
 
 __all__ = ["PlacedDecoder", "Placement"]
@@ -80,7 +82,7 @@ class PlacedDecoder:
     def __init__(self, vae: Any, instantiator: Any, *, expansions: int = 150, branching: int = 2,
                  retries: int = 2, slack: float = 0.15, pressure: int = 40, temperature: float = 0.0,
                  width: int = 16, homing: float = 1.0, reach: bool = True, homing_from: float | None = None,
-                 max_open: int | None = None):
+                 max_open: int | None = None, bonus: int = 40):
         self.vae = vae
         self.model = vae.model
         self.vocab = vae.vocab
@@ -98,6 +100,7 @@ class PlacedDecoder:
         self.width = max(1, int(width))
         self.homing = float(homing)
         self.max_open = None if max_open is None else int(max_open)
+        self.bonus = int(bonus)  # per_point > 1: search steps granted per string found
         # with the reach table the beam is ranked by it from the first letter (measured better
         # than from half the budget); the straight-line homing starts at half the budget as before
         self.homing_from = float(homing_from if homing_from is not None else (0.0 if reach else 0.5))
@@ -227,7 +230,7 @@ class PlacedDecoder:
             return {}, None
         P, R = arrays if arrays is not None else self._arrays(ctx, hyp)
         owners = set(ctx.state.rings.values())
-        d = np.linalg.norm(P - Fy[:3, 3], axis=1)
+        d = np.sqrt(((P - Fy[:3, 3]) ** 2).sum(axis=1))
         # an open ring's owner must stay reachable with the tokens left (each part one step)
         # from a part that can still grow: the new one or the owner of an open branch
         left = ctx.state.a.max_len - ctx.state.length
@@ -235,10 +238,11 @@ class PlacedDecoder:
         # parts still possible after this letter: the tokens left minus the end and one ring
         # label per open ring (the reach table counts parts of a chain, exact up to collisions)
         parts_left = left - 2 - len(ctx.state.rings)
+        S = P[stack] if stack else None
         for o in owners:
             if o == parent:
                 continue
-            near = min([d[o]] + [float(np.linalg.norm(P[o] - P[q])) for q in stack])
+            near = float(d[o]) if S is None else min(float(d[o]), float(np.sqrt(((S - P[o]) ** 2).sum(axis=1)).min()))
             if near > (left + 1) * self.step_max:
                 return None, "reach"
             if self.reach is not None and parts_left < self.reach.depth:
@@ -319,9 +323,19 @@ class PlacedDecoder:
 
     # ---- the search ------------------------------------------------------------------------
     @torch.no_grad()
-    def decode(self, z: np.ndarray, target_len: int | None = None, seed: int = 0) -> Decoded:
+    def decode(self, z: np.ndarray, target_len: int | None = None, seed: int = 0,
+               reject: Any = None, per_point: int = 1) -> Decoded:
         """One latent point -> a checked string with its placement (`Decoded.placement`), or an
-        invalid Decoded whose error says why (`stage`: "decoding" or "3D placement")."""
+        invalid Decoded whose error says why (`stage`: "decoding" or "3D placement").
+
+        `reject` (a callable graph -> bool, e.g. "is a training graph or made already"): a
+        finished string whose graph it rejects is a dead end like any masked token, so the
+        search goes on to the next-best alternative instead of returning a known shape.
+
+        `per_point` > 1: after a finished string the search goes on (from where it is, so the
+        next strings share the latent point's prefix and differ near the end) until that many
+        strings of distinct graphs, none rejected, are found; the first is returned, the others
+        in its `more`. Each one found grants `bonus` more search steps."""
         zt = torch.from_numpy(np.ascontiguousarray(z, dtype=np.float32).reshape(1, -1))
         auto = self._automaton(self.budget_for(target_len))
         soft_end = target_len if target_len is not None else getattr(self.model, "soft_end", None)
@@ -330,20 +344,26 @@ class PlacedDecoder:
         ctx = None
         for attempt in range(self.retries + 1):
             temp = self.temperature if attempt == 0 else max(self.temperature, 0.8)
-            ctx = _Ctx(auto.start(), np.random.default_rng([seed, attempt]), temp, soft_end, self.expansions)
+            ctx = _Ctx(auto.start(), np.random.default_rng([seed, attempt]), temp, soft_end, self.expansions,
+                       reject=reject, want=max(1, int(per_point)), attempt=attempt)
             ok = self._run(ctx, zt)
             spent += ctx.steps
             for key, c in ctx.fails.items():
                 reasons[key] = reasons.get(key, 0) + c
-            if ok:
+            if ok and ctx.want <= 1:
                 d = self._result(ctx, spent, attempt)
                 if d.valid:
                     return d
+            if ctx.found:  # every string wanted, or out of steps after some: keep those
+                first, *rest = ctx.found
+                first.more = rest
+                return first
         common = max(reasons, key=reasons.get) if reasons else "no allowed token"
         out = Decoded(ctx.state.graph_text(), False, None,
                       f"placed decoding found no buildable string in {spent} steps (most often masked: {common})",
                       spent, "failed")
-        out.stage = "3D placement" if reasons else "decoding"
+        # a search that finished strings but only known ones lost its point to novelty
+        out.stage = "novelty" if reasons.get("known") else ("3D placement" if reasons else "decoding")
         return out
 
     @torch.no_grad()
@@ -409,8 +429,21 @@ class PlacedDecoder:
         placement)."""
         st = ctx.state
         if st.done:
+            if ctx.reject is not None and ctx.reject(decode_string(st.graph_text(), self.vae.alphabet).graph):
+                # a known graph: the decoder's favourite small castles come back from many
+                # latent points; searching on finds the nearest completion that is new
+                ctx.fails["known"] = ctx.fails.get("known", 0) + 1
+                self.stats["known"] = self.stats.get("known", 0) + 1
+                return False
             ctx.result = beam[0]
-            return True
+            if ctx.want <= 1:
+                return True
+            d = self._result(ctx, ctx.steps, ctx.attempt)
+            if not d.valid or not ctx.distinct.add(d.graph):
+                return False
+            ctx.found.append(d)
+            ctx.limit += self.bonus
+            return len(ctx.found) >= ctx.want
         ctx.steps += 1
         if st.length > ctx.deepest:
             ctx.deepest = st.length
@@ -471,3 +504,8 @@ class _Ctx:
     types: list = field(default_factory=list)  # per part written
     fails: dict = field(default_factory=dict)
     result: Any = None
+    reject: Any = None  # graph -> bool: finished graphs that count as dead ends (known ones)
+    want: int = 1  # finished strings of distinct graphs to find (per_point)
+    attempt: int = 0
+    found: list = field(default_factory=list)  # per_point > 1: the Decoded strings found so far
+    distinct: Any = field(default_factory=lambda: GraphSet())

@@ -101,7 +101,10 @@ class ReachTable:
     def parts_needed(self, tc: str, Fc: np.ndarray, to: str, Fo: np.ndarray) -> int:
         """A lower bound on the parts to write after a type-`tc` part at frame `Fc` before one
         of them can dock to the type-`to` part at frame `Fo` (0: `tc` itself can)."""
-        rel = np.linalg.solve(Fc[:3, :3], Fo[:3, 3] - Fc[:3, 3])
+        # frames are rigid (products of the categories' rigid placements), so the inverse
+        # rotation is the transpose: d @ R = R^T d, ~30x cheaper than a solve per call (the
+        # placed decoder asks this ~30,000 times per latent point)
+        rel = (Fo[:3, 3] - Fc[:3, 3]) @ Fc[:3, :3]
         c = np.floor(rel / self.cell).astype(np.int64)
         key = ((int(c[0]) + _BIAS) << 42) | ((int(c[1]) + _BIAS) << 21) | (int(c[2]) + _BIAS)
         return self.table.get((tc, to), {}).get(key, self.depth + 1)

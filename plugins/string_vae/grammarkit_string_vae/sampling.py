@@ -83,12 +83,15 @@ class Sampler:
     stop: object = None  # a callable: True when the run's time is up (placed decoding polls it per point)
     on_point: object = None  # a callable, called after every decoded latent point (progress)
     known: object = None  # a callable graph -> bool: graphs the search moves past (training graphs, made ones)
+    novel_only: bool = False  # placed decoding: a finished string of a `known` graph is a dead end of its search
+    per_point: int = 1  # placed decoding: finished strings of distinct graphs searched per latent point
 
     def __post_init__(self) -> None:
         self.rng = np.random.default_rng(self.seed)
         self._train_graphs: list[TypedGraph] | None = None
         self._calls = 0
         self.lost: dict[str, int] = {}  # invalid decodes by where they failed ("decoding", "3D placement")
+        self._pending: list[Sample] = []  # further strings of points already decoded (per_point > 1)
 
     # ---- helpers ---------------------------------------------------------------------------
     @property
@@ -136,7 +139,9 @@ class Sampler:
             for i in range(len(z)):  # seconds per point: the time budget is polled between points
                 if self.stop is not None and self.stop():
                     break
-                out.append(self.placed.decode(z[i], targets[i], seed=self.seed * 7919 + self._calls * 1009 + i))
+                reject = self.known if self.novel_only else None
+                out.append(self.placed.decode(z[i], targets[i], seed=self.seed * 7919 + self._calls * 1009 + i,
+                                              reject=reject, per_point=self.per_point))
                 self.decoded_points += 1
                 if self.on_point is not None:
                     self.on_point()
@@ -178,6 +183,8 @@ class Sampler:
                 if (d.valid and not any(_same(d.graph, self.train_graphs[a]) for a in avoid[i])
                         and not (self.known is not None and self.known(d.graph))):
                     found[i] = Sample(z[j], d, mode, parents[i], k)
+                    # per_point > 1: the point's further strings follow it (same latent point)
+                    self._pending += [Sample(z[j], m, mode, parents[i], k) for m in d.more]
                     continue
                 if d.valid:  # a valid decode of a graph the search moves past
                     self.lost["novelty"] = self.lost.get("novelty", 0) + 1
@@ -188,7 +195,9 @@ class Sampler:
     # ---- modes -----------------------------------------------------------------------------
     def prior(self, count: int) -> list[Sample]:
         z = self.rng.standard_normal((count, self.vae.model.config.latent))
-        return [Sample(z[i], d, "prior") for i, d in enumerate(self._decode(z))]
+        out = [Sample(z[i], d, "prior") for i, d in enumerate(self._decode(z))]
+        self._pending += [Sample(s.z, m, "prior") for s in out for m in s.decoded.more]
+        return out
 
     def perturb(self, count: int) -> list[Sample | None]:
         mu = self.vae.train_mu.numpy()
@@ -272,6 +281,8 @@ class Sampler:
             for s in batch:
                 if s is not None:
                     yield s
+            pending, self._pending = self._pending, []
+            yield from pending
 
 
 def _same(g: TypedGraph | None, h: TypedGraph) -> bool:
