@@ -145,7 +145,9 @@ def run_one(path: Path, backend: str, n: int, seed: int, time_limit: float, pati
     seconds = time.perf_counter() - t
     files = sorted(out.glob("variant_*.glb"))
     return {"files": files, "seconds": seconds, "written": len(files),
-            "stopped": (summary.stats or {}).get("stopped", "") if hasattr(summary, "stats") else ""}
+            # the run layer's shortfall names the cause for every back end (the time limit,
+            # a pool run dry, a model that writes nothing); a back end's own `stopped` is a fallback
+            "stopped": getattr(summary, "shortfall", None) or (getattr(summary, "stats", None) or {}).get("stopped", "")}
 
 
 def main(argv=None) -> int:  # noqa: ANN001
