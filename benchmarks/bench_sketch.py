@@ -1,7 +1,7 @@
 """Sketch recognizer (Nishida et al. 2016): accuracy, parameter error, speed, robustness, round trip.
 
     python benchmarks/bench_sketch.py [--models FILE] [--n 30] [--refine-n 6] [--steps 10]
-        [--runs 3] [--plain-models FILE] [--quick]
+        [--runs 3] [--plain-models FILE] [--compare-models FILE] [--quick]
         [--only accuracy,robustness,baseline,table3,roundtrip,calibration]
         [--types Roof,Window]
 
@@ -39,7 +39,10 @@ these seed 1000+), in the training style ("sketchy": new pens) and in styles nev
    temperature, CNN-only parameter RMSE. Compare a calibrated file (`--models`, made by
    plugins/sketch/scripts/calibrate_shipped.py) with the raw column. Every drawing is read
    as drawn (the paper) and with the page's turn undone (rectify.py, the default): top-1 and
-   RMSE for both, medians over the cells.
+   RMSE for both, medians over the cells. `--compare-models FILE[,FILE]` measures each FILE first on the
+   same drawings (e.g. the previous weights, or classifiers that read the drawing as drawn:
+   the paper's input). The held-out pens are checked against the training styles' pens
+   (wider lines and more passes per edge than any training pen draws).
 
 The machine is shared: times are noisy; the load average is printed before and after.
 """
@@ -294,6 +297,32 @@ def section_robustness(rec, args, out):
 #: section 6: pens no training augmentation used x the perturbations of issue 30
 CAL_PENS = ("thick", "overdrawn")
 CAL_PERTURBATIONS = ("rotated", "perspective", "partial")
+_CAL_SETS: dict = {}  # section 6's drawings, rendered once for every models file measured
+
+
+def held_out_pens_unseen(draws: int = 4000) -> str:
+    """Section 6's pens against every pen the training styles draw with (`draws` random
+    pens of each): the widest line and the most passes per edge the training uses, and the
+    held-out pens' (which must lie outside, or the benchmark measures seen pens)."""
+    from grammarkit_sketch.drawing import test_style, training_style
+
+    rng = np.random.default_rng(11)
+    trained = [training_style(rng, kind) for kind in ("sketchy", "augmented", "plain") for _ in range(draws)]
+    width, strokes = max(s.width for s in trained), max(s.strokes for s in trained if s.sketchy)
+    held = {pen: test_style(pen, np.random.default_rng(12)) for pen in CAL_PENS}
+    unseen = {"thick": held["thick"].width > width, "overdrawn": held["overdrawn"].strokes > strokes}
+    return (f"held-out pens: thick {held['thick'].width:g} px lines (training pens <= {width:.2f} px), "
+            f"overdrawn {held['overdrawn'].strokes} passes per edge (training pens <= {strokes}): "
+            f"{'both outside every training pen' if all(unseen.values()) else 'NOT unseen: ' + str(unseen)}")
+
+
+def calibration_set(lib, stage, n, seed, cond):
+    from grammarkit_sketch.dataset import generate
+
+    key = (stage.object_type, n, seed, cond)
+    if key not in _CAL_SETS:
+        _CAL_SETS[key] = generate(lib, stage, n, seed=seed, test_kind=cond, cache=None)
+    return _CAL_SETS[key]
 
 
 def section_calibration(rec, args, out):
@@ -305,13 +334,14 @@ def section_calibration(rec, args, out):
     ink cut out. Each drawing is read twice: as drawn (the paper) and rectified (the page's
     turn undone on stages seen straight on, rectify.py: the default)."""
     from grammarkit_sketch.calibration import expected_calibration_error, softmax
-    from grammarkit_sketch.dataset import generate
     from grammarkit_sketch.rectify import rectify_input
     from grammarkit_sketch.recognizer import redraw_threshold_of, temperature_of
 
     lib = rec.library
     n = max(3, args.n // 5)
-    print(f"\n6. Calibration and robustness on held-out pens ({n} per snippet per condition; CNN only)")
+    print(f"\n6. Calibration and robustness on held-out pens ({n} per snippet per condition; CNN only): "
+          f"{rec.models.path}")
+    print(held_out_pens_unseen())
     print("acc: top-1 with the redraw answer counted wrong; ECE raw: softmax of the logits; ECE cal.: "
           "with the file's temperature T; RMSE: the true snippet's regressor, normalised units; "
           "paper = the drawing as drawn, rect. = the page's turn undone (the default: the classifier averages "
@@ -327,7 +357,7 @@ def section_calibration(rec, args, out):
             continue
         temp, below = temperature_of(tm), redraw_threshold_of(tm)
         for ci, cond in enumerate(f"{pen}+{p}" for pen in CAL_PENS for p in CAL_PERTURBATIONS):
-            data = generate(lib, tm.stage, n, seed=3000 + 10 * ti + ci, test_kind=cond, cache=None)
+            data = calibration_set(lib, tm.stage, n, 3000 + 10 * ti + ci, cond)
             raw_c, cal_c, ok, ok_paper, redraw, errs, errs_paper = [], [], [], [], [], [], []
             for i in range(len(data)):
                 x_paper = data.inputs(i)
@@ -523,6 +553,9 @@ def main() -> int:
     ap.add_argument("--models", default=None, help="models file (default: the shipped weights)")
     ap.add_argument("--library", default=str(ROOT / "grammars" / "library.grammar"))
     ap.add_argument("--plain-models", default=None)
+    ap.add_argument("--compare-models", default=None,
+                    help="section 6 also for these models files first (comma-separated; e.g. the previous "
+                         "weights), on the same drawings")
     ap.add_argument("--n", type=int, default=30, help="test sketches per snippet")
     ap.add_argument("--refine-n", type=int, default=6, help="refined test sketches per snippet")
     ap.add_argument("--steps", type=int, default=10, help="refinement steps")
@@ -549,6 +582,9 @@ def main() -> int:
                 "table3": section_table3, "roundtrip": section_roundtrip,
                 "calibration": section_calibration}
     for name in args.only.split(","):
+        for other in (args.compare_models or "").split(",") if name.strip() == "calibration" else ():
+            if other.strip():
+                section_calibration(get_recognizer(other.strip(), args.library), args, {})
         sections[name.strip()](rec, args, out)
     print(f"\nload average after: {load_avg()}")
     return 0

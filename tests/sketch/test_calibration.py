@@ -165,6 +165,22 @@ def test_fine_tune_starts_from_the_trained_weights_and_keeps_the_regressors(rec)
     assert all((again.classifier[k].float() == tuned.classifier[k].float()).all() for k in tuned.classifier)
 
 
+def test_fine_tune_can_switch_what_the_classifier_reads(rec):
+    """Trained weights as the starting point of a classifier that reads the other input: the
+    type records the input its weights belong to, whichever weights win."""
+    from grammarkit_sketch.training import TrainConfig, fine_tune_classifier
+
+    tm = rec.models.types["Window"]
+    was = tm.metrics.get("classifier_input", "as-drawn")
+    other = "centre-lines" if was == "as-drawn" else "as-drawn"
+    cfg = TrainConfig(samples=4, classifier_epochs=1, lr=5e-4, style="augmented", seed=3, cache=None)
+    tuned = fine_tune_classifier(rec.library, tm, cfg, input_kind=other)
+    ft = tuned.metrics["fine_tune"]
+    kept = all((tuned.classifier[k].float() == tm.classifier[k].float()).all() for k in tm.classifier)
+    assert ft["input"] == tuned.metrics.get("classifier_input", "as-drawn") == (was if kept else other)
+    assert tm.metrics.get("classifier_input", "as-drawn") == was  # the original is not modified
+
+
 def test_regressor_fine_tune_keeps_a_regressor_unless_it_improves(rec):
     from grammarkit_sketch.training import TrainConfig, fine_tune_regressors
 

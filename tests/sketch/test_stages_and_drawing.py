@@ -120,3 +120,19 @@ def test_equivalence_interval_of_a_repeat_driven_parameter(library, stages):
     d = StageDeriver(library, stages["Roof"])
     lo, hi = equivalence_interval(d, "roof_hip", {"roof_deg": 30.0, "roof_over": 0.3}, "roof_deg", 15, 50)
     assert lo == hi == 30.0  # every angle draws differently
+
+
+def test_the_held_out_pens_are_outside_every_training_pen():
+    """Issue 30's acceptance is measured on pens no training (or augmentation) draws with:
+    the thick pen's line is wider, the overdrawn pen goes over each edge more often, than any
+    pen the training styles pick (many draws of each)."""
+    from grammarkit_sketch.drawing import test_style, training_style
+
+    rng = np.random.default_rng(3)
+    trained = [training_style(rng, kind) for kind in ("sketchy", "augmented", "plain") for _ in range(3000)]
+    for seed in range(20):
+        thick = test_style("thick+partial", np.random.default_rng(seed))
+        overdrawn = test_style("overdrawn+rotated", np.random.default_rng(seed))
+        assert thick.width > max(s.width for s in trained)
+        assert overdrawn.strokes > max(s.strokes for s in trained if s.sketchy)
+        assert thick.partial > 0 and overdrawn.rotation != 0  # the perturbation is kept

@@ -189,12 +189,15 @@ def train_type(library: SnippetLibrary, stage: StageSpec, cfg: TrainConfig, repo
 
 
 def fine_tune_classifier(library: SnippetLibrary, tm: TypeModel, cfg: TrainConfig,
-                         reporter: Reporter | None = None) -> TypeModel:
+                         reporter: Reporter | None = None, input_kind: str | None = None) -> TypeModel:
     """The type's classifier trained further from its current weights on `cfg.samples` new
     renders per snippet in `cfg.style` (e.g. "augmented"), `cfg.classifier_epochs` epochs at
     learning rate `cfg.lr`; the epoch with the best validation accuracy is kept, unless
     the starting weights score better on those renders (then they stay). The regressors are not touched. A cheaper way to robustness than
-    retraining from scratch (issue 30)."""
+    retraining from scratch (issue 30). `input_kind` ("as-drawn" or "centre-lines"): what the
+    tuned classifier reads (default: what it read before); the trained weights are then only
+    the starting point: they stay (with the input they read) if, reading their own input,
+    they score better on the validation renders."""
     torch = require_torch()
     reporter = reporter or Reporter()
     if len(tm.classes) < 2:
@@ -207,21 +210,25 @@ def fine_tune_classifier(library: SnippetLibrary, tm: TypeModel, cfg: TrainConfi
     group_of = {name: gi for gi, g in enumerate(tm.classes) for name in g}
     labels = np.array([group_of[data.snippets[i]] for i in data.snippet], dtype=np.int64)
     tr, va = split_indices(len(data), cfg.val_share, cfg.seed)
-    xc = classifier_input(data.x, tm.metrics.get("classifier_input", "as-drawn"))
+    before = tm.metrics.get("classifier_input", "as-drawn")
+    kind = input_kind or before
+    xc = classifier_input(data.x, kind)
     torch.manual_seed(cfg.seed)
     net = build_classifier(len(tm.classes), tm.width)
     net.load_state_dict({k: (v.float() if v.is_floating_point() else v) for k, v in tm.classifier.items()})
-    vx, vy = torch.from_numpy(xc[va]), torch.from_numpy(labels[va])
-    start = _evaluate(net, vx, vy, "ce")
+    vy = torch.from_numpy(labels[va])
+    start = _evaluate(net, torch.from_numpy(classifier_input(data.x[va], before)), vy, "ce")
     advance = reporter.task(f"{t}: fine-tuning the classifier (start: acc {start:.3f})", cfg.classifier_epochs)
     state, acc = _train_net(net, xc[tr], labels[tr], (xc[va], labels[va]), "ce",
                             cfg.classifier_epochs, cfg, advance, cfg.seed)
     metrics = dict(tm.metrics)
     metrics["fine_tune"] = {"style": cfg.style, "samples": cfg.samples, "epochs": cfg.classifier_epochs,
                             "lr": cfg.lr, "seed": cfg.seed, "val_accuracy_before": round(start, 4),
-                            "val_accuracy_after": round(max(acc, start), 4)}
+                            "val_accuracy_after": round(max(acc, start), 4), "input": kind}
     if acc < start:  # a tie goes to the tuned weights: they have seen the perturbations
+        metrics["fine_tune"]["input"] = before
         return replace(tm, metrics=metrics)
+    metrics["classifier_input"] = kind
     return replace(tm, classifier=state, metrics=metrics, net=None)
 
 

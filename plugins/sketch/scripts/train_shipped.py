@@ -1,5 +1,7 @@
-"""Reproduce the shipped weights (grammarkit_sketch/weights/library.sketch.pt) for
-grammars/library.grammar, in three steps, each a public command:
+"""Train a whole models file for grammars/library.grammar (the base of the shipped weights,
+grammarkit_sketch/weights/library.sketch.pt: their regressors started as step 1's; the
+shipped file is then tuned by finetune_shipped.py and calibrate_shipped.py, see their
+docstrings), in three steps, each a public command:
 
 1. regressors: `grammarkit train sketch --library grammars/library.grammar --samples SAMPLES
    --classifier-epochs CLASSIFIER_EPOCHS --regressor-epochs REGRESSOR_EPOCHS --seed 0`
