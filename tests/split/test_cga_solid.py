@@ -24,24 +24,9 @@ LOTS = {"rect": [(0.0, 0.0), (20.0, 0.0), (20.0, 12.0), (0.0, 12.0)],
         "lshape": [tuple(map(float, p)) for p in lshape(20, 12, 8, 5)]}
 
 
-@pytest.fixture(scope="module")
-def imported(tmp_path_factory):
-    """Package name -> its parsed grammar, imported once per module."""
-    pytest.importorskip("py7zr", reason="7z rule packages need the optional py7zr (grammarkit[cga])")
-    from grammarkit.cga import translate_cga
-    from grammarkit.cga.project import open_input
-
-    out = {}
-    tmp = tmp_path_factory.mktemp("packages")
-    for rpk in PACKAGES:
-        target = tmp / rpk.stem / f"{rpk.stem}.grammar"
-        target.parent.mkdir(parents=True)
-        project = open_input(rpk, extract_to=target.parent / (rpk.name + ".d"))
-        result = translate_cga(project.rule_file, output=target, project=project)
-        assert result.ok, f"{rpk.name} does not import"
-        target.write_text(result.text, encoding="utf-8")
-        out[rpk.stem] = grammarkit.parse(result.text, filename=str(target))
-    return out
+@pytest.fixture
+def imported(cga_packages):
+    return cga_packages
 
 
 def _closed(mesh, bodies: bool = True) -> None:

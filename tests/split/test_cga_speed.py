@@ -9,7 +9,6 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-import grammarkit
 from grammarkit.split import closings, derive
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -17,25 +16,9 @@ PACKAGES = sorted((ROOT / "grammars" / "cga" / "packages").glob("*.rpk"))
 LOT = [(0.0, 0.0), (20.0, 0.0), (20.0, 12.0), (0.0, 12.0)]
 
 
-@pytest.fixture(scope="module")
-def imported(tmp_path_factory):
-    pytest.importorskip(
-        "py7zr", reason="7z rule packages need the optional py7zr (grammarkit[cga])"
-    )
-    from grammarkit.cga import translate_cga
-    from grammarkit.cga.project import open_input
-
-    out = {}
-    tmp = tmp_path_factory.mktemp("speed")
-    for rpk in PACKAGES:
-        target = tmp / rpk.stem / f"{rpk.stem}.grammar"
-        target.parent.mkdir(parents=True)
-        project = open_input(rpk, extract_to=target.parent / (rpk.name + ".d"))
-        result = translate_cga(project.rule_file, output=target, project=project)
-        assert result.ok
-        target.write_text(result.text, encoding="utf-8")
-        out[rpk.stem] = grammarkit.parse(result.text, filename=str(target))
-    return out
+@pytest.fixture
+def imported(cga_packages):
+    return cga_packages
 
 
 def _mesh_bytes(model) -> tuple:

@@ -4,7 +4,6 @@ the asset is, not grown by the weld's factor (size + 2 mm) / size (13 km before;
 from __future__ import annotations
 
 import numpy as np
-import pytest
 
 import grammarkit
 
