@@ -22,7 +22,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
-__all__ = ["MAX_CELLS", "Footprint", "check_filled", "open_sites"]
+__all__ = ["MAX_CELLS", "Footprint", "check_filled", "open_sites", "shape_outline"]
 
 MAX_CELLS = 1024
 _PROBE = 0.25  # probe distance beyond a site, in part diagonals
@@ -116,17 +116,29 @@ class _Outlines:
         return np.asarray(hull.equations, dtype=np.float64)
 
 
-def open_sites(rules: Any, shape: Any, wanted: dict[str, list[str]], tolerance: float):  # noqa: ANN201
-    """Per (part index, type, site): (inside mask, filled mask) over the site's images, for the
-    sites in `wanted` (type -> names). Empty without an up axis (no outline to speak of)."""
-    from .validate import _up, site_occupancy
+def shape_outline(rules: Any, shape: Any, tolerance: float) -> Footprint | None:
+    """The shape's outline along the grammar's up axis; None without an up axis or parts."""
+    from .validate import _up
 
     up = _up(rules)
     if up is None or not len(shape.nodes):
-        return
+        return None
     k = int(np.argmax(np.abs(up)))
-    outline = Footprint(shape.lo, shape.hi, k, tolerance,
-                        [shape.part(i).mesh for i in range(len(shape.nodes))])
+    return Footprint(shape.lo, shape.hi, k, tolerance,
+                     [shape.part(i).mesh for i in range(len(shape.nodes))])
+
+
+def open_sites(rules: Any, shape: Any, wanted: dict[str, list[str]], tolerance: float,  # noqa: ANN201
+               outline: Footprint | None = None):
+    """Per (part index, type, site): (inside mask, filled mask) over the site's images, for the
+    sites in `wanted` (type -> names). Empty without an up axis (no outline to speak of).
+    `outline`: the shape's, when the caller has it already (shape_outline)."""
+    from .validate import site_occupancy
+
+    if outline is None:
+        outline = shape_outline(rules, shape, tolerance)
+    if outline is None:
+        return
     for i, t, name, pos, facing, filled in site_occupancy(rules, shape, wanted):
         probe = pos + facing * (_PROBE * float(shape.diag[i]))
         yield i, t, name, outline.inside(probe), filled
@@ -142,10 +154,20 @@ def check_filled(graph: Any, args: dict[str, Any], context: dict | None = None) 
         return []  # no geometry: nothing to say where a site opens
     if t in rules.parts and not any(s.name == site for s in rules.sites.get(t, ())):
         return [f"filled({t}, {site!r}): {t} has no site {site!r}"]
-    shape = _Shape(assembly, graph)
     tol = float(graph.graph.get("tolerance", 1e-6))
+    # One validate checks every `filled` constraint against the same graph in one context: the
+    # shape and its outline (most of the check's time on a facade) are built once for them all.
+    cached = context.get("filled_outline")
+    if cached is not None and cached[0] is graph and cached[1] == tol:
+        shape, outline = cached[2], cached[3]
+    else:
+        shape = _Shape(assembly, graph)
+        outline = shape_outline(rules, shape, tol)
+        context["filled_outline"] = (graph, tol, shape, outline)
+    if outline is None:
+        return []
     out = []
-    for i, _, _, inside, filled in open_sites(rules, shape, {t: [site]}, tol):
+    for i, _, _, inside, filled in open_sites(rules, shape, {t: [site]}, tol, outline):
         holes = int((inside & ~filled).sum())
         if holes:
             out.append(f"part {shape.nodes[i]} ({t}): site {t}.{site} opens inside the shape and has nothing "
