@@ -47,6 +47,12 @@ On a machine shared by many jobs wall-clock times swing by several times between
 is the ratio of the processes' CPU time (time.process_time, all threads) for the same alternating
 runs, steadier there.
 
+`--union-study` (with `--only`) measures, on each package's parts as the final union gets them
+(20 x 12 lot; the added solids, not the cuts), what the union's time is made of: the batched
+union as `compose` runs it; the same parts first concatenated into layers of parts whose boxes
+are apart (numpy, no boolean), then the layers united; and the sum of the unions of every pair
+of parts whose boxes meet (the intersection work alone). CPU medians of `--runs`.
+
 `--record` writes PRT's bounding boxes as reference numbers for tests/cga (which cannot need
 PyPRT).
 """
@@ -260,7 +266,11 @@ def main(argv=None) -> int:
     ap.add_argument("--prior", action="store_true",
                     help="also time the default mode with issue 27's speed switches off (prior ms)")
     ap.add_argument("--only", nargs="*", default=None, help="only these package names (stems)")
+    ap.add_argument("--union-study", action="store_true",
+                    help="what the final union's time is made of (see the module docstring)")
     args = ap.parse_args(argv)
+    if args.union_study:
+        return union_study(args.only, args.runs)
     try:
         import pyprt  # noqa: F401 - optional reference (Esri's terms), never a dependency
     except ImportError:
@@ -334,6 +344,89 @@ def main(argv=None) -> int:
         print(f"recorded PRT reference bboxes in {args.record}")
     if args.json is not None:
         args.json.write_text(json.dumps(rows, indent=1, default=str) + "\n", encoding="utf-8")
+    return 0
+
+
+def union_parts(grammar, lot) -> list:
+    """The solids the final union of one derive gets (openings cut, free parts left out)."""
+    import grammarkit
+    from grammarkit.split import model
+    seen = []
+    original = model.surface_layer  # called by compose once `adds` is final
+
+    def spy(ctx):
+        seen.append(list(ctx.adds))
+        return original(ctx)
+    model.surface_layer = spy
+    try:
+        grammarkit.derive(grammar, seed=0, lot=lot)
+    finally:
+        model.surface_layer = original
+    return seen[-1]
+
+
+def _concatenated(parts: list):
+    """One manifold of disjoint parts, their meshes concatenated (no boolean)."""
+    import manifold3d
+    meshes = [p.to_mesh() for p in parts]
+    offsets = np.cumsum([0] + [len(m.vert_properties) for m in meshes])
+    v = np.concatenate([np.asarray(m.vert_properties, dtype=np.float32) for m in meshes])
+    f = np.concatenate([np.asarray(m.tri_verts, dtype=np.uint32) + np.uint32(o) for m, o in zip(meshes, offsets)])
+    return manifold3d.Manifold(manifold3d.Mesh(vert_properties=np.ascontiguousarray(v),
+                                               tri_verts=np.ascontiguousarray(f)))
+
+
+def _box_layers(boxes: np.ndarray, sizes: np.ndarray) -> list[list[int]]:
+    """Greedy colouring, largest parts first: layers of parts whose closed boxes are apart."""
+    layers: list[list[int]] = []
+    for i in np.argsort(-sizes, kind="stable").tolist():
+        for layer in layers:
+            lb = boxes[layer]
+            if not ((lb[:, :3] <= boxes[i, 3:]) & (boxes[i, :3] <= lb[:, 3:])).all(axis=1).any():
+                layer.append(i)
+                break
+        else:
+            layers.append([i])
+    return layers
+
+
+def _cpu(fn) -> float:
+    c = time.process_time()
+    fn().num_tri()  # manifold3d evaluates lazily
+    return time.process_time() - c
+
+
+def union_study(only: list | None, runs: int) -> int:
+    import manifold3d
+    add = manifold3d.OpType.Add
+    print(f"{'package':<12} {'parts':>5} {'in tris':>8} {'out tris':>8} {'pairs':>6} {'union ms':>9} "
+          f"{'layers':>6} {'layered ms':>10} {'pairs ms':>9}")
+    with tempfile.TemporaryDirectory() as tmp:
+        for rpk in sorted(PACKAGES.glob("*.rpk")):
+            if only is not None and rpk.stem not in only:
+                continue
+            grammar, err = import_package(rpk, Path(tmp))
+            if grammar is None:
+                print(f"{rpk.stem:<12} {err}")
+                continue
+            parts = union_parts(grammar, LOTS["rect"])
+            if len(parts) < 2:
+                continue
+            boxes = np.asarray([p.bounding_box() for p in parts], dtype=np.float64)
+            sizes = np.asarray([p.num_tri() for p in parts])
+            meet = ((boxes[:, None, :3] <= boxes[None, :, 3:]) & (boxes[None, :, :3] <= boxes[:, None, 3:])).all(2)
+            pairs = [(i, j) for i, j in zip(*np.nonzero(np.triu(meet, 1)))]
+            layers = _box_layers(boxes, sizes)
+            plain, layered, pair = [], [], []
+            for _ in range(runs):
+                plain.append(_cpu(lambda: manifold3d.Manifold.batch_boolean(parts, add)))
+                layered.append(_cpu(lambda: manifold3d.Manifold.batch_boolean(
+                    [_concatenated([parts[i] for i in layer]) for layer in layers], add)))
+                pair.append(sum(_cpu(lambda i=i, j=j: parts[i] + parts[j]) for i, j in pairs))
+            out = manifold3d.Manifold.batch_boolean(parts, add).num_tri()
+            print(f"{rpk.stem:<12} {len(parts):>5} {int(sizes.sum()):>8} {out:>8} {len(pairs):>6} "
+                  f"{statistics.median(plain) * 1e3:>9.0f} {len(layers):>6} "
+                  f"{statistics.median(layered) * 1e3:>10.0f} {statistics.median(pair) * 1e3:>9.0f}")
     return 0
 
 
