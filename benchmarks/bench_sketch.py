@@ -316,13 +316,65 @@ def held_out_pens_unseen(draws: int = 4000) -> str:
             f"{'both outside every training pen' if all(unseen.values()) else 'NOT unseen: ' + str(unseen)}")
 
 
-def calibration_set(lib, stage, n, seed, cond):
-    from grammarkit_sketch.dataset import generate
+class CanvasSet:
+    """Section 6's drawings: the same samples as dataset.generate(lib, stage, n, seed=seed,
+    test_kind=cond) (the same randomness per sample), each also kept on its full stage canvas,
+    which the refinement compares its proposals with (as a user's image)."""
 
+    def __init__(self, lib, stage, n, seed, cond):
+        from grammarkit_sketch.dataset import line_mask, sample_drawing
+        from grammarkit_sketch.stages import StageDeriver
+
+        deriver = StageDeriver(lib, stage)
+        ti = lib.types.index(stage.object_type)
+        self.snippets = [s.name for s in lib.snippets_of(stage.object_type)]
+        self.x, self.u, self.snippet, self.targets = [], [], [], []
+        for si, info in enumerate(lib.snippets_of(stage.object_type)):
+            for i in range(n):
+                got = sample_drawing(deriver, info, np.random.default_rng([seed, ti, si, i]), "sketchy", cond)
+                if got is None:
+                    continue
+                x, u, ink = got
+                # the input as the cached sets store it (uint8), so the CNN columns are unchanged
+                self.x.append(np.clip(np.round(x * 255.0), 0, 255).astype(np.uint8))
+                self.u.append(u)
+                self.snippet.append(si)
+                self.targets.append(line_mask(ink, stage))
+
+    def __len__(self):
+        return len(self.snippet)
+
+    def inputs(self, i):
+        return self.x[i].astype(np.float32) / 255.0
+
+
+def calibration_set(lib, stage, n, seed, cond):
     key = (stage.object_type, n, seed, cond)
     if key not in _CAL_SETS:
-        _CAL_SETS[key] = generate(lib, stage, n, seed=seed, test_kind=cond, cache=None)
+        _CAL_SETS[key] = CanvasSet(lib, stage, n, seed, cond)
     return _CAL_SETS[key]
+
+
+#: section 6's analysis-by-synthesis set-up (Recognizer.recognize_input keywords)
+FIT = dict(score="pen", view_range=6.0)
+
+
+def fit_columns(rec, tm, t, data, i, x_paper, fit, ambiguous, args):
+    """Section 6's analysis by synthesis on drawing `i`: (errors of the refined parameters with
+    the true snippet, or None when not `fit`; the re-ranked answer's snippet, or None when not
+    `ambiguous`). Re-ranking fits every class at least RERANK_MIN_PROBABILITY likely; a drawing
+    with one such class keeps the classifier's answer, as recognize_input(rerank=True) does,
+    so only the ambiguous ones need the fits."""
+    info = rec.library.snippets[data.snippets[int(data.snippet[i])]]
+    kw = dict(FIT, refine_steps=args.steps, target=data.targets[i])
+    errs = answer = None
+    if fit:
+        r = rec.recognize_input(x_paper, t, snippet=info.name, **kw)
+        if r.estimated:
+            errs = errors_of(r, info, data.u[i])
+    if ambiguous:
+        answer = rec.recognize_input(x_paper, t, rerank=True, **kw).snippet
+    return errs, answer
 
 
 def section_calibration(rec, args, out):
@@ -335,7 +387,7 @@ def section_calibration(rec, args, out):
     turn undone on stages seen straight on, rectify.py: the default)."""
     from grammarkit_sketch.calibration import expected_calibration_error, softmax
     from grammarkit_sketch.rectify import rectify_input
-    from grammarkit_sketch.recognizer import redraw_threshold_of, temperature_of
+    from grammarkit_sketch.recognizer import RERANK_MIN_PROBABILITY, redraw_threshold_of, temperature_of
 
     lib = rec.library
     n = max(3, args.n // 5)
@@ -348,6 +400,12 @@ def section_calibration(rec, args, out):
           "both views, the regressor reads the turned-back one)")
     hdr = (f"{'type':<8}{'condition':<22}{'n':>5}{'acc paper':>10}{'rect.':>7}{'redraw':>8}{'ECE raw':>9}"
            f"{'ECE cal.':>9}{'RMSE paper':>11}{'rect.':>7}{'T':>6}{'below':>7}")
+    if args.fit:
+        print(f"fit (analysis by synthesis, {args.steps} pattern steps, {FIT}): on the first {args.fit_n} "
+              "drawing(s) per snippet of each cell, RMSE of the CNN (rect.) and of the refined parameters "
+              "(true snippet); rerank: the likely classes (p >= "
+              f"{RERANK_MIN_PROBABILITY}) each fitted, the best match the answer (acc, redraw, ECE of it)")
+        hdr += f"{'| fit n':>8}{'cnn':>7}{'fit':>7}{'rerank':>8}{'redraw':>8}{'ECE':>7}"
     print(hdr)
     print("-" * len(hdr))
     table, pooled = {}, {"raw": [], "cal": [], "ok": [], "redraw": [], "ok_paper": []}
@@ -359,6 +417,8 @@ def section_calibration(rec, args, out):
         for ci, cond in enumerate(f"{pen}+{p}" for pen in CAL_PENS for p in CAL_PERTURBATIONS):
             data = calibration_set(lib, tm.stage, n, 3000 + 10 * ti + ci, cond)
             raw_c, cal_c, ok, ok_paper, redraw, errs, errs_paper = [], [], [], [], [], [], []
+            fit_cnn, fit_ref, rr_ok, rr_conf = [], [], [], []
+            fitted: dict = {}
             for i in range(len(data)):
                 x_paper = data.inputs(i)
                 x, _turn = rectify_input(x_paper, tm.stage)
@@ -378,6 +438,19 @@ def section_calibration(rec, args, out):
                     u, names, _ = rec.regress(tm, name, xx)
                     if names:
                         into.append(u - data.u[i][[info.param_names.index(k) for k in names]])
+                if not args.fit:
+                    continue
+                do_fit = fitted.get(name, 0) < args.fit_n
+                fitted[name] = fitted.get(name, 0) + 1
+                ambiguous = np.sort(p_cal)[-2] >= RERANK_MIN_PROBABILITY if len(p_cal) > 1 else False
+                e_fit, answer = fit_columns(rec, tm, t, data, i, x_paper, do_fit, ambiguous, args)
+                if e_fit is not None:
+                    fit_cnn.append(errs[-1])
+                    fit_ref.append(e_fit)
+                k = int(np.argmax(p_cal)) if answer is None else next(
+                    j for j, g in enumerate(tm.classes) if answer in g)
+                rr_ok.append(k == truth)
+                rr_conf.append(p_cal[k])
             ok, redraw, ok_paper = np.array(ok), np.array(redraw), np.array(ok_paper)
             acc = float((ok & ~redraw).mean())
             e_raw = expected_calibration_error(np.array(raw_c), ok)
@@ -388,9 +461,19 @@ def section_calibration(rec, args, out):
                                 "redraw": float(redraw.mean()), "ece_raw": e_raw, "ece_cal": e_cal,
                                 "rmse": rmse(errs), "rmse_paper": rmse(errs_paper)}
             c = table[(t, cond)]
-            print(f"{t:<8}{cond:<22}{len(ok):>5}{c['acc_paper']:>10.2f}{acc:>7.2f}{redraw.mean():>8.2f}"
-                  f"{e_raw:>9.3f}{e_cal:>9.3f}{c['rmse_paper']:>11.3f}{c['rmse']:>7.3f}{temp:>6.2f}{below:>7.2f}",
-                  flush=True)
+            line = (f"{t:<8}{cond:<22}{len(ok):>5}{c['acc_paper']:>10.2f}{acc:>7.2f}{redraw.mean():>8.2f}"
+                    f"{e_raw:>9.3f}{e_cal:>9.3f}{c['rmse_paper']:>11.3f}{c['rmse']:>7.3f}{temp:>6.2f}{below:>7.2f}")
+            if args.fit:
+                rr_ok_, rr_conf_ = np.array(rr_ok), np.array(rr_conf)
+                rr_redraw = rr_conf_ < below
+                c.update(acc_rerank=float((rr_ok_ & ~rr_redraw).mean()), redraw_rerank=float(rr_redraw.mean()),
+                         ece_rerank=expected_calibration_error(rr_conf_, rr_ok_), fit_n=len(fit_ref),
+                         rmse_fit_cnn=rmse(fit_cnn), rmse_fit=rmse(fit_ref))
+                for k, v in (("rr_ok", rr_ok), ("rr_conf", rr_conf), ("rr_redraw", rr_redraw)):
+                    pooled.setdefault(k, []).extend(list(v))
+                line += (f"{c['fit_n']:>6}{c['rmse_fit_cnn']:>9.3f}{c['rmse_fit']:>7.3f}"
+                         f"{c['acc_rerank']:>8.2f}{c['redraw_rerank']:>8.2f}{c['ece_rerank']:>7.3f}")
+            print(line, flush=True)
     ok = np.array(pooled["ok"])
     ece = expected_calibration_error(np.array(pooled["cal"]), ok)
     print(f"{'all':<8}{'pooled':<22}{len(ok):>5}{np.mean(pooled['ok_paper']):>10.2f}"
@@ -411,6 +494,20 @@ def section_calibration(rec, args, out):
               f"ECE <= 0.05 pooled: {'met' if ece <= 0.05 else 'not met'} ({ece:.3f}); "
               f"RMSE <= 0.06 in every cell: {'met' if worst_rmse <= 0.06 else 'not met'} "
               f"(highest {worst_rmse:.3f})")
+        if args.fit:
+            rr_ok, rr_redraw = np.array(pooled["rr_ok"]), np.array(pooled["rr_redraw"])
+            rr_ece = expected_calibration_error(np.array(pooled["rr_conf"]), rr_ok)
+            fits = [c for c in cells if c["rmse_fit"] == c["rmse_fit"]]
+            print(f"with fit: pooled rerank top-1 {(rr_ok & ~rr_redraw).mean():.2f}, lowest cell "
+                  f"{min(c['acc_rerank'] for c in cells):.2f}, cells >= 0.95: "
+                  f"{sum(c['acc_rerank'] >= 0.95 for c in cells)}/{len(cells)} (CNN "
+                  f"{sum(c['acc'] >= 0.95 for c in cells)}/{len(cells)}); redraw {rr_redraw.mean():.2f}; "
+                  f"ECE {rr_ece:.3f}; RMSE on the fitted subset: median over cells CNN "
+                  f"{float(np.median([c['rmse_fit_cnn'] for c in fits])):.3f} -> fit "
+                  f"{float(np.median([c['rmse_fit'] for c in fits])):.3f}, cells <= 0.06: CNN "
+                  f"{sum(c['rmse_fit_cnn'] <= 0.06 for c in fits)}/{len(fits)}, fit "
+                  f"{sum(c['rmse_fit'] <= 0.06 for c in fits)}/{len(fits)}, highest "
+                  f"{max(c['rmse_fit_cnn'] for c in fits):.3f} -> {max(c['rmse_fit'] for c in fits):.3f}")
     out["calibration"] = table
 
 
@@ -562,6 +659,9 @@ def main() -> int:
     ap.add_argument("--runs", type=int, default=3, help="timing repetitions")
     ap.add_argument("--roundtrip", type=int, default=100)
     ap.add_argument("--threads", type=int, default=1)
+    ap.add_argument("--fit", action="store_true",
+                    help="section 6 also with analysis-by-synthesis refinement (--steps) and re-ranking")
+    ap.add_argument("--fit-n", type=int, default=1, help="section 6: refined drawings per snippet per cell")
     ap.add_argument("--quick", action="store_true", help="small sizes, for a smoke run")
     ap.add_argument("--only", default="accuracy,robustness,baseline,table3,roundtrip,calibration")
     ap.add_argument("--types", default=None, help="object types measured in sections 1-4 (default: all)")

@@ -12,7 +12,7 @@ from typing import Any
 import click
 
 METHODS = ("pattern", "greedy", "metropolis")  # refine.METHODS (refine.py is not light)
-SCORES = ("chamfer", "paper")  # refine.SCORES
+SCORES = ("chamfer", "paper", "pen")  # refine.SCORES
 
 
 def _echo_json(data: Any) -> None:
@@ -91,7 +91,8 @@ def print_recognition(r: Any, library: Any, source: str) -> None:
               help="Refinement search: line scans + compass search (pattern), the public code's "
                    "greedy coordinate search, or the paper's Metropolis-Hastings.")
 @click.option("--score", type=click.Choice(SCORES), default="chamfer", show_default=True,
-              help="Refinement score: truncated symmetric chamfer distance, or the paper's "
+              help="Refinement score: truncated symmetric chamfer distance, the same with the "
+                   "proposals drawn in the sketch's own line width (pen), or the paper's "
                    "exp(-RMS(D(render) - D(sketch))).")
 @click.option("--view-range", type=click.FloatRange(0, 10), default=3.0, show_default=True,
               help="Degrees the refinement may turn the view (pitch and yaw) to match a sketch "
@@ -104,6 +105,9 @@ def print_recognition(r: Any, library: Any, source: str) -> None:
               help="Undo a turn of the page (a few degrees) on stages seen straight on (facades, "
                    "floors, windows) before recognising; --no-rectify reads the drawing as it is "
                    "(the paper).")
+@click.option("--rerank/--no-rerank", default=False, show_default=True,
+              help="With --refine: fit each likely snippet (probability >= 0.05, top 3) to the "
+                   "sketch and answer the one whose refined model matches best.")
 @click.option("--snippet", default=None, help="Skip the classifier: estimate this snippet's parameters.")
 @click.option("--preview", type=click.Path(dir_okay=False, path_type=Path), default=None,
               help="Write the sketch with the recognised model drawn over it (PNG).")
@@ -113,7 +117,7 @@ def print_recognition(r: Any, library: Any, source: str) -> None:
 @click.option("--json", "as_json", is_flag=True, help="Print the result as JSON.")
 def recognize_command(sketch: Path | None, object_type: str, library: Path | None, models: Path | None,
                       refine_steps: int, method: str, score: str, view_range: float, prior: bool,
-                      rectify: bool, snippet: str | None, preview: Path | None,
+                      rectify: bool, rerank: bool, snippet: str | None, preview: Path | None,
                       canvas: Path | None, seed: int, as_json: bool) -> None:
     """Recognise the snippet and its parameters in a sketch of one object type.
 
@@ -139,7 +143,7 @@ def recognize_command(sketch: Path | None, object_type: str, library: Path | Non
         bar.add_task(f"recognising {sketch}" + (f" ({refine_steps} refinement steps)" if refine_steps else ""),
                      total=None)
         r = rec.recognize(sketch, t, refine_steps=refine_steps, method=method, snippet=snippet, seed=seed,
-                          score=score, view_range=view_range, prior=prior, rectify=rectify)
+                          score=score, view_range=view_range, prior=prior, rectify=rectify, rerank=rerank)
         if preview is not None:
             rec.preview(sketch, r, preview)
     if as_json:

@@ -115,10 +115,14 @@ def line_mask(ink: np.ndarray, stage: StageSpec, short: int = RES) -> np.ndarray
 
 
 # ------------------------------------------------------------------------------------------
-def _sample_one(deriver: StageDeriver, info: Any, rng: np.random.Generator, style_kind: str,
-                test_kind: str | None) -> tuple[np.ndarray, np.ndarray] | None:
+def sample_drawing(deriver: StageDeriver, info: Any, rng: np.random.Generator, style_kind: str,
+                   test_kind: str | None) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+    """One sample of a snippet: (network input, normalised parameters, the drawing on the full
+    stage canvas), or None when MAX_ATTEMPTS parameter draws build nothing visible. The canvas
+    drawing is what a user's image is: the refinement's target (benchmarks/bench_sketch.py)."""
     from grammarkit.errors import GrammarkitError
 
+    stage = deriver.stage
     for _ in range(MAX_ATTEMPTS):
         u = rng.random(len(info.params))
         values = {p.name: p.value(x) for p, x in zip(info.params, u)}
@@ -127,11 +131,18 @@ def _sample_one(deriver: StageDeriver, info: Any, rng: np.random.Generator, styl
         except GrammarkitError:
             continue  # a parameter combination the snippet cannot build: draw again
         style = test_style(test_kind, rng) if test_kind else training_style(rng, style_kind)
-        x = render_input(deriver.stage, model, style)
+        ink = draw(model, stage_view(stage, model, None, style), style, stage.host_box())
+        x = to_input(ink, stage.framing)  # = render_input(stage, model, style)
         if (x > 0.5).sum() < 8:
             continue  # nothing visible (e.g. everything hidden): not a usable sketch
-        return x, u.astype(np.float32)
+        return x, u.astype(np.float32), ink
     return None
+
+
+def _sample_one(deriver: StageDeriver, info: Any, rng: np.random.Generator, style_kind: str,
+                test_kind: str | None) -> tuple[np.ndarray, np.ndarray] | None:
+    got = sample_drawing(deriver, info, rng, style_kind, test_kind)
+    return None if got is None else (got[0], got[1])
 
 
 def _init_state(library_src: Any, stage_dict: dict) -> StageDeriver:

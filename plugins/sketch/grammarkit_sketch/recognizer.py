@@ -35,6 +35,22 @@ from .refine import EXACT_STYLE, METHODS, SCORE_SHORT, SCORES, VIEW_RANGE, Score
 from .stages import StageDeriver, StageSpec
 
 TOP = 3
+RERANK_MIN_PROBABILITY = 0.05  # classes less likely than this are not fitted when re-ranking
+
+
+@dataclass
+class _Fit:
+    """One snippet fitted to a drawing (Recognizer._fit)."""
+
+    values: dict[str, float]
+    params: dict[str, Any]
+    names: list[str]
+    hidden: list[str]
+    match: float
+    net_score: float
+    evaluations: int
+    regress_s: float
+    score_s: float
 
 
 @dataclass(frozen=True)
@@ -181,7 +197,7 @@ class Recognizer:
                         seed: int = 0, t_load: float = 0.0, target: np.ndarray | None = None,
                         score: str = "chamfer", score_short: int = SCORE_SHORT,
                         view_range: float = VIEW_RANGE, prior: bool = True,
-                        rectify: bool = True) -> Recognition:
+                        rectify: bool = True, rerank: bool = False) -> Recognition:
         """Recognise a network input (RES x RES ink); see `recognize`. `rectify`: undo a turn
         of the page first on stages seen straight on (rectify.py; False: the drawing as it is,
         the paper's way); the classifier then averages its logits over the drawing as drawn
@@ -224,10 +240,6 @@ class Recognizer:
             prob = next((c.probability for c in top if c.snippet == snippet or snippet in c.same_drawing), 0.0)
         else:
             chosen, prob = top[0].snippet, top[0].probability
-        u, names, hidden = self.regress(tm, chosen, x)
-        t2 = time.perf_counter()
-        info = self.library.snippets[chosen]
-        values = info.defaults()
         if target is None:
             target = (resize(x, (score_short, score_short)) if stage.framing == "fit"
                       else level(resize(x, quick_size(stage, score_short)))) > 0.5
@@ -235,10 +247,46 @@ class Recognizer:
             from .augment import rotate_ink
 
             target = rotate_ink(np.asarray(target, dtype=np.float32), turn) > 0.5
+        fit = self._fit(tm, chosen, x, stage, target, refine_steps=refine_steps, method=method, seed=seed,
+                        score=score, score_short=score_short, view_range=view_range, prior=prior)
+        t2 = time.perf_counter()
+        if rerank and snippet is None and refine_steps > 0:
+            # analysis by synthesis over the likely classes: each is fitted to the drawing and
+            # the one whose refined model matches the strokes best is the answer
+            for c in top[1:TOP]:
+                if c.probability < RERANK_MIN_PROBABILITY:
+                    break
+                alt = self._fit(tm, c.snippet, x, stage, target, refine_steps=refine_steps, method=method,
+                                seed=seed, score=score, score_short=score_short, view_range=view_range,
+                                prior=prior)
+                if alt.match > fit.match:
+                    fit, chosen, prob = alt, c.snippet, c.probability
+        t3 = time.perf_counter()
+        params, values = fit.params, fit.values
+        normalized = {n: params[n].normalise(v) for n, v in values.items()}
+        timings = {"load": t_load * 1e3, "classify": (t1 - t0) * 1e3, "regress": fit.regress_s * 1e3,
+                   "score": fit.score_s * 1e3, "refine": (t2 - t1 - fit.regress_s - fit.score_s) * 1e3,
+                   "rerank": (t3 - t2) * 1e3, "total": t_load * 1e3 + (t3 - t0) * 1e3}
+        threshold = redraw_threshold_of(tm)
+        return Recognition(t, chosen, prob, top[:TOP], values, normalized, fit.names, fit.hidden, fit.match,
+                           fit.net_score, refine_steps if fit.names else 0, method, fit.evaluations,
+                           timings, stage, score, redraw=snippet is None and prob < threshold,
+                           redraw_below=threshold, page_turn=turn)
+
+    def _fit(self, tm: TypeModel, chosen: str, x: np.ndarray, stage: StageSpec, target: np.ndarray, *,
+             refine_steps: int, method: str, seed: int, score: str, score_short: int, view_range: float,
+             prior: bool) -> _Fit:
+        """The parameters of snippet `chosen` for network input `x`: the regressor's estimate,
+        refined against `target` (the sketch's line mask at the score canvas)."""
+        t0 = time.perf_counter()
+        u, names, hidden = self.regress(tm, chosen, x)
+        t1 = time.perf_counter()
+        info = self.library.snippets[chosen]
+        values = info.defaults()
         scorer = Scorer(self.deriver(stage), info, names, dict(values), target, score, score_short,
                         view_range=view_range if refine_steps > 0 else 0.0)
         net_score = scorer(scorer.start(u))
-        t3 = time.perf_counter()
+        t2 = time.perf_counter()
         u_ref, match = u, net_score
         params = {p.name: p for p in info.params}
         if refine_steps > 0 and len(u):
@@ -252,16 +300,7 @@ class Recognizer:
             values[n] = params[n].value(val)
         if refine_steps > 0 and names:
             values = centre_on_plateaus(scorer.deriver, info, values, names)
-        t4 = time.perf_counter()
-        normalized = {n: params[n].normalise(v) for n, v in values.items()}
-        timings = {"load": t_load * 1e3, "classify": (t1 - t0) * 1e3, "regress": (t2 - t1) * 1e3,
-                   "score": (t3 - t2) * 1e3, "refine": (t4 - t3) * 1e3,
-                   "total": t_load * 1e3 + (t4 - t0) * 1e3}
-        threshold = redraw_threshold_of(tm)
-        return Recognition(t, chosen, prob, top[:TOP], values, normalized, names, hidden, match,
-                           net_score, refine_steps if len(u) else 0, method, scorer.evaluations,
-                           timings, stage, score, redraw=snippet is None and prob < threshold,
-                           redraw_below=threshold, page_turn=turn)
+        return _Fit(values, params, names, hidden, match, net_score, scorer.evaluations, t1 - t0, t2 - t1)
 
     def recognize(self, image: Any, object_type: str, *, stage: StageSpec | None = None, **kw: Any) -> Recognition:
         """Recognise a sketch image (path, PIL image or array) of one object type."""
@@ -418,7 +457,7 @@ def get_recognizer(models: Any = None, library: Any = None) -> Recognizer:
 def recognize(image: Any, object_type: str, *, models: Any = None, library: Any = None,
               refine: int = 0, method: str = "pattern", snippet: str | None = None,
               seed: int = 0, score: str = "chamfer", view_range: float = VIEW_RANGE,
-              prior: bool = True, rectify: bool = True) -> Recognition:
+              prior: bool = True, rectify: bool = True, rerank: bool = False) -> Recognition:
     """Recognise a sketch of one object type.
 
     image:   a path, a PIL image or an array (dark lines on light paper). An object type with
@@ -428,8 +467,11 @@ def recognize(image: Any, object_type: str, *, models: Any = None, library: Any 
              that differs from the one trained on is refused ("retrain").
     refine:  refinement steps; `method` "pattern" (line scans + compass search, the default),
              "greedy" (Nishida's code) or "metropolis" (the paper).
-    score:   "chamfer" (truncated symmetric chamfer distance, the default) or "paper"
-             (exp(-RMS(D(render) - D(sketch))), the paper's equation 1).
+    score:   "chamfer" (truncated symmetric chamfer distance, the default), "pen" (the same
+             with the proposals drawn in the sketch's own line width: a felt pen's band costs
+             nothing) or "paper" (exp(-RMS(D(render) - D(sketch))), the paper's equation 1).
+    rerank:  with refinement, fit each class at least 0.05 likely (of the top 3) and answer the
+             one whose refined model matches the sketch best (analysis by synthesis).
     view_range: degrees the refinement may turn the view to fit the sketch's perspective.
     prior:   "pattern" maximises the score times a Gaussian prior around the network's estimate
              (as wide as the regressor's validation RMSE); False: the score alone.
@@ -439,7 +481,7 @@ def recognize(image: Any, object_type: str, *, models: Any = None, library: Any 
     """
     rec = get_recognizer(models, library)
     return rec.recognize(image, object_type, refine_steps=refine, method=method, snippet=snippet, seed=seed,
-                         score=score, view_range=view_range, prior=prior, rectify=rectify)
+                         score=score, view_range=view_range, prior=prior, rectify=rectify, rerank=rerank)
 
 
 __all__ = ["Candidate", "ModelFileError", "Recognition", "Recognizer", "get_recognizer", "recognize",

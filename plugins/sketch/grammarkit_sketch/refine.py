@@ -63,7 +63,7 @@ def score_from_distance(d_prop: np.ndarray, d_sketch: np.ndarray) -> float:
     return math.exp(-float(np.sqrt((diff * diff).mean())))
 
 
-SCORES = ("chamfer", "paper")
+SCORES = ("chamfer", "paper", "pen")
 SCORE_SHORT = 128  # default score canvas, shorter side (pixels); distances are in these pixels
 CHAMFER_CAP = 8.0  # distances beyond this (128 px canvas) count as this: a stroke far off
 
@@ -106,6 +106,18 @@ class Scorer:
             raise ValueError(f"unknown score {self.score!r}; expected one of {', '.join(SCORES)}")
         self._cache: dict[tuple, float] = {}
         self.sketch = np.asarray(self.sketch, dtype=bool)
+        self.pen = EXACT_STYLE
+        if self.score == "pen":
+            # the proposals drawn with the sketch's own line width: a 7 px felt pen or five
+            # passes over an edge are a band that exact 1 px lines sit inside, whose pixels'
+            # distances add a pen-dependent cost (and thinning the band to its centre line
+            # breaks it into spurs where two edges' bands merge, measured worse)
+            from .strokes import thin
+
+            centre = int(thin(self.sketch).sum())
+            width_px = float(self.sketch.sum()) / max(1, centre)  # line area / line length
+            scale = min(quick_size(self.deriver.stage, self.short)) / 256.0
+            self.pen = replace(EXACT_STYLE, width=max(EXACT_STYLE.width, width_px / scale))
         self.sketch_distance = distance_map(self.sketch)
         # distances in pixels of a 128 px canvas whatever the score canvas, so the score's scale
         # (and Metropolis-Hastings' acceptance) does not depend on the resolution
@@ -145,10 +157,10 @@ class Scorer:
             return None
         stage = self.deriver.stage
         size = quick_size(stage, self.short)
-        style = EXACT_STYLE
+        style = self.pen
         pitch, yaw = self.offsets(u)
         if (pitch, yaw) != (0.0, 0.0):
-            style = replace(EXACT_STYLE, pitch_offset=pitch, yaw_offset=yaw)
+            style = replace(self.pen, pitch_offset=pitch, yaw_offset=yaw)
         ink = draw(model, stage_view(stage, model, size, style), style, stage.host_box(), supersample=1)
         return line_mask(ink, stage, self.short)
 
