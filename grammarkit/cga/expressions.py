@@ -52,7 +52,8 @@ _TEXT_FUNCTIONS = {"colorRGBToHex", "colorHSVToHex", "str", "substring", "listIt
 _BINARY = {"+": "+", "-": "-", "*": "*", "/": "/", "%": "%", "==": "==", "!=": "!=",
            "<": "<", "<=": "<=", ">": ">", ">=": ">="}
 _INDEX_REFS = {"split.index", "split.total", "comp.index", "comp.total", "comp.sel"}
-_GEOMETRY_REFS = {"geometry.area", "geometry.volume", "geometry.nVertices", "geometry.isRectangular"}
+_GEOMETRY_REFS = {"geometry.area", "geometry.volume", "geometry.nVertices", "geometry.isRectangular",
+                  "geometry.isConcave"}
 # counts CGA has and grammarkit's geometry queries give through nVertices: exact on faces
 # (n outline vertices, n edges, 1 face) and on the prisms extrude() makes (2n vertices, 3n
 # edges, n + 2 faces); on meshes (booleans, inserted assets) the prism formula is used

@@ -20,7 +20,7 @@ from .assets import place_assets
 from .parser import DEFAULT_MAX_BYTES, decode_cga, parse_cga, read_cga
 from .report import ImportReport
 
-MISSING_ASSETS = ("keep", "drop")
+MISSING_ASSETS = ("keep", "drop", "error")
 
 
 @dataclass
@@ -78,8 +78,10 @@ def translate_cga(source: "str | Path | bytes", *, filename: str | None = None,
     asset_dirs:     extra folders to look for assets in (CityEngine projects keep them in
                     `assets/` beside `rules/`; both are searched from the .cga file's folder).
     missing_assets: "keep" (default): `i()` of an asset that is not found is kept (the report
-                    lists it; derivation will fail until the file is there); "drop": such an
-                    `i()` is left out with a warning.
+                    lists it) as `i(..., missing=skip)`: while deriving, a file that is still
+                    not there leaves the shape out with a located warning, as CityEngine does;
+                    "drop": such an `i()` is left out at import, with a warning; "error": kept
+                    as a plain `i()`, so the derivation stops at a missing file (strict).
     project:        a `cga.project.Project` (from `open_input`: a .cga in a CityEngine project,
                     a project folder, an .rpk): assets and imports are looked up as CityEngine
                     does, and the grammar gets the project's folders as `asset_dir` lines.

@@ -13,6 +13,7 @@ BUILTIN_REFS = frozenset({
     "split.index", "split.total", "comp.index", "comp.total", "comp.sel",
     # the shape's geometry (split grammars; grammarkit/split/geometry_queries.py)
     "geometry.area", "geometry.volume", "geometry.nVertices", "geometry.isRectangular",
+    "geometry.isConcave",
 })
 # Global constraints of tiling grammars that are always known, even before their plugin loads.
 BUILTIN_CONSTRAINTS = frozenset({"connected", "grounded", "path", "count", "filled", "deformable"})

@@ -186,7 +186,7 @@ def test_importer_translates_file_functions_and_computed_names():
     assert "texture(tex)" in line(r, "Roof") and 'fileSearch("b*.jpg")' in line(r, "Roof")
     wall = line(r, "Wall")
     assert 'float(getRange(fileName(tex), "f", "_t"))' in wall
-    assert "i(part_)" in wall and 'i(fileRandom("parts/*.obj"))' in wall
+    assert "i(part_, missing=skip)" in wall and 'i(fileRandom("parts/*.obj"), missing=skip)' in wall
     features = {c.feature for c in r.report.constructs if c.status != "translated"}
     assert not features & {"i:expression", "texture:expression", "fn:fileRandom", "fn:fileSearch",
                            "fn:getRange"}
@@ -197,7 +197,8 @@ def test_importer_translates_file_functions_and_computed_names():
 def test_importer_drops_a_missing_known_computed_asset_when_asked():
     text = 'attr part = "parts/none.obj"\nLot --> extrude(1) i(part) X.\n'
     keep = imported(text)
-    assert "i(part_)" in line(keep, "Lot")
+    assert "i(part_, missing=skip)" in line(keep, "Lot")
+    assert "i(part_) X." in line(imported(text, missing_assets="error"), "Lot")
     drop = imported(text, missing_assets="drop")
     assert "i(" not in line(drop, "Lot")
     assert any(c.feature == "asset:missing" for c in drop.report.constructs)
@@ -231,4 +232,4 @@ def test_importer_guards_an_unknown_computed_asset_when_dropping_missing_ones(tm
     # the chimney in the first metre, the second part's box kept as it was (12 triangles)
     assert len(m.mesh.faces) >= len(chimney.faces)
     assert m.mesh.bounds.ravel().tolist() == pytest.approx([0, 0, 0, 3, 2, 2], abs=2e-3)
-    assert "Part(asset) --> i(asset) X." in imported(text).text
+    assert "Part(asset) --> i(asset, missing=skip) X." in imported(text).text

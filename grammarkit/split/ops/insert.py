@@ -45,6 +45,7 @@ def _trimmed(solid: Any, s: Shape) -> Any:
 
 
 _FOUND: dict[tuple[str, str], Path] = {}
+MISSING_FILE = ("error", "skip")
 
 
 def _mesh_path(rel: str, base: str) -> tuple[Path, bool]:
@@ -63,7 +64,10 @@ def _mesh_path(rel: str, base: str) -> tuple[Path, bool]:
 
 @operation("i", (Param("path", "string"),
                  Param("fit", "name", required=False, default="scale", names="fits",
-                       doc="how the asset is fitted to the scope (a fit from the registry)")),
+                       doc="how the asset is fitted to the scope (a fit from the registry)"),
+                 Param("missing", "axis", required=False, default="error", choices=MISSING_FILE,
+                       doc="a mesh file that is not found: `error` stops the derivation, `skip` "
+                       "leaves the shape out with a warning (CityEngine's behaviour)")),
            doc="Insert a mesh file fitted to the scope (`fit=scale`: scaled to it).")
 def op_insert(ctx: Any, s: Shape, args: Any, block: Any) -> Shape | None:
     from ..assets import builtin_asset, load_asset, load_asset_mesh
@@ -77,6 +81,13 @@ def op_insert(ctx: Any, s: Shape, args: Any, block: Any) -> Shape | None:
         confine.check(rel, base=ctx.base_dir or ".", what="mesh file")  # before is_file: tells no existence
         path, found = _mesh_path(rel, ctx.base_dir or ".")
         if not found:
+            if len(args) > 2 and str(args[2]) == "skip":
+                # CityEngine warns "asset not found" and inserts nothing: the shape is left out
+                span = getattr(s.rule, "span", None)
+                where = f"{span}: " if span is not None else ""
+                ctx.warn(f"{where}in rule {s.rule_name!r}: i(): mesh file not found: {path} (the "
+                         "shape is left out, as CityEngine does)")
+                return None
             raise ValueError(f"i(): mesh file not found: {path}")
         asset = load_asset(str(path)) if fit == "scale" else None
     if fit == "scale":  # the built-in fit, on the manifold directly (no mesh round trip)

@@ -86,11 +86,22 @@ for _cga in _PRIMITIVE_OPS:
 
 
 
+def _insert_call(h: HandlerContext, path: Any) -> OpCall:
+    """`i(path)`; with missing_assets="keep", `i(path, missing=skip)`: a file that is not
+    there when the shape is derived leaves the shape out with a located warning, as CityEngine
+    and PRT do ("error" keeps the plain i(), which stops the derivation instead)."""
+    args = [Arg(value=path)]
+    if h.t.missing_assets == "keep":
+        args.append(Arg(name="missing", value=Ref(name="skip", span=h.span)))
+    return OpCall(name="i", args=tuple(args), span=h.span)
+
+
 @register("i")
 def _h_i(h: HandlerContext):
     if not h.args:
         raise Untranslatable("op:i", "i() without a file", h.span)
     path = translate_expr(h.args[0], h.ctx)
+    options = ("i:options", "the up axis and insert mode arguments are ignored") if len(h.args) > 1 else None
     if not isinstance(path, Str):
         # a computed file name (an attr, a parameter, fileRandom(...), "dir/" + name): grammarkit
         # evaluates it at derive time too; a value known from the attrs' defaults is looked up
@@ -101,23 +112,19 @@ def _h_i(h: HandlerContext):
         if known is not None and not h.t.asset(known, h.span, computed=True) and h.t.missing_assets == "drop":
             raise Untranslatable("asset:missing", f"asset {known!r} was not found (the i() is "
                                  "left out; --missing-assets keep keeps it)", h.span)
-        call = OpCall(name="i", args=(Arg(value=path),), span=h.span)
-        approx = ("i:options", "the up axis and insert mode arguments are ignored") if len(h.args) > 1 else None
+        call = _insert_call(h, path)
         if known is None and h.t.missing_assets == "drop":
             # which file is only known while deriving: `(case fileExists(p): i(p))` leaves the
             # i() out there when the file is missing, as "drop" does here for a known one
             guard = Case(arms=(CaseArm(cond=Call(func="fileExists", args=(path,), span=h.span),
                                        body=Seq(items=(call,)), span=h.span),), span=h.span)
-            return [guard], approx
-        return [call], approx
+            return [guard], options
+        return [call], options
     if path.value.startswith("builtin:"):
         return _builtin(path.value[len("builtin:"):], h.frame, h.span, len(h.args) > 1)
     found = h.t.asset(path.value, h.span)
     if not found and h.t.missing_assets == "drop":
         raise Untranslatable("asset:missing", f"asset {path.value!r} was not found (the i() is "
                              "left out; --missing-assets keep keeps it)", h.span)
-    call = OpCall(name="i", args=(Arg(value=path),), span=h.span)
-    if len(h.args) > 1:
-        return [call], ("i:options", "the up axis and insert mode arguments are ignored")
-    return [call], None
+    return [_insert_call(h, path)], options
 
