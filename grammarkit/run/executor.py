@@ -354,7 +354,10 @@ class _LocalSession:
         if per_item is None:  # nothing timed yet: a few chunks per worker
             size = max(1, min(64, len(pending) // (4 * len(self.workers))))
         else:
-            size = max(1, min(64, int(CHUNK_SECONDS / max(per_item, 1e-6))))
+            # at least two chunks per worker: a map is a barrier (the graph sampler's batch of
+            # 128 attempts in chunks of 50 left one worker idle for the last 28)
+            share = -(-len(pending) // (2 * len(self.workers)))
+            size = max(1, min(64, int(CHUNK_SECONDS / max(per_item, 1e-6)), share))
         results: dict[int, tuple[bool, Any]] = {}  # item position -> (ok, value)
         order = deque(pos for pos, _ in pending)
         chunk_ids = itertools.count()

@@ -67,8 +67,10 @@ class Orientations:
 
     def __call__(self, geo: np.ndarray, rotations: np.ndarray) -> np.ndarray:
         out = np.empty(len(geo), dtype=np.int64)
+        # one rounding for all parts (a numpy call per part was most of a key's cost)
+        rounded = np.ascontiguousarray(np.round(np.asarray(rotations, dtype=np.float64), 9))
         for k, (g, R) in enumerate(zip(geo.tolist(), rotations)):
-            key = (g, np.round(R, 9).tobytes())
+            key = (g, rounded[k].tobytes())
             h = self._memo.get(key)
             if h is None:
                 rows = np.round(self.local[g] @ R.T / self.quantum).astype(np.int64)
