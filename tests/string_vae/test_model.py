@@ -163,9 +163,10 @@ def test_derive_refuses_a_model_of_another_grammar(tiny_vae, tmp_path):
                                     "--option", f"model={tiny_vae.path}", "-o", str(tmp_path / "o")])
     assert res.exit_code == 1 and "trained for grammar 'castle'" in res.output and "Traceback" not in res.output
     # no model option: the grammar's shipped model, and for a grammar without one, what ships
-    res = CliRunner().invoke(main, ["derive", str(BALLTRACK), "--backend", "string-vae", "-n", "2",
+    facade = BALLTRACK.parents[1] / "facade" / "facade.grammar"
+    res = CliRunner().invoke(main, ["derive", str(facade), "--backend", "string-vae", "-n", "2",
                                     "-o", str(tmp_path / "o2")])
-    assert res.exit_code == 1 and "no model ships for grammar 'balltrack'" in res.output, res.output
+    assert res.exit_code == 1 and "no model ships for grammar 'facade'" in res.output, res.output
 
 
 def test_train_cli_and_small_datasets(castle_dataset, tmp_path):

@@ -120,8 +120,11 @@ def test_no_model_option_uses_the_shipped_models_or_says_what_ships():
         ("builtin:castle", "builtin:castle", "placed", 41, 56, 2)
     given = shipped_defaults(StringVAEOptions(model="m.vae"), "castle")
     assert (given.categories, given.decoding, given.max_length) == (None, "masked", None)
-    with pytest.raises(GrammarkitError, match="no model ships for grammar 'balltrack'.*shipped: castle"):
-        shipped_defaults(StringVAEOptions(), "balltrack")
+    small = shipped_defaults(StringVAEOptions(), "balltrack")  # a small shipped model, the plain length prior
+    assert (small.model, small.categories, small.decoding, small.max_length, small.max_open_rings) == \
+        ("builtin:balltrack", "builtin:balltrack", "placed", None, None)
+    with pytest.raises(GrammarkitError, match="no model ships for grammar 'paris'.*shipped: balltrack, castle"):
+        shipped_defaults(StringVAEOptions(), "paris")
 
 
 def test_a_time_limit_ends_a_placed_run_and_says_so(tmp_path):
@@ -167,3 +170,30 @@ def test_per_point_returns_distinct_graphs_from_one_latent_point(shipped):
         assert x.valid and graphs.add(x.graph)  # all distinct
         asm, problem = inst.build(x.graph, x.placement.frames, x.placement.variants)
         assert problem is None
+
+
+def test_the_finish_check_builds_each_finished_string_and_rejects_ones_that_fail(shipped, castle_grammar):
+    from grammarkit_string_vae.placed import PlacedDecoder
+
+    vae, inst, _dec = shipped
+    text = min(vae.train_strings, key=len)
+    checked = PlacedDecoder(vae, inst, width=16, finish_check=True)
+    d = checked.place_text(text, steps=3000)
+    assert d.valid, d.error
+    assert d.placement.assembly is not None and validate(castle_grammar, d.placement.assembly).ok
+
+    class Refusing:  # an instantiator whose final check fails every shape (e.g. a `filled` hole)
+        def __init__(self, inner):
+            self.inner = inner
+
+        def __getattr__(self, name):
+            return getattr(self.inner, name)
+
+        def build(self, graph, frames, variants=None):
+            return None, "the finished shape breaks the grammar: [constraint filled] a hole"
+
+    refused = PlacedDecoder(vae, Refusing(inst), width=16, finish_check=True).place_text(text, steps=3000)
+    assert not refused.valid and "unbuildable" in refused.error
+    # without the check the same string is returned unbuilt (the build comes later, in generate)
+    plain = PlacedDecoder(vae, Refusing(inst), width=16).place_text(text, steps=3000)
+    assert plain.valid and plain.placement.assembly is None

@@ -86,9 +86,16 @@ class PartLibrary:
         self.sizes: dict[str, float] = {}
         self.start_frame: dict[str, np.ndarray] = {}
         meshes = [(p.type, p.mesh) for asm in examples for p in asm.parts]
+        # the types every example part of which stands on the ground: only a shape started
+        # from one of them has a known height (built shapes are stood on the ground as a whole)
+        lowest: dict[str, list[float]] = {}
         for asm in examples:
             for p in asm.parts:
                 self.start_frame.setdefault(p.type, local_frame(p))
+                if up is not None:
+                    lowest.setdefault(p.type, []).append(float((np.asarray(p.mesh.vertices) @ up).min()))
+        self.on_ground: set[str] = {t for t, lows in lowest.items()
+                                    if self.ground is not None and max(abs(v - self.ground) for v in lows) < 1e-3}
         for p in grammar.parts:
             if p.name not in {t for t, _ in meshes}:
                 meshes.append((p.name, part_prototype(grammar, p.name)))

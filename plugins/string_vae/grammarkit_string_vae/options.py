@@ -59,6 +59,9 @@ class StringVAEOptions(BaseModel):
     novel_search: bool = Field(True, description="placed decoding: a finished string whose graph is a training "
                                "graph or made already is a dead end of the search, which goes on to the next "
                                "alternative (needs search_past_known); false: such points are lost to novelty")
+    finish_check: bool = Field(True, description="placed decoding: build and check every finished string at once "
+                               "(the global constraints: filled, grounded, path); one that fails is a dead end of "
+                               "the search, which goes on to a string that builds")
     per_point: int = Field(1, ge=1, description="placed decoding: new graphs searched per latent point (the search "
                            "goes on after a finished string; the further ones share the point's prefix)")
     include_training: bool = Field(False, description="also yield graphs of the training set")

@@ -51,6 +51,9 @@ from .vocab import EOS
 __all__ = ["PlacedDecoder", "Placement"]
 
 
+FINISH_COST = 10  # search steps charged for a finished string that fails the finish check
+
+
 @dataclass
 class Placement:
     frames: list  # per part (string order), 4x4 canonical frames
@@ -58,6 +61,7 @@ class Placement:
     categories: dict = field(default_factory=dict)  # (u, v), u < v: category u -> v
     expansions: int = 0  # decoding steps spent
     retries: int = 0
+    assembly: Any = None  # the built shape, when the decoder checked it (`finish_check`)
 
 
 @dataclass
@@ -82,8 +86,14 @@ class PlacedDecoder:
     def __init__(self, vae: Any, instantiator: Any, *, expansions: int = 150, branching: int = 2,
                  retries: int = 2, slack: float = 0.15, pressure: int = 40, temperature: float = 0.0,
                  width: int = 16, homing: float = 1.0, reach: bool = True, homing_from: float | None = None,
-                 max_open: int | None = None, bonus: int = 40):
+                 max_open: int | None = None, bonus: int = 40, finish_check: bool = False, finish_tries: int = 4):
         self.vae = vae
+        # finish_check: a finished string is built and checked at once (`Instantiator.build`:
+        # the grammar's global constraints such as `filled` and `grounded`, which no local mask
+        # sees); one that fails on each of its best `finish_tries` layouts is a dead end of the
+        # search like a masked token, so the search goes on to a string that builds
+        self.finish_check = bool(finish_check)
+        self.finish_tries = max(1, int(finish_tries))
         self.model = vae.model
         self.vocab = vae.vocab
         self.rules = vae.rules
@@ -222,7 +232,9 @@ class PlacedDecoder:
         """The placed parts (besides the parent) that a part of type `ty` at `Fy` touches, with
         their cycle edges' categories, or None with the reason the placement is masked out."""
         T, F, V = ctx.types, hyp.frames, hyp.variants
-        if self.lib.up is not None and self.lib.ground is not None:
+        if self.lib.up is not None and self.lib.ground is not None and ctx.types and ctx.types[0] in self.lib.on_ground:
+            # below the ground only when the first part stands on it (else its height is
+            # unknown, and `grounded` is checked on the finished shape)
             if self._lowest(ty, vy, Fy) < self.lib.ground - self.inst.tolerance:
                 return None, "ground"
         n = len(F)
@@ -389,10 +401,21 @@ class PlacedDecoder:
     def _result(self, ctx: "_Ctx", spent: int, attempt: int) -> Decoded:
         d = check_text(ctx.state.graph_text(), self.vae.alphabet, self.rules)
         best = ctx.result
-        d.placement = Placement(list(best.frames), list(best.variants), dict(best.cats), spent, attempt)
+        d.placement = Placement(list(best.frames), list(best.variants), dict(best.cats), spent, attempt,
+                                assembly=ctx.built)
         d.repaired = "placed" if attempt == 0 else "placed-resample"
         d.backtracks = spent
         return d
+
+    def _built(self, text: str, beam: list) -> tuple | None:
+        """(layout, assembly) of the first of the beam's best layouts whose shape passes the
+        final check, or None."""
+        g = decode_string(text, self.vae.alphabet).graph
+        for hyp in beam[:self.finish_tries]:
+            asm, problem = self.inst.build(g, list(hyp.frames), list(hyp.variants))
+            if problem is None:
+                return hyp, asm
+        return None
 
     def _ordered(self, ctx: "_Ctx", logits: torch.Tensor, allowed: list[int]) -> list[int]:
         row = logits[0].double()
@@ -436,6 +459,15 @@ class PlacedDecoder:
                 self.stats["known"] = self.stats.get("known", 0) + 1
                 return False
             ctx.result = beam[0]
+            if self.finish_check:
+                built = self._built(st.graph_text(), beam)
+                if built is None:
+                    ctx.fails["unbuildable"] = ctx.fails.get("unbuildable", 0) + 1
+                    self.stats["unbuildable"] = self.stats.get("unbuildable", 0) + 1
+                    # a build costs as much as many token steps: charge it to the step budget
+                    ctx.steps += FINISH_COST
+                    return False
+                ctx.result, ctx.built = built
             if ctx.want <= 1:
                 return True
             d = self._result(ctx, ctx.steps, ctx.attempt)
@@ -507,5 +539,6 @@ class _Ctx:
     reject: Any = None  # graph -> bool: finished graphs that count as dead ends (known ones)
     want: int = 1  # finished strings of distinct graphs to find (per_point)
     attempt: int = 0
+    built: Any = None  # finish_check: the shape of ctx.result
     found: list = field(default_factory=list)  # per_point > 1: the Decoded strings found so far
     distinct: Any = field(default_factory=lambda: GraphSet())
