@@ -27,8 +27,11 @@ import click
               help="write the per-construct report (JSON) here")
 @click.option("--force", is_flag=True,
               help="write the grammar even if it does not pass `grammarkit check`")
-@click.option("--missing-assets", type=click.Choice(["keep", "drop"]), default="keep", show_default=True,
-              help="what to do with i() of an asset that is not found")
+@click.option("--missing-assets", type=click.Choice(["keep", "drop", "error"]), default="keep",
+              show_default=True,
+              help="i() of an asset that is not found. keep: a file still missing while deriving "
+              "leaves its shape out with a warning, as CityEngine does; drop: left out at import "
+              "with a warning; error: the derivation stops at the missing file")
 @click.option("--asset-dir", "asset_dirs", multiple=True,
               type=click.Path(file_okay=False, path_type=Path),
               help="another folder to look for assets in (repeatable)")
