@@ -112,14 +112,12 @@ def _concave_faces_of_mesh(V: np.ndarray, F: np.ndarray) -> bool:
     normal = np.zeros_like(cross)
     normal[keep] = cross[keep] / double[keep, None]
     plane = np.round(np.column_stack([normal, (normal * a).sum(axis=1)]), 5)
-    parent = list(range(len(F)))
+    # planar faces = connected components of the graph "shares an edge and a plane"
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
 
-    def root(i: int) -> int:
-        while parent[i] != i:
-            parent[i] = parent[parent[i]]
-            i = parent[i]
-        return i
-
+    rows: list[int] = []
+    cols: list[int] = []
     by_edge: dict = {}
     for t, tri in enumerate(F.tolist()):
         if not keep[t]:
@@ -127,10 +125,13 @@ def _concave_faces_of_mesh(V: np.ndarray, F: np.ndarray) -> bool:
         for e in ((tri[0], tri[1]), (tri[1], tri[2]), (tri[2], tri[0])):
             other = by_edge.setdefault((min(e), max(e)), t)
             if other != t and (plane[other] == plane[t]).all():
-                parent[root(t)] = root(other)
+                rows.append(t)
+                cols.append(other)
+    graph = coo_matrix((np.ones(len(rows)), (rows, cols)), shape=(len(F), len(F)))
+    _, label = connected_components(graph, directed=False)
     faces: dict[int, list[int]] = {}
     for t in np.flatnonzero(keep).tolist():
-        faces.setdefault(root(t), []).append(t)
+        faces.setdefault(int(label[t]), []).append(t)
     for tris in faces.values():
         n = normal[tris[0]]
         u = np.cross(n, (1.0, 0.0, 0.0) if abs(n[0]) < 0.9 else (0.0, 1.0, 0.0))
