@@ -150,6 +150,9 @@ class ShapeView(Protocol):
     def rule_name(self) -> str: ...  # the rule being applied (for messages)
 
     @property
+    def rule_span(self) -> Any: ...  # where that rule is written (a Span, or None)
+
+    @property
     def index(self) -> int: ...  # split.index: position among its parent block's children
 
     @property

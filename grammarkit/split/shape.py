@@ -131,6 +131,11 @@ class Shape:
         return getattr(self.rule, "name", "?")
 
     @property
+    def rule_span(self) -> Any:
+        """Where the rule being applied is written (a Span, or None), for located warnings."""
+        return getattr(self.rule, "span", None)
+
+    @property
     def index(self) -> int:
         """`split.index`: this shape's position among its parent block's children."""
         return self.si

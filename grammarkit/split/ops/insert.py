@@ -83,8 +83,7 @@ def op_insert(ctx: Any, s: Shape, args: Any, block: Any) -> Shape | None:
         if not found:
             if len(args) > 2 and str(args[2]) == "skip":
                 # CityEngine warns "asset not found" and inserts nothing: the shape is left out
-                span = getattr(s.rule, "span", None)
-                where = f"{span}: " if span is not None else ""
+                where = f"{s.rule_span}: " if s.rule_span is not None else ""
                 ctx.warn(f"{where}in rule {s.rule_name!r}: i(): mesh file not found: {path} (the "
                          "shape is left out, as CityEngine does)")
                 return None
